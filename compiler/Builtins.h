@@ -1,0 +1,143 @@
+// Builtins: the one table of built-in functions and models of the language.
+//
+// The checker, the reference interpreter and the JIT lowering all read these
+// tables, so a function or model is declared exactly once: its name, its
+// parameters and their types, and (for functions) its scalar semantics in any
+// real type. Adding a model means adding a row here and its formula in the
+// interpreter and the lowering; the checker needs no change.
+#pragma once
+
+#include "AST.h"
+
+#include <cmath>
+#include <string_view>
+#include <vector>
+
+namespace facet {
+
+// ---- functions -----------------------------------------------------------
+
+enum class BuiltinFn {
+    Rgb, Sqrt, Pow, Exp, Log, Abs, Min, Max, Clamp, Mix, PhongExponent, BeckmannToPhong,
+};
+
+struct BuiltinFunction {
+    BuiltinFn id;
+    const char* name;
+    int arity;
+    // Rgb builds an rgb from three floats; every other function works
+    // channel-wise: the result type is rgb if any argument is rgb (floats are
+    // promoted), float otherwise.
+    bool makesRgb;
+    const char* signature;  // for diagnostics, e.g. "clamp(x, lo, hi)"
+};
+
+const std::vector<BuiltinFunction>& builtinFunctions();
+const BuiltinFunction* findBuiltinFunction(std::string_view name);
+
+// Channel-wise semantics of a builtin (not Rgb) in any real type; args has
+// `arity` values. This is the definition the interpreter uses; the JIT
+// lowering implements the same formulas in IR.
+template <typename Real>
+Real applyBuiltin(BuiltinFn fn, const Real* a) {
+    using std::abs; using std::exp; using std::log; using std::pow; using std::sqrt;
+    switch (fn) {
+        case BuiltinFn::Sqrt: return sqrt(a[0]);
+        case BuiltinFn::Pow: return pow(a[0], a[1]);
+        case BuiltinFn::Exp: return exp(a[0]);
+        case BuiltinFn::Log: return log(a[0]);
+        case BuiltinFn::Abs: return abs(a[0]);
+        // min/max/clamp propagate NaN (a NaN parameter must invalidate the
+        // lane, not be silently replaced by a bound).
+        case BuiltinFn::Min: return a[0] != a[0] || a[1] != a[1] ? a[0] + a[1] : (a[1] < a[0] ? a[1] : a[0]);
+        case BuiltinFn::Max: return a[0] != a[0] || a[1] != a[1] ? a[0] + a[1] : (a[1] > a[0] ? a[1] : a[0]);
+        case BuiltinFn::Clamp: {
+            Real lo = a[1], hi = a[2], x = a[0];
+            if (x != x || lo != lo || hi != hi) return x + lo + hi;
+            return x < lo ? lo : (x > hi ? hi : x);
+        }
+        case BuiltinFn::Mix: return a[0] + (a[1] - a[0]) * a[2];
+        case BuiltinFn::PhongExponent: {  // 2/r^4 - 2 (Blinn-Phong exponent from roughness)
+            Real r2 = a[0] * a[0];
+            return Real(2) / (r2 * r2) - Real(2);
+        }
+        case BuiltinFn::BeckmannToPhong: return Real(2) / (a[0] * a[0]) - Real(2);
+        case BuiltinFn::Rgb: break;
+    }
+    return Real(0) / Real(0);  // unreachable for checked input
+}
+
+// ---- models --------------------------------------------------------------
+
+enum class NdfModel { Ggx, Beckmann, BlinnPhong, Gtr, Gaussian, Ward };
+enum class MaskingModel {
+    None, Implicit, CookTorrance, Kelemen, Neumann, SchlickSmith, SmithSeparable,
+    SmithHeightCorrelated, SmithDirectionCorrelated, SmithHeightDirectionCorrelated,
+};
+enum class FresnelModel { None, Schlick, Dielectric, Conductor };
+enum class EnergyModel { None, KullaConty };
+enum class DiffuseModel { None, Lambert };
+
+// Canonical parameter indices per model: checked model uses store their
+// argument expressions in this order, whatever form the user wrote.
+namespace param {
+// ggx, beckmann, ward
+constexpr int AlphaX = 0, AlphaY = 1;
+// blinn_phong
+constexpr int Exponent = 0;
+// gtr
+constexpr int GtrAlpha = 0, GtrGamma = 1;
+// gaussian
+constexpr int GaussianAlpha = 0;
+// schlick_smith
+constexpr int SchlickK = 0;
+// schlick: exactly one of F0, Eta is set
+constexpr int F0 = 0, SchlickEta = 1;
+// dielectric
+constexpr int DielectricEta = 0;
+// conductor
+constexpr int ConductorEta = 0, ConductorK = 1;
+// lambert
+constexpr int Albedo = 0;
+}  // namespace param
+
+struct ModelParam {
+    const char* name;
+    ValueType type;
+};
+
+// One way of writing a model's arguments, e.g. ggx(alpha) or
+// ggx(alpha_x, alpha_y). Each written parameter fills one or more canonical
+// parameters (ggx(alpha) fills both alpha_x and alpha_y).
+struct ModelForm {
+    struct Param {
+        const char* name;
+        ValueType type;
+        std::vector<int> targets;
+    };
+    std::vector<Param> params;
+};
+
+struct ModelInfo {
+    ModelSlot slot;
+    int id;  // value of the slot's enum (NdfModel, MaskingModel, ...)
+    const char* name;
+    std::vector<const char*> aliases;
+    std::vector<ModelParam> canonical;
+    std::vector<ModelForm> forms;  // at least one (an empty form for no arguments)
+    // masking: needs the NDF's Smith Lambda. ndf: has a closed-form Lambda.
+    bool smith = false;
+    const char* summary;
+};
+
+const std::vector<ModelInfo>& builtinModels();
+const ModelInfo* findModel(ModelSlot slot, std::string_view name);
+const ModelInfo& modelInfo(ModelSlot slot, int id);
+
+// Domain limits shared by every evaluator.
+constexpr double kMinAlpha = 1e-4;        // SPEC 3: smaller alpha is a delta lobe
+constexpr double kMaxPhongExponent = 2e8; // = beckmann_to_phong(kMinAlpha)
+constexpr double kMinEta = 1e-4;
+constexpr double kUnitTolerance = 1e-3;   // SPEC 2: |len(w) - 1| allowed
+
+}  // namespace facet

@@ -1,0 +1,566 @@
+// Checker: resolution, typing and material rules (see Checker.h).
+#include "Checker.h"
+
+#include "ExprEval.h"
+#include "Parser.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace facet {
+
+const CheckedInput* CheckedMaterial::findInput(std::string_view n) const {
+    for (const CheckedInput& in : inputs)
+        if (in.name == n) return &in;
+    return nullptr;
+}
+
+std::string CheckedMaterial::slotName(int slot) const {
+    for (const CheckedInput& in : inputs) {
+        if (slot < in.firstSlot || slot >= in.firstSlot + in.slotCount()) continue;
+        if (in.type == ValueType::Float) return in.name;
+        static const char* channels[3] = {"r", "g", "b"};
+        return in.name + "." + channels[slot - in.firstSlot];
+    }
+    return {};
+}
+
+std::vector<double> CheckedMaterial::defaultSlots() const {
+    std::vector<double> slots(slotCount);
+    for (const CheckedInput& in : inputs)
+        for (int i = 0; i < in.slotCount(); ++i) slots[in.firstSlot + i] = in.defaultValue[i];
+    return slots;
+}
+
+const CheckedMaterial* CheckedProgram::find(std::string_view name) const {
+    if (materials.empty()) return nullptr;
+    if (name.empty()) return &materials.front();
+    for (const CheckedMaterial& m : materials)
+        if (m.name == name) return &m;
+    return nullptr;
+}
+
+namespace {
+
+size_t editDistance(std::string_view a, std::string_view b) {
+    std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        cur[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j)
+            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1])});
+        std::swap(prev, cur);
+    }
+    return prev[b.size()];
+}
+
+// " (did you mean 'x'?)" for the closest candidate within 2 edits, or "".
+std::string suggestion(std::string_view name, const std::vector<std::string>& candidates) {
+    size_t best = 3;
+    std::string bestName;
+    for (const std::string& c : candidates) {
+        size_t d = editDistance(name, c);
+        if (d < best) {
+            best = d;
+            bestName = c;
+        }
+    }
+    return bestName.empty() ? "" : fmt::format(" (did you mean '{}'?)", bestName);
+}
+
+std::string joinNames(const std::vector<std::string>& names) {
+    std::string out;
+    for (size_t i = 0; i < names.size(); ++i) {
+        if (i) out += i + 1 == names.size() ? " or " : ", ";
+        out += names[i];
+    }
+    return out;
+}
+
+// "alpha", or "alpha_x and alpha_y"
+std::string describeForm(const ModelForm& form) {
+    std::string out;
+    for (size_t i = 0; i < form.params.size(); ++i) {
+        if (i) out += i + 1 == form.params.size() ? " and " : ", ";
+        out += form.params[i].name;
+    }
+    return out.empty() ? "no arguments" : out;
+}
+
+struct NameInfo {
+    BindingKind kind;
+    int index;
+    SourceLoc loc;
+    size_t statement;  // index of the defining statement
+};
+
+class MaterialChecker {
+public:
+    MaterialChecker(const MaterialDecl& decl, DiagnosticEngine& diags) : decl_(decl), diags_(diags) {}
+
+    CheckedMaterial run() {
+        out_.loc = decl_.loc;
+        out_.name = decl_.name;
+        collectNames();
+        std::array<const ModelStmt*, kModelSlotCount> seen{};
+        for (current_ = 0; current_ < decl_.statements.size(); ++current_) {
+            const Stmt& s = decl_.statements[current_];
+            if (auto* in = std::get_if<InputDecl>(&s)) checkInput(*in);
+            else if (auto* let = std::get_if<LetDecl>(&s)) checkLet(*let);
+            else checkModelStmt(std::get<ModelStmt>(s), seen);
+        }
+        if (!seen[int(ModelSlot::Ndf)])
+            diags_.error(decl_.loc, fmt::format("material '{}' has no 'ndf' statement; every material needs "
+                                                "one, e.g. 'ndf = ggx(0.3);'",
+                                                decl_.name));
+        for (int s = 0; s < kModelSlotCount; ++s) {
+            ModelUse& use = slotUse(ModelSlot(s));
+            if (!use.model && s != int(ModelSlot::Ndf)) {
+                use.model = findModel(ModelSlot(s), "none");
+                use.loc = decl_.loc;
+            }
+        }
+        if (seen[int(ModelSlot::Ndf)] && out_.ndf.model) checkCombination(seen);
+        if (out_.energy.model->id == int(EnergyModel::KullaConty)) {
+            diags_.error(out_.energy.loc, "energy 'kulla_conty' is not available in this version of Facet "
+                                          "(its albedo tables are not built yet); use 'energy = none'");
+        }
+        return std::move(out_);
+    }
+
+private:
+    // First pass: where every input and let is defined, so that a use before
+    // the definition gets a precise message, and duplicates are reported once.
+    void collectNames() {
+        int inputs = 0, lets = 0;
+        for (size_t i = 0; i < decl_.statements.size(); ++i) {
+            const Stmt& s = decl_.statements[i];
+            const std::string* name = nullptr;
+            SourceLoc loc;
+            NameInfo info;
+            if (auto* in = std::get_if<InputDecl>(&s)) {
+                name = &in->name;
+                loc = in->loc;
+                info = {BindingKind::Input, inputs++, loc, i};
+            } else if (auto* let = std::get_if<LetDecl>(&s)) {
+                name = &let->name;
+                loc = let->loc;
+                info = {BindingKind::Let, lets++, loc, i};
+            } else {
+                continue;
+            }
+            auto it = names_.find(*name);
+            if (it != names_.end()) {
+                diags_.error(loc, fmt::format("duplicate definition of '{}'; first defined at {}", *name,
+                                              it->second.loc.str()));
+                duplicateStatements_.push_back(i);
+                continue;
+            }
+            names_.emplace(*name, info);
+        }
+    }
+
+    bool isDuplicate(size_t statement) const {
+        return std::find(duplicateStatements_.begin(), duplicateStatements_.end(), statement) !=
+               duplicateStatements_.end();
+    }
+
+    void checkInput(const InputDecl& in) {
+        CheckedInput ci;
+        ci.loc = in.loc;
+        ci.name = in.name;
+        ci.firstSlot = out_.slotCount;
+        bool ok = true;
+        auto def = constant(*in.defaultValue, fmt::format("the default value of input '{}'", in.name));
+        if (def) {
+            ci.type = in.defaultValue->type;
+            ci.defaultValue = def->c;
+            if (!def->rgb) ci.defaultValue = {def->c[0], def->c[0], def->c[0]};
+        } else {
+            ok = false;
+            ci.type = in.defaultValue->type == ValueType::Rgb ? ValueType::Rgb : ValueType::Float;
+        }
+        if (in.lo) {
+            auto lo = constant(*in.lo, fmt::format("the lower bound of input '{}'", in.name));
+            auto hi = constant(*in.hi, fmt::format("the upper bound of input '{}'", in.name));
+            for (auto [v, e] : {std::pair{&lo, in.lo.get()}, std::pair{&hi, in.hi.get()}}) {
+                if (*v && (*v)->rgb) {
+                    diags_.error(e->loc, fmt::format("range bound of input '{}' must be float, got rgb", in.name));
+                    v->reset();
+                }
+            }
+            if (lo && hi) {
+                ci.hasRange = true;
+                ci.lo = lo->c[0];
+                ci.hi = hi->c[0];
+                if (ci.lo > ci.hi) {
+                    diags_.error(in.lo->loc, fmt::format("empty range {} .. {} for input '{}' (lower bound is "
+                                                         "above the upper bound)",
+                                                         ci.lo, ci.hi, in.name));
+                } else if (def) {
+                    for (int i = 0; i < ci.slotCount(); ++i) {
+                        double v = ci.defaultValue[i];
+                        if (v < ci.lo || v > ci.hi) {
+                            diags_.error(in.defaultValue->loc,
+                                         fmt::format("default value {} of input '{}' is outside its range {} .. {}",
+                                                     v, in.name, ci.lo, ci.hi));
+                            break;
+                        }
+                    }
+                }
+            }
+        }
+        (void)ok;
+        if (isDuplicate(current_)) return;
+        out_.slotCount += ci.slotCount();
+        out_.inputs.push_back(std::move(ci));
+    }
+
+    // Types `e` (which must not use names) and evaluates it in double.
+    std::optional<Value<double>> constant(Expr& e, const std::string& what) {
+        constantContext_ = &what;
+        ValueType t = typeOf(e);
+        constantContext_ = nullptr;
+        if (t == ValueType::Unknown) return std::nullopt;
+        Value<double> v = evaluateExpr<double>(e, [](const NameExpr&) -> Value<double> {
+            internal_error << "name in a constant expression";
+        });
+        for (int i = 0; i < (v.rgb ? 3 : 1); ++i) {
+            if (!std::isfinite(v.c[i])) {
+                diags_.error(e.loc, fmt::format("{} is not a finite number ({})", what, printExpr(e)));
+                return std::nullopt;
+            }
+        }
+        return v;
+    }
+
+    void checkLet(const LetDecl& let) {
+        typeOf(*let.value);
+        if (isDuplicate(current_)) return;
+        out_.lets.push_back({let.loc, let.name, let.value});
+    }
+
+    ModelUse& slotUse(ModelSlot slot) {
+        switch (slot) {
+            case ModelSlot::Ndf: return out_.ndf;
+            case ModelSlot::Masking: return out_.masking;
+            case ModelSlot::Fresnel: return out_.fresnel;
+            case ModelSlot::Energy: return out_.energy;
+            case ModelSlot::Diffuse: return out_.diffuse;
+        }
+        internal_error << "bad slot";
+    }
+
+    void checkModelStmt(const ModelStmt& stmt, std::array<const ModelStmt*, kModelSlotCount>& seen) {
+        const char* slotName = modelSlotName(stmt.slot);
+        if (const ModelStmt* first = seen[int(stmt.slot)]) {
+            diags_.error(stmt.loc, fmt::format("duplicate '{}' statement; first given at {}", slotName,
+                                               first->loc.str()));
+            return;
+        }
+        seen[int(stmt.slot)] = &stmt;
+        const ModelInfo* model = findModel(stmt.slot, stmt.model);
+        if (!model) {
+            std::vector<std::string> candidates;
+            for (const ModelInfo& m : builtinModels()) {
+                if (m.slot != stmt.slot) continue;
+                candidates.push_back(m.name);
+                for (const char* a : m.aliases) candidates.push_back(a);
+            }
+            std::string hint = suggestion(stmt.model, candidates);
+            if (hint.empty()) hint = fmt::format(" (expected {})", joinNames(candidates));
+            diags_.error(stmt.modelLoc, fmt::format("unknown {} model '{}'{}", slotName, stmt.model, hint));
+            return;
+        }
+        ModelUse use;
+        use.loc = stmt.modelLoc;
+        use.model = model;
+        use.args.assign(model->canonical.size(), nullptr);
+        if (matchArguments(stmt, *model, use)) slotUse(stmt.slot) = std::move(use);
+    }
+
+    // Picks the form of `model` that the written arguments fit and fills the
+    // canonical argument list. Reports and returns false when none fits.
+    bool matchArguments(const ModelStmt& stmt, const ModelInfo& model, ModelUse& use) {
+        const char* slotName = modelSlotName(stmt.slot);
+        std::string modelName = fmt::format("{} '{}'", slotName, model.name);
+        // Named arguments must each exist in some form, and appear once.
+        for (size_t i = 0; i < stmt.args.size(); ++i) {
+            const Argument& a = stmt.args[i];
+            if (a.name.empty()) {
+                bool laterNamed = false;
+                for (size_t j = 0; j < i; ++j) laterNamed |= !stmt.args[j].name.empty();
+                if (laterNamed) {
+                    diags_.error(a.value->loc, fmt::format("positional argument after a named argument in {}", modelName));
+                    return false;
+                }
+                continue;
+            }
+            bool known = false;
+            std::vector<std::string> all;
+            for (const ModelForm& f : model.forms)
+                for (const auto& p : f.params) {
+                    known |= a.name == p.name;
+                    if (std::find(all.begin(), all.end(), p.name) == all.end()) all.push_back(p.name);
+                }
+            if (!known) {
+                std::string expected = all.empty() ? std::string(" (it takes no arguments)")
+                                                   : fmt::format(" (expected {})", joinNames(all));
+                std::string hint = suggestion(a.name, all);
+                diags_.error(a.nameLoc, fmt::format("unknown argument '{}' for {}{}", a.name, modelName,
+                                                    hint.empty() ? expected : hint));
+                return false;
+            }
+            for (size_t j = 0; j < i; ++j)
+                if (stmt.args[j].name == a.name) {
+                    diags_.error(a.nameLoc, fmt::format("argument '{}' of {} given twice", a.name, modelName));
+                    return false;
+                }
+        }
+        // Try each form with the right number of parameters.
+        const ModelForm* chosen = nullptr;
+        std::vector<const ModelForm::Param*> bound;
+        for (const ModelForm& form : model.forms) {
+            if (form.params.size() != stmt.args.size()) continue;
+            std::vector<const ModelForm::Param*> assign(stmt.args.size(), nullptr);
+            bool fits = true;
+            for (size_t i = 0; i < stmt.args.size() && fits; ++i) {
+                const Argument& a = stmt.args[i];
+                if (a.name.empty()) {
+                    assign[i] = &form.params[i];
+                } else {
+                    auto it = std::find_if(form.params.begin(), form.params.end(),
+                                           [&](const ModelForm::Param& p) { return a.name == p.name; });
+                    if (it == form.params.end()) fits = false;
+                    else assign[i] = &*it;
+                }
+            }
+            // A named argument may not land on a parameter already filled positionally.
+            for (size_t i = 0; fits && i < assign.size(); ++i)
+                for (size_t j = 0; j < i; ++j)
+                    if (assign[i] == assign[j]) fits = false;
+            if (fits) {
+                chosen = &form;
+                bound = assign;
+                break;
+            }
+        }
+        if (!chosen) {
+            std::vector<std::string> forms;
+            for (const ModelForm& f : model.forms) forms.push_back(fmt::format("({})", describeForm(f)));
+            SourceLoc where = stmt.args.empty() ? stmt.modelLoc : stmt.args.front().value->loc;
+            // Report the most useful thing: a missing parameter when the
+            // count is short of the only form, a count mismatch otherwise.
+            if (model.forms.size() == 1 && stmt.args.size() < model.forms[0].params.size()) {
+                for (const auto& p : model.forms[0].params) {
+                    bool given = false;
+                    for (size_t i = 0; i < stmt.args.size(); ++i)
+                        given |= stmt.args[i].name.empty() ? &model.forms[0].params[i] == &p : stmt.args[i].name == p.name;
+                    if (!given) {
+                        diags_.error(stmt.modelLoc, fmt::format("missing argument '{}' for {}", p.name, modelName));
+                        return false;
+                    }
+                }
+            }
+            diags_.error(where, fmt::format("{} takes {}, got {} argument{}", modelName, joinNames(forms),
+                                            stmt.args.size(), stmt.args.size() == 1 ? "" : "s"));
+            return false;
+        }
+        bool ok = true;
+        for (size_t i = 0; i < stmt.args.size(); ++i) {
+            const Argument& a = stmt.args[i];
+            const ModelForm::Param& p = *bound[i];
+            ValueType t = typeOf(*a.value);
+            if (t == ValueType::Unknown) {
+                ok = false;
+                continue;
+            }
+            if (p.type == ValueType::Float && t == ValueType::Rgb) {
+                diags_.error(a.value->loc, fmt::format("argument '{}' of {} must be float, got rgb", p.name, modelName));
+                ok = false;
+                continue;
+            }
+            for (int target : p.targets) use.args[target] = a.value;
+        }
+        use.isotropic = stmt.slot == ModelSlot::Ndf && chosen->params.size() == 1 && chosen->params[0].targets.size() == 2;
+        return ok;
+    }
+
+    void checkCombination(const std::array<const ModelStmt*, kModelSlotCount>& seen) {
+        const ModelInfo& ndf = *out_.ndf.model;
+        const ModelInfo& masking = *out_.masking.model;
+        SourceLoc maskingLoc = seen[int(ModelSlot::Masking)] ? out_.masking.loc : out_.ndf.loc;
+        if (ndf.id == int(NdfModel::Ward)) {
+            if (masking.id != int(MaskingModel::None))
+                diags_.error(maskingLoc, fmt::format("ndf 'ward' is a whole BRDF lobe with its own normalization; it "
+                                                     "requires 'masking = none', not '{}'",
+                                                     masking.name));
+        } else if (masking.smith && !ndf.smith) {
+            diags_.error(maskingLoc,
+                         fmt::format("masking '{}' needs the Smith Lambda of the NDF, and ndf '{}' has no closed-form "
+                                     "Lambda; use ggx, beckmann or blinn_phong, or a non-Smith masking such as "
+                                     "cook_torrance or schlick_smith",
+                                     masking.name, ndf.name));
+        }
+    }
+
+    // ---- expressions ----
+
+    ValueType typeOf(Expr& e) {
+        e.type = computeType(e);
+        return e.type;
+    }
+
+    static ValueType promote(ValueType a, ValueType b) {
+        if (a == ValueType::Unknown || b == ValueType::Unknown) return ValueType::Unknown;
+        return a == ValueType::Rgb || b == ValueType::Rgb ? ValueType::Rgb : ValueType::Float;
+    }
+
+    ValueType computeType(Expr& e) {
+        switch (e.kind) {
+            case ExprKind::Number: return ValueType::Float;
+            case ExprKind::Name: return resolveName(static_cast<NameExpr&>(e));
+            case ExprKind::Unary: return typeOf(*static_cast<UnaryExpr&>(e).operand);
+            case ExprKind::Binary: {
+                auto& b = static_cast<BinaryExpr&>(e);
+                ValueType l = typeOf(*b.lhs), r = typeOf(*b.rhs);
+                return promote(l, r);
+            }
+            case ExprKind::Call: return typeCall(static_cast<CallExpr&>(e));
+        }
+        internal_error << "unknown expression kind";
+    }
+
+    ValueType resolveName(NameExpr& n) {
+        if (constantContext_) {
+            diags_.error(n.loc, fmt::format("{} must be a constant expression; it uses '{}'", *constantContext_, n.name));
+            return ValueType::Unknown;
+        }
+        auto it = names_.find(n.name);
+        if (it == names_.end()) {
+            std::vector<std::string> candidates;
+            for (const auto& [name, info] : names_) candidates.push_back(name);
+            std::string hint = suggestion(n.name, candidates);
+            if (findBuiltinFunction(n.name))
+                hint = fmt::format(" ('{}' is a function; call it with arguments)", n.name);
+            diags_.error(n.loc, fmt::format("undefined name '{}'{}", n.name, hint));
+            return ValueType::Unknown;
+        }
+        const NameInfo& info = it->second;
+        if (info.statement >= current_) {
+            diags_.error(n.loc, fmt::format("'{}' is used before its definition at {}", n.name, info.loc.str()));
+            return ValueType::Unknown;
+        }
+        n.binding = info.kind;
+        n.index = info.index;
+        if (info.kind == BindingKind::Input) {
+            if (info.index >= int(out_.inputs.size())) return ValueType::Unknown;  // its declaration failed
+            return out_.inputs[info.index].type;
+        }
+        if (info.index >= int(out_.lets.size())) return ValueType::Unknown;
+        return out_.lets[info.index].value->type;
+    }
+
+    ValueType typeCall(CallExpr& call) {
+        const BuiltinFunction* fn = findBuiltinFunction(call.callee);
+        if (!fn) {
+            for (int s = 0; s < kModelSlotCount; ++s)
+                if (findModel(ModelSlot(s), call.callee)) {
+                    diags_.error(call.loc, fmt::format("'{}' is a {} model, not a function; write '{} = {}(...);'",
+                                                       call.callee, modelSlotName(ModelSlot(s)),
+                                                       modelSlotName(ModelSlot(s)), call.callee));
+                    return ValueType::Unknown;
+                }
+            std::vector<std::string> candidates;
+            for (const BuiltinFunction& f : builtinFunctions()) candidates.push_back(f.name);
+            diags_.error(call.loc, fmt::format("unknown function '{}'{}", call.callee, suggestion(call.callee, candidates)));
+            return ValueType::Unknown;
+        }
+        for (const Argument& a : call.args)
+            if (!a.name.empty()) {
+                diags_.error(a.nameLoc, fmt::format("function '{}' takes no named arguments", fn->name));
+                return ValueType::Unknown;
+            }
+        if (int(call.args.size()) != fn->arity) {
+            diags_.error(call.loc, fmt::format("function {} takes {} argument{}, got {}", fn->signature, fn->arity,
+                                               fn->arity == 1 ? "" : "s", call.args.size()));
+            return ValueType::Unknown;
+        }
+        ValueType result = ValueType::Float;
+        for (size_t i = 0; i < call.args.size(); ++i) {
+            ValueType t = typeOf(*call.args[i].value);
+            if (fn->makesRgb && t == ValueType::Rgb) {
+                diags_.error(call.args[i].value->loc,
+                             fmt::format("argument {} of {} must be float, got rgb", i + 1, fn->signature));
+                result = ValueType::Unknown;
+            }
+            result = promote(result, t);
+        }
+        call.function = fn;
+        if (result == ValueType::Unknown) return result;
+        return fn->makesRgb ? ValueType::Rgb : result;
+    }
+
+    const MaterialDecl& decl_;
+    DiagnosticEngine& diags_;
+    CheckedMaterial out_;
+    std::map<std::string, NameInfo> names_;
+    std::vector<size_t> duplicateStatements_;
+    size_t current_ = 0;
+    const std::string* constantContext_ = nullptr;
+};
+
+}  // namespace
+
+CheckedProgram checkProgram(const Program& program, DiagnosticEngine& diags) {
+    CheckedProgram out;
+    out.file = program.file;
+    std::map<std::string, SourceLoc> seen;
+    for (const MaterialDecl& decl : program.materials) {
+        auto [it, fresh] = seen.emplace(decl.name, decl.loc);
+        if (!fresh)
+            diags.error(decl.loc, fmt::format("duplicate material '{}'; first defined at {}", decl.name, it->second.str()));
+        // A material that lost statements to syntax errors would only produce
+        // follow-on errors (e.g. a missing ndf that was merely misspelled).
+        if (decl.hasSyntaxErrors) continue;
+        out.materials.push_back(MaterialChecker(decl, diags).run());
+    }
+    return out;
+}
+
+CheckedProgram loadProgramText(std::string_view text, const std::string& path, DiagnosticEngine& diags) {
+    if (text.size() > kMaxSourceBytes) {
+        diags.error({std::make_shared<const std::string>(path), 0, 0},
+                    fmt::format("file is too large ({} bytes; the limit is {})", text.size(), kMaxSourceBytes));
+        return {};
+    }
+    Program program = parseProgram(text, path, diags);
+    CheckedProgram checked = checkProgram(program, diags);
+    if (diags.hasErrors()) return {};
+    return checked;
+}
+
+CheckedProgram loadProgramFile(const std::string& path, DiagnosticEngine& diags) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        diags.error({std::make_shared<const std::string>(path), 0, 0}, "cannot open file");
+        return {};
+    }
+    in.seekg(0, std::ios::end);
+    std::streamoff size = in.tellg();
+    in.seekg(0);
+    if (size < 0 || size_t(size) > kMaxSourceBytes) {
+        diags.error({std::make_shared<const std::string>(path), 0, 0},
+                    fmt::format("file is too large or unreadable (limit {} bytes)", kMaxSourceBytes));
+        return {};
+    }
+    std::string text(size_t(size), '\0');
+    in.read(text.data(), size);
+    return loadProgramText(text, path, diags);
+}
+
+}  // namespace facet

@@ -1,0 +1,29 @@
+// Checker: names, types and model rules of a parsed program.
+//
+// Resolves every name (inputs and lets must be defined before use), types
+// every expression (float and rgb, with float promoting to rgb), evaluates
+// input defaults and ranges (which must be constant), matches model
+// arguments against the model's forms (positional or named), and enforces
+// the material rules: `ndf` required, no duplicate statements, masking
+// compatible with the NDF (Smith needs a closed-form Lambda; ward is a whole
+// BRDF and needs masking = none). Reports through the DiagnosticEngine.
+#pragma once
+
+#include "AST.h"
+#include "Diagnostics.h"
+#include "Material.h"
+
+namespace facet {
+
+// Checks `program`. The result is meaningful only if diags has no errors.
+CheckedProgram checkProgram(const Program& program, DiagnosticEngine& diags);
+
+// Convenience: read, parse and check a file; diagnostics go to diags.
+// A file that cannot be read is reported as an error at "path".
+CheckedProgram loadProgramFile(const std::string& path, DiagnosticEngine& diags);
+CheckedProgram loadProgramText(std::string_view text, const std::string& path, DiagnosticEngine& diags);
+
+// Largest material file accepted (the compiler must not allocate without bound).
+constexpr size_t kMaxSourceBytes = 4u << 20;
+
+}  // namespace facet

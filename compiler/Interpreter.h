@@ -1,0 +1,96 @@
+// Interpreter: the reference evaluator of a checked material.
+//
+// It walks the checked material in double precision (or any wider real type;
+// the hard-case checks run it in long double) and evaluates each model term
+// from the formulas of SPEC section 3, written for obvious correctness rather
+// than speed. Every compiled evaluator is tested against it, so it shares no
+// code with the JIT lowering: only the checked material and the builtin
+// function semantics (ExprEval.h) are common.
+//
+// Resolving a material against a set of input values gives a ResolvedMaterial
+// whose term functions (D, Lambda, G, F) the physics tests call directly.
+#pragma once
+
+#include "Builtins.h"
+#include "ExprEval.h"
+#include "Material.h"
+
+#include <array>
+#include <vector>
+
+namespace facet {
+
+template <typename Real>
+struct Vec3 {
+    Real x, y, z;
+};
+
+// One material with its parameters evaluated for one set of input values.
+template <typename Real>
+struct ResolvedMaterial {
+    bool valid = true;  // false when an input or parameter is not finite
+    NdfModel ndf;
+    MaskingModel masking;
+    FresnelModel fresnel;
+    DiffuseModel diffuse;
+    Real alphaX = 1, alphaY = 1;  // ggx, beckmann, ward, gtr (x), gaussian (x)
+    Real exponent = 0;            // blinn_phong
+    Real gamma = 2;               // gtr
+    Real gaussianNorm = 1;        // gaussian: integral of exp(-theta^2/a^2) cos
+    Real schlickK = 0;            // schlick_smith
+    std::array<Real, 3> f0{}, eta{}, k{}, albedo{};
+    bool schlickFromEta = false;
+
+    // Microfacet normal distribution D(m), m a unit vector (zero below the horizon).
+    Real D(const Vec3<Real>& m) const;
+    // Smith Lambda(v) of the NDF (ggx, beckmann, blinn_phong only).
+    Real lambda(const Vec3<Real>& v) const;
+    // Smith G1(v, m) = chi+(v.m) / (1 + Lambda(v)).
+    Real smithG1(const Vec3<Real>& v, const Vec3<Real>& m) const;
+    // Shadowing-masking G(wi, wo, h) of the material's masking model.
+    Real G(const Vec3<Real>& wi, const Vec3<Real>& wo, const Vec3<Real>& h) const;
+    // Fresnel reflectance of channel ch at cos = wi.h.
+    Real F(Real cosTheta, int ch) const;
+    // The BRDF (without the cosine factor), rgb; wi and wo must be unit
+    // vectors. Zero for directions below the horizon.
+    std::array<Real, 3> brdf(const Vec3<Real>& wi, const Vec3<Real>& wo) const;
+};
+
+template <typename Real>
+struct EvalResult {
+    std::array<Real, 3> rgb{};
+    bool valid = true;
+};
+
+template <typename Real>
+class Interpreter {
+public:
+    explicit Interpreter(const CheckedMaterial& material) : material_(material) {}
+
+    // Evaluates every let and model argument for the given slot values
+    // (material().slotCount of them; null means all defaults). Inputs are
+    // clamped to their declared ranges; a non-finite input or parameter
+    // makes the result invalid.
+    ResolvedMaterial<Real> resolve(const Real* slots) const;
+
+    // Full evaluation with the SPEC section 2 conventions: directions that
+    // are not finite or not unit length within 1e-3 give an invalid lane
+    // (f = 0); valid directions are renormalized.
+    EvalResult<Real> eval(const Real wi[3], const Real wo[3], const Real* slots) const;
+
+    const CheckedMaterial& material() const { return material_; }
+
+private:
+    const CheckedMaterial& material_;
+};
+
+// Normalization integral of the Gaussian NDF, 2 pi Int_0^{pi/2} exp(-t^2/a^2) cos t sin t dt.
+template <typename Real>
+Real gaussianNdfNorm(Real alpha);
+
+extern template class Interpreter<double>;
+extern template class Interpreter<long double>;
+extern template struct ResolvedMaterial<double>;
+extern template struct ResolvedMaterial<long double>;
+
+}  // namespace facet

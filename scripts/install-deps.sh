@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Installs the Debian packages Facet needs to build and test, if any is
+# missing (a fresh machine has none of them). Runs apt-get update first.
+set -euo pipefail
+packages=(
+  build-essential cmake ninja-build python3
+  llvm-19-dev clang-19 libclang-rt-19-dev   # JIT, bitcode math library, sanitizers
+  libzstd-dev zlib1g-dev libedit-dev libxml2-dev libffi-dev libcurl4-openssl-dev  # llvm-19-dev's link deps
+  libopenimageio-dev libfmt-dev doctest-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "installing: ${missing[*]}"
+  sudo_cmd=""
+  [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
+  $sudo_cmd apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
