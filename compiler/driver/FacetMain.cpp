@@ -1,14 +1,16 @@
 // facet: the command-line driver (SPEC section 5).
 //
 //   facet check FILE...
-//   facet eval FILE [--material NAME] [--backend interp] [--set NAME=VALUE]...
-//              --in IN.csv [--out OUT.csv]
+//   facet eval FILE [--material NAME] [--backend interp|scalar|simd] [--math exact|fast]
+//              [--width 4|8|16] [--set NAME=VALUE]... --in IN.csv [--out OUT.csv]
+//   facet ir FILE [--material NAME] [--simd] [--stages] [--set NAME=VALUE]...
 //
 // Exit codes: 0 ok, 1 a check failed (e.g. invalid rows), 2 usage,
 // 65 a material file error.
 #include "Checker.h"
 #include "CsvTable.h"
 #include "Interpreter.h"
+#include "Kernel.h"
 
 #include <cmath>
 #include <cstdio>
@@ -25,8 +27,11 @@ constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitUsage = 2, kExitMaterialEr
 const char* kUsage =
     "usage: facet <command> [options]\n"
     "  check FILE...                       check material files, print diagnostics\n"
-    "  eval FILE --in IN.csv [--out OUT.csv] [--material NAME] [--backend interp]\n"
-    "       [--set NAME=VALUE]...          evaluate the BRDF for each CSV row\n"
+    "  eval FILE --in IN.csv [--out OUT.csv] [--material NAME] [--backend interp|scalar|simd]\n"
+    "       [--math exact|fast] [--width 4|8|16] [--set NAME=VALUE]...\n"
+    "                                      evaluate the BRDF for each CSV row\n"
+    "  ir FILE [--material NAME] [--simd] [--stages] [--math exact|fast] [--width N] [--set NAME=VALUE]...\n"
+    "                                      print the optimized LLVM IR (--stages: every stage)\n"
     "exit codes: 0 ok, 1 a check failed, 2 usage, 65 a material file error\n";
 
 struct UsageError {
@@ -74,9 +79,19 @@ void parseSet(const std::string& spec, Bindings& out) {
 }
 
 struct EvalOptions {
-    std::string file, material, backend = "interp", in, out;
+    std::string file, material, backend = "interp", in, out, math = "exact", width;
     Bindings bindings;
 };
+
+// Builds the compile-option string of the C++/C API from CLI flags.
+CompileOptions compileOptionsFor(const EvalOptions& opt) {
+    std::string spec = fmt::format("backend={};math={}", opt.backend, opt.math);
+    if (!opt.width.empty()) spec += ";width=" + opt.width;
+    CompileOptions options;
+    std::string error = CompileOptions::parse(spec, options);
+    if (!error.empty()) throw UsageError{error};
+    return options;
+}
 
 int cmdEval(const std::vector<std::string>& args) {
     EvalOptions opt;
@@ -91,14 +106,15 @@ int cmdEval(const std::vector<std::string>& args) {
         else if (a == "--in") opt.in = value();
         else if (a == "--out") opt.out = value();
         else if (a == "--set") parseSet(value(), opt.bindings);
+        else if (a == "--math") opt.math = value();
+        else if (a == "--width") opt.width = value();
         else if (!a.empty() && a[0] == '-') throw UsageError{fmt::format("eval: unknown option '{}'", a)};
         else if (opt.file.empty()) opt.file = a;
         else throw UsageError{fmt::format("eval: more than one material file ('{}' and '{}')", opt.file, a)};
     }
     if (opt.file.empty()) throw UsageError{"eval: no material file given"};
     if (opt.in.empty()) throw UsageError{"eval: --in IN.csv is required"};
-    if (opt.backend != "interp")
-        throw UsageError{fmt::format("eval: unknown backend '{}' (expected interp)", opt.backend)};
+    CompileOptions compileOptions = compileOptionsFor(opt);
 
     DiagnosticEngine diags;
     CheckedProgram program = loadProgramFile(opt.file, diags);
@@ -179,54 +195,145 @@ int cmdEval(const std::vector<std::string>& args) {
         }
     }
     std::fprintf(out, "r,g,b\n");
-    Interpreter<double> interp(*material);
-    int bad = 0;
-    for (size_t r = 0; r < table->rows.size(); ++r) {
+    // First pass: per-row validation with precise messages, and the slot
+    // values of every row.
+    size_t rows = table->rows.size();
+    std::vector<std::string> problems(rows);
+    std::vector<std::array<double, 6>> dirs(rows);
+    std::vector<std::vector<double>> rowSlots(rows, slots);
+    for (size_t r = 0; r < rows; ++r) {
         const CsvRow& row = table->rows[r];
-        std::string problem = row.error;
-        double rgb[3] = {0, 0, 0};
-        if (problem.empty()) {
-            double wi[3], wo[3];
-            for (int d = 0; d < 3; ++d) {
-                wi[d] = row.values[dirIndex[d]];
-                wo[d] = row.values[dirIndex[d + 3]];
-            }
-            std::vector<double> rowSlots = slots;
-            for (const auto& [col, targets] : inputColumns)
-                for (int s : targets) rowSlots[s] = row.values[col];
-            // Say precisely why a lane is invalid before evaluating it.
-            for (int d = 0; d < 6 && problem.empty(); ++d)
-                if (!std::isfinite(row.values[dirIndex[d]]))
-                    problem = fmt::format("column '{}' is {}", dirColumns[d],
-                                          std::isnan(row.values[dirIndex[d]]) ? "NaN" : "infinite");
-            for (const auto& [col, targets] : inputColumns)
-                if (problem.empty() && !std::isfinite(row.values[col]))
-                    problem = fmt::format("column '{}' is {}", table->columns[col],
-                                          std::isnan(row.values[col]) ? "NaN" : "infinite");
-            for (int d = 0; d < 2 && problem.empty(); ++d) {
-                const double* w = d ? wo : wi;
-                double len = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-                if (!(std::fabs(len - 1) <= kUnitTolerance))
-                    problem = fmt::format("{} is not a unit vector (length {:.9g})", d ? "wo" : "wi", len);
-            }
-            if (problem.empty()) {
-                EvalResult<double> res = interp.eval(wi, wo, rowSlots.data());
-                if (!res.valid) problem = "a model parameter is not finite for this row's inputs";
-                else for (int c = 0; c < 3; ++c) rgb[c] = res.rgb[c];
+        std::string& problem = problems[r];
+        problem = row.error;
+        if (!problem.empty()) continue;
+        for (int d = 0; d < 6; ++d) dirs[r][d] = row.values[dirIndex[d]];
+        for (const auto& [col, targets] : inputColumns)
+            for (int s : targets) rowSlots[r][s] = row.values[col];
+        for (int d = 0; d < 6 && problem.empty(); ++d)
+            if (!std::isfinite(dirs[r][d]))
+                problem = fmt::format("column '{}' is {}", dirColumns[d], std::isnan(dirs[r][d]) ? "NaN" : "infinite");
+        for (const auto& [col, targets] : inputColumns)
+            if (problem.empty() && !std::isfinite(row.values[col]))
+                problem = fmt::format("column '{}' is {}", table->columns[col],
+                                      std::isnan(row.values[col]) ? "NaN" : "infinite");
+        for (int d = 0; d < 2 && problem.empty(); ++d) {
+            const double* w = &dirs[r][3 * d];
+            double len = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+            if (!(std::fabs(len - 1) <= kUnitTolerance))
+                problem = fmt::format("{} is not a unit vector (length {:.9g})", d ? "wo" : "wi", len);
+        }
+    }
+    std::vector<std::array<double, 3>> results(rows, {0, 0, 0});
+    const char* parameterProblem = "a model parameter is not finite for this row's inputs";
+    if (compileOptions.backend == Backend::Interp) {
+        Interpreter<double> interp(*material);
+        for (size_t r = 0; r < rows; ++r) {
+            if (!problems[r].empty()) continue;
+            EvalResult<double> res = interp.eval(&dirs[r][0], &dirs[r][3], rowSlots[r].data());
+            if (!res.valid) problems[r] = parameterProblem;
+            else results[r] = {res.rgb[0], res.rgb[1], res.rgb[2]};
+        }
+    } else {
+        // JIT backends: the input slots are all unbound (bindings are
+        // applied per row here, so that one kernel serves every row).
+        Compiler compiler;
+        DiagnosticEngine kdiags;
+        std::unique_ptr<Kernel> kernel = compiler.compileFile(opt.file, material->name, compileOptions, kdiags);
+        if (!kernel) {
+            std::fputs(kdiags.str().c_str(), stderr);
+            return kExitMaterialError;
+        }
+        std::vector<size_t> live;
+        for (size_t r = 0; r < rows; ++r)
+            if (problems[r].empty()) live.push_back(r);
+        int slotCount = kernel->inputCount();
+        std::vector<float> soa((6 + slotCount + 3) * live.size());
+        auto column = [&](int c) { return soa.data() + c * live.size(); };
+        for (size_t j = 0; j < live.size(); ++j) {
+            for (int d = 0; d < 6; ++d) column(d)[j] = float(dirs[live[j]][d]);
+            for (int s = 0; s < slotCount; ++s) column(6 + s)[j] = float(rowSlots[live[j]][s]);
+        }
+        const float* wi[3] = {column(0), column(1), column(2)};
+        const float* wo[3] = {column(3), column(4), column(5)};
+        std::vector<const float*> inputs;
+        for (int s = 0; s < slotCount; ++s) inputs.push_back(column(6 + s));
+        float* rgb[3] = {column(6 + slotCount), column(7 + slotCount), column(8 + slotCount)};
+        int64_t invalid = 0;
+        if (compileOptions.backend == Backend::Simd) {
+            invalid = kernel->evalBatch(int64_t(live.size()), wi, wo, slotCount ? inputs.data() : nullptr, rgb);
+        } else {
+            for (size_t j = 0; j < live.size(); ++j) {
+                float a[3] = {wi[0][j], wi[1][j], wi[2][j]}, b[3] = {wo[0][j], wo[1][j], wo[2][j]}, o[3];
+                std::vector<float> in(slotCount);
+                for (int s = 0; s < slotCount; ++s) in[s] = inputs[s][j];
+                kernel->eval(a, b, in.data(), o);
+                for (int c = 0; c < 3; ++c) rgb[c][j] = o[c];
             }
         }
-        if (!problem.empty()) {
+        // Which rows the kernel found invalid: the reference says precisely.
+        Interpreter<double> interp(*material);
+        for (size_t j = 0; j < live.size(); ++j) {
+            size_t r = live[j];
+            for (int c = 0; c < 3; ++c) results[r][c] = rgb[c][j];
+            if (invalid > 0 || compileOptions.backend == Backend::Scalar) {
+                EvalResult<double> res = interp.eval(&dirs[r][0], &dirs[r][3], rowSlots[r].data());
+                if (!res.valid) problems[r] = parameterProblem;
+            }
+        }
+    }
+    bool doublePrecision = compileOptions.backend == Backend::Interp;
+    int bad = 0;
+    for (size_t r = 0; r < rows; ++r) {
+        if (!problems[r].empty()) {
             ++bad;
-            std::fprintf(stderr, "%s:%d: error: row %zu: %s; its output is 0,0,0\n", opt.in.c_str(), row.line, r + 1,
-                         problem.c_str());
+            results[r] = {0, 0, 0};
+            std::fprintf(stderr, "%s:%d: error: row %zu: %s; its output is 0,0,0\n", opt.in.c_str(),
+                         table->rows[r].line, r + 1, problems[r].c_str());
         }
-        std::fprintf(out, "%.17g,%.17g,%.17g\n", rgb[0], rgb[1], rgb[2]);
+        if (doublePrecision)
+            std::fprintf(out, "%.17g,%.17g,%.17g\n", results[r][0], results[r][1], results[r][2]);
+        else
+            std::fprintf(out, "%.9g,%.9g,%.9g\n", results[r][0], results[r][1], results[r][2]);
     }
     if (out != stdout) std::fclose(out);
     if (bad) {
-        std::fprintf(stderr, "%d of %zu rows invalid\n", bad, table->rows.size());
+        std::fprintf(stderr, "%d of %zu rows invalid\n", bad, rows);
         return kExitCheckFailed;
     }
+    return kExitOk;
+}
+
+int cmdIr(const std::vector<std::string>& args) {
+    EvalOptions opt;
+    bool simd = false, stages = false;
+    for (size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        auto value = [&]() -> const std::string& {
+            if (i + 1 >= args.size()) throw UsageError{fmt::format("ir: {} needs a value", a)};
+            return args[++i];
+        };
+        if (a == "--material") opt.material = value();
+        else if (a == "--simd") simd = true;
+        else if (a == "--stages") stages = true;
+        else if (a == "--set") parseSet(value(), opt.bindings);
+        else if (a == "--math") opt.math = value();
+        else if (a == "--width") opt.width = value();
+        else if (!a.empty() && a[0] == '-') throw UsageError{fmt::format("ir: unknown option '{}'", a)};
+        else if (opt.file.empty()) opt.file = a;
+        else throw UsageError{"ir: more than one material file"};
+    }
+    if (opt.file.empty()) throw UsageError{"ir: no material file given"};
+    opt.backend = simd ? "simd" : "scalar";
+    CompileOptions options = compileOptionsFor(opt);
+    options.bindings = opt.bindings;
+    Compiler compiler;
+    DiagnosticEngine diags;
+    std::string ir = compiler.irText(opt.file, opt.material, options, simd, stages, diags);
+    if (diags.hasErrors()) {
+        std::fputs(diags.str().c_str(), stderr);
+        return kExitMaterialError;
+    }
+    std::fputs(ir.c_str(), stdout);
     return kExitOk;
 }
 
@@ -245,10 +352,14 @@ int main(int argc, char** argv) {
     try {
         if (command == "check") return cmdCheck(args);
         if (command == "eval") return cmdEval(args);
+        if (command == "ir") return cmdIr(args);
         throw UsageError{fmt::format("unknown command '{}'", command)};
     } catch (const UsageError& e) {
         std::fprintf(stderr, "facet: %s\n%s", e.message.c_str(), kUsage);
         return kExitUsage;
+    } catch (const std::runtime_error& e) {
+        std::fprintf(stderr, "facet: error: %s\n", e.what());
+        return kExitCheckFailed;
     } catch (const InternalError& e) {
         std::fprintf(stderr, "facet: %s\n", e.what());
         return 70;

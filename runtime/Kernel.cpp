@@ -1,0 +1,366 @@
+// Kernel: option parsing, the compile pipeline, kernel caches, evaluation.
+#include "Kernel.h"
+
+#include "Checker.h"
+#include "Interpreter.h"
+#include "Jit.h"
+
+#include <llvm/Config/llvm-config.h>
+#include <llvm/IR/LLVMContext.h>
+#include <llvm/ADT/StringExtras.h>
+#include <llvm/Support/SHA256.h>
+#include <llvm/Support/raw_ostream.h>
+#include <llvm/Support/xxhash.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+
+namespace facet {
+
+// Changes whenever the lowering is rebuilt, so that a disk cache never
+// serves objects produced by older code generation.
+extern const char* const kLoweringBuildStamp;
+
+const char* backendName(Backend b) {
+    switch (b) {
+        case Backend::Interp: return "interp";
+        case Backend::Scalar: return "scalar";
+        case Backend::Simd: return "simd";
+    }
+    return "?";
+}
+
+namespace {
+
+std::optional<double> parseDouble(const std::string& s) {
+    if (s.empty()) return std::nullopt;
+    char* end = nullptr;
+    double v = std::strtod(s.c_str(), &end);
+    if (end != s.c_str() + s.size()) return std::nullopt;
+    return v;
+}
+
+double millisSince(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string defaultCacheDir() {
+    if (const char* dir = std::getenv("FACET_CACHE_DIR")) return dir;
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME")) return std::string(xdg) + "/facet";
+    if (const char* home = std::getenv("HOME")) return std::string(home) + "/.cache/facet";
+    return "";
+}
+
+constexpr char kCacheMagic[8] = {'F', 'A', 'C', 'E', 'T', 'K', 'O', '1'};
+
+// Reads a cached object; any mismatch (truncation, wrong key, bad checksum)
+// returns nullopt so the caller recompiles.
+std::optional<std::string> readCacheFile(const std::string& path, const std::string& key) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return std::nullopt;
+    char magic[8];
+    uint64_t keyLen = 0, size = 0, checksum = 0;
+    if (!in.read(magic, 8) || std::memcmp(magic, kCacheMagic, 8) != 0) return std::nullopt;
+    if (!in.read(reinterpret_cast<char*>(&keyLen), 8) || keyLen != key.size()) return std::nullopt;
+    std::string storedKey(keyLen, '\0');
+    if (!in.read(storedKey.data(), keyLen) || storedKey != key) return std::nullopt;
+    if (!in.read(reinterpret_cast<char*>(&size), 8) || !in.read(reinterpret_cast<char*>(&checksum), 8))
+        return std::nullopt;
+    if (size > (256u << 20)) return std::nullopt;
+    std::string payload(size, '\0');
+    if (!in.read(payload.data(), size)) return std::nullopt;
+    if (in.peek() != std::char_traits<char>::eof()) return std::nullopt;
+    if (llvm::xxh3_64bits(llvm::StringRef(payload)) != checksum) return std::nullopt;
+    return payload;
+}
+
+void writeCacheFile(const std::string& dir, const std::string& path, const std::string& key,
+                    const std::string& payload) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) return;  // a cache that cannot be written is only slower
+    // Write to a temporary name and rename, so a concurrent reader never
+    // sees a half-written file.
+    std::string tmp = path + ".tmp" + std::to_string(std::hash<std::string>()(key + std::to_string(std::rand())));
+    {
+        std::ofstream out(tmp, std::ios::binary);
+        uint64_t keyLen = key.size(), size = payload.size(), checksum = llvm::xxh3_64bits(llvm::StringRef(payload));
+        out.write(kCacheMagic, 8);
+        out.write(reinterpret_cast<const char*>(&keyLen), 8);
+        out.write(key.data(), keyLen);
+        out.write(reinterpret_cast<const char*>(&size), 8);
+        out.write(reinterpret_cast<const char*>(&checksum), 8);
+        out.write(payload.data(), size);
+        if (!out) {
+            std::filesystem::remove(tmp, ec);
+            return;
+        }
+    }
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) std::filesystem::remove(tmp, ec);
+}
+
+}  // namespace
+
+std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) {
+    size_t start = 0;
+    while (start <= spec.size()) {
+        size_t end = spec.find(';', start);
+        std::string item = spec.substr(start, end == std::string::npos ? std::string::npos : end - start);
+        start = end == std::string::npos ? spec.size() + 1 : end + 1;
+        // Allow blanks around items: "backend=simd; math=fast".
+        item.erase(0, item.find_first_not_of(" \t"));
+        item.erase(item.find_last_not_of(" \t") + 1);
+        if (item.empty()) continue;
+        size_t eq = item.find('=');
+        if (eq == std::string::npos) return fmt::format("option '{}' is not key=value", item);
+        std::string key = item.substr(0, eq), value = item.substr(eq + 1);
+        if (key == "backend") {
+            if (value == "scalar") out.backend = Backend::Scalar;
+            else if (value == "simd") out.backend = Backend::Simd;
+            else if (value == "interp") out.backend = Backend::Interp;
+            else return fmt::format("backend '{}' is not scalar, simd or interp", value);
+        } else if (key == "math") {
+            if (value == "exact") out.math = MathMode::Exact;
+            else if (value == "fast") out.math = MathMode::Fast;
+            else return fmt::format("math '{}' is not exact or fast", value);
+        } else if (key == "tolerance") {
+            auto v = parseDouble(value);
+            if (!v || !(*v > 0) || !std::isfinite(*v)) return fmt::format("tolerance '{}' is not a positive number", value);
+            out.tolerance = *v;
+        } else if (key == "width") {
+            if (value == "4" || value == "8" || value == "16") out.width = std::stoi(value);
+            else return fmt::format("width '{}' is not 4, 8 or 16", value);
+        } else if (key == "cache") {
+            if (value == "on") out.cache = Cache::On;
+            else if (value == "off") out.cache = Cache::Off;
+            else if (value == "memory") out.cache = Cache::Memory;
+            else return fmt::format("cache '{}' is not on, off or memory", value);
+        } else if (key.rfind("set.", 0) == 0 && key.size() > 4) {
+            std::vector<double> values;
+            size_t p = 0;
+            while (p <= value.size()) {
+                size_t comma = value.find(',', p);
+                std::string field = value.substr(p, comma == std::string::npos ? std::string::npos : comma - p);
+                auto v = parseDouble(field);
+                if (!v || !std::isfinite(*v)) return fmt::format("{}: '{}' is not a finite number", key, field);
+                values.push_back(*v);
+                p = comma == std::string::npos ? value.size() + 1 : comma + 1;
+            }
+            if (values.size() != 1 && values.size() != 3)
+                return fmt::format("{}: expected one value or three (r,g,b)", key);
+            out.bindings[key.substr(4)] = values;
+        } else {
+            return fmt::format("unknown option '{}' (known: backend, math, tolerance, width, cache, set.NAME)", key);
+        }
+    }
+    return "";
+}
+
+std::string CompileOptions::canonical() const {
+    std::string s = fmt::format("backend={};math={};width={}", backendName(backend), mathModeName(math), width);
+    if (tolerance) s += fmt::format(";tolerance={}", *tolerance);
+    for (const auto& [name, values] : bindings) {
+        s += ";set." + name + "=";
+        for (size_t i = 0; i < values.size(); ++i) s += fmt::format("{}{}", i ? "," : "", values[i]);
+    }
+    return s;
+}
+
+Kernel::~Kernel() {
+    if (jit_ && dylib_) jit_->release(*dylib_);
+}
+
+void Kernel::eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]) const {
+    if (scalar_) return scalar_(wi, wo, inputs, rgb);
+    if (batch_) {
+        // A SIMD-only kernel evaluates one lane through the batch entry.
+        const float* wiP[3] = {&wi[0], &wi[1], &wi[2]};
+        const float* woP[3] = {&wo[0], &wo[1], &wo[2]};
+        std::vector<const float*> in;
+        if (inputs)
+            for (int s = 0; s < inputCount(); ++s) in.push_back(&inputs[s]);
+        float* out[3] = {&rgb[0], &rgb[1], &rgb[2]};
+        batch_(1, wiP, woP, inputs ? in.data() : nullptr, out);
+        return;
+    }
+    Interpreter<double> interp(material_);
+    double w[2][3], slots[256];
+    std::vector<double> slotVec(std::max(1, inputCount()));
+    for (int i = 0; i < 3; ++i) {
+        w[0][i] = wi[i];
+        w[1][i] = wo[i];
+    }
+    std::vector<double> defaults = material_.defaultSlots();
+    for (int s = 0; s < inputCount(); ++s) slotVec[s] = inputs ? inputs[s] : defaults[s];
+    (void)slots;
+    EvalResult<double> r = interp.eval(w[0], w[1], slotVec.data());
+    for (int i = 0; i < 3; ++i) rgb[i] = r.valid ? float(r.rgb[i]) : 0.0f;
+}
+
+int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                          float* const rgb[3]) const {
+    if (n <= 0) return 0;
+    if (batch_) return batch_(n, wi, wo, inputs, rgb);
+    int64_t invalid = 0;
+    std::vector<double> defaults = material_.defaultSlots();
+    std::vector<double> slots(std::max(1, inputCount()));
+    Interpreter<double> interp(material_);
+    for (int64_t i = 0; i < n; ++i) {
+        double w[2][3];
+        for (int c = 0; c < 3; ++c) {
+            w[0][c] = wi[c][i];
+            w[1][c] = wo[c][i];
+        }
+        for (int s = 0; s < inputCount(); ++s)
+            slots[s] = inputs && inputs[s] ? double(inputs[s][i]) : defaults[s];
+        if (scalar_) {
+            float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, out[3];
+            std::vector<float> fs(slots.begin(), slots.end());
+            scalar_(a, b, fs.data(), out);
+            for (int c = 0; c < 3; ++c) rgb[c][i] = out[c];
+            continue;
+        }
+        EvalResult<double> r = interp.eval(w[0], w[1], slots.data());
+        if (!r.valid) ++invalid;
+        for (int c = 0; c < 3; ++c) rgb[c][i] = r.valid ? float(r.rgb[c]) : 0.0f;
+    }
+    return invalid;
+}
+
+Compiler::Compiler() : jit_(FacetJit::Create()), cacheDir_(defaultCacheDir()) {}
+Compiler::~Compiler() = default;
+
+int Compiler::resolveWidth(const CompileOptions& options) const {
+    return options.width ? options.width : jit_->hostVectorWidth();
+}
+
+std::unique_ptr<Kernel> Compiler::compileFile(const std::string& path, const std::string& name,
+                                              const CompileOptions& options, DiagnosticEngine& diags) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        diags.error({std::make_shared<const std::string>(path), 0, 0}, "cannot open file");
+        return nullptr;
+    }
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return compileText(text, path, name, options, diags);
+}
+
+std::unique_ptr<Kernel> Compiler::compileText(const std::string& text, const std::string& path,
+                                              const std::string& name, const CompileOptions& options,
+                                              DiagnosticEngine& diags) {
+    auto start = std::chrono::steady_clock::now();
+    auto program = std::make_shared<CheckedProgram>(loadProgramText(text, path, diags));
+    if (diags.hasErrors()) return nullptr;
+    const CheckedMaterial* material = program->find(name);
+    if (!material) {
+        diags.error({std::make_shared<const std::string>(path), 0, 0},
+                    fmt::format("no material named '{}'", name));
+        return nullptr;
+    }
+    CheckedMaterial specialized = specializeMaterial(*material, options.bindings, diags);
+    if (diags.hasErrors()) return nullptr;
+
+    std::unique_ptr<Kernel> kernel(new Kernel());
+    kernel->program_ = program;
+    kernel->material_ = std::move(specialized);
+    kernel->backend_ = options.backend;
+    for (int s = 0; s < kernel->material_.slotCount; ++s) kernel->slotNames_.push_back(kernel->material_.slotName(s));
+    if (options.backend == Backend::Interp) {
+        kernel->origin_ = "interpreter";
+        kernel->compileMillis_ = millisSince(start);
+        return kernel;
+    }
+    kernel->width_ = options.backend == Backend::Simd ? resolveWidth(options) : 1;
+
+    LoweringOptions lowering;
+    lowering.math = options.math;
+    lowering.width = options.backend == Backend::Simd ? kernel->width_ : 4;
+    lowering.emitScalar = options.backend == Backend::Scalar;
+    lowering.emitBatch = options.backend == Backend::Simd;
+
+    // The cache key: what the kernel computes (the specialized material,
+    // printed), how (options, width), and with what (LLVM, CPU, codegen build).
+    std::string keyText = fmt::format("{}|{}|{}|w{}|{}|{}|{}|{}", printMaterial(kernel->material_), options.canonical(),
+                                      mathModeName(lowering.math), lowering.width, LLVM_VERSION_STRING,
+                                      jit_->cpuName(), jit_->cpuFeatures(), kLoweringBuildStamp);
+    auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(keyText));
+    std::string key = llvm::toHex(digest, true);
+    std::string prefix = "facet_" + key.substr(0, 16);
+    std::string cachePath = cacheDir_.empty() ? "" : cacheDir_ + "/" + key + ".fko";
+
+    std::optional<std::string> object;
+    if (options.cache != CompileOptions::Cache::Off) {
+        std::lock_guard<std::mutex> lock(cacheMutex_);
+        auto it = memoryCache_.find(key);
+        if (it != memoryCache_.end()) {
+            object = it->second;
+            kernel->origin_ = "memory cache";
+        }
+    }
+    if (!object && options.cache == CompileOptions::Cache::On && !cachePath.empty()) {
+        object = readCacheFile(cachePath, key);
+        if (object) kernel->origin_ = "disk cache";
+    }
+    if (!object) {
+        llvm::LLVMContext context;
+        LoweredModule lowered = lowerMaterial(kernel->material_, lowering, context, prefix);
+        jit_->optimize(*lowered.module);
+        std::unique_ptr<llvm::MemoryBuffer> buffer = jit_->emitObject(*lowered.module);
+        object = buffer->getBuffer().str();
+        kernel->origin_ = "compiled";
+        if (options.cache == CompileOptions::Cache::On && !cachePath.empty())
+            writeCacheFile(cacheDir_, cachePath, key, *object);
+    }
+    if (options.cache != CompileOptions::Cache::Off) {
+        std::lock_guard<std::mutex> lock(cacheMutex_);
+        memoryCache_.emplace(key, *object);
+    }
+    kernel->jit_ = jit_;
+    kernel->dylib_ = &jit_->addObject(llvm::MemoryBuffer::getMemBufferCopy(*object, prefix));
+    if (lowering.emitScalar)
+        kernel->scalar_ = reinterpret_cast<ScalarKernelFn>(jit_->lookup(*kernel->dylib_, prefix + "_scalar"));
+    if (lowering.emitBatch)
+        kernel->batch_ = reinterpret_cast<BatchKernelFn>(jit_->lookup(*kernel->dylib_, prefix + "_batch"));
+    kernel->compileMillis_ = millisSince(start);
+    return kernel;
+}
+
+std::string Compiler::irText(const std::string& path, const std::string& name, const CompileOptions& options,
+                             bool simd, bool stages, DiagnosticEngine& diags) {
+    CheckedProgram program = loadProgramFile(path, diags);
+    if (diags.hasErrors()) return "";
+    const CheckedMaterial* material = program.find(name);
+    if (!material) {
+        diags.error({std::make_shared<const std::string>(path), 0, 0}, fmt::format("no material named '{}'", name));
+        return "";
+    }
+    CheckedMaterial specialized = specializeMaterial(*material, options.bindings, diags);
+    if (diags.hasErrors()) return "";
+    LoweringOptions lowering;
+    lowering.math = options.math;
+    lowering.width = simd ? resolveWidth(options) : 4;
+    lowering.emitScalar = !simd;
+    lowering.emitBatch = simd;
+    std::string out;
+    llvm::raw_string_ostream os(out);
+    if (stages) {
+        os << "; ==== stage 1: checked material\n" << printMaterial(*material);
+        os << "; ==== stage 2: specialized material (" << options.bindings.size() << " inputs bound)\n"
+           << printMaterial(specialized);
+    }
+    llvm::LLVMContext context;
+    LoweredModule lowered = lowerMaterial(specialized, lowering, context, "facet_" + specialized.name);
+    if (stages) os << "; ==== stage 3: lowered IR (verified, unoptimized)\n" << *lowered.module;
+    jit_->optimize(*lowered.module);
+    if (stages) os << "; ==== stage 4: optimized IR\n";
+    os << *lowered.module;
+    return os.str();
+}
+
+}  // namespace facet

@@ -1,0 +1,111 @@
+// Kernel: the C++ library API — compile a material with options, evaluate it.
+//
+// A Compiler owns one JIT and the compiled-kernel caches (in memory, and on
+// disk under FACET_CACHE_DIR or ~/.cache/facet). Several Compilers may live
+// in one process. A Kernel is immutable once built and safe to evaluate from
+// many threads at once.
+//
+// Options (SPEC section 4) are "key=value" pairs separated by ';':
+//   backend=scalar|simd|interp   math=exact|fast   tolerance=X
+//   width=4|8|16                 set.NAME=VALUE (rgb: set.NAME=r,g,b)
+//   cache=on|off|memory
+#pragma once
+
+#include "Lowering.h"
+#include "Material.h"
+#include "Specialize.h"
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+namespace llvm::orc { class JITDylib; }
+
+namespace facet {
+
+class FacetJit;
+
+enum class Backend { Interp, Scalar, Simd };
+const char* backendName(Backend b);
+
+struct CompileOptions {
+    Backend backend = Backend::Simd;
+    MathMode math = MathMode::Exact;
+    std::optional<double> tolerance;
+    int width = 0;  // 0: the host's natural width
+    InputBindings bindings;
+    enum class Cache { On, Off, Memory } cache = Cache::On;
+
+    // Parses the ';'-separated option string; returns an error message or "".
+    static std::string parse(const std::string& spec, CompileOptions& out);
+    std::string canonical() const;  // stable text, part of the cache key
+};
+
+using ScalarKernelFn = void (*)(const float*, const float*, const float*, float*);
+using BatchKernelFn = int64_t (*)(int64_t, const float* const*, const float* const*, const float* const*,
+                                  float* const*);
+
+class Kernel {
+public:
+    ~Kernel();
+    const CheckedMaterial& material() const { return material_; }  // specialized
+    Backend backend() const { return backend_; }
+    int width() const { return width_; }
+    int inputCount() const { return material_.slotCount; }
+    const std::string& inputName(int slot) const { return slotNames_.at(slot); }
+    // How this kernel was obtained: "compiled", "memory cache", "disk cache".
+    const std::string& origin() const { return origin_; }
+    double compileMillis() const { return compileMillis_; }
+
+    void eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]) const;
+    int64_t evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                      float* const rgb[3]) const;
+
+private:
+    friend class Compiler;
+    Kernel() = default;
+    CheckedMaterial material_;
+    std::shared_ptr<const CheckedProgram> program_;  // keeps the AST alive
+    Backend backend_ = Backend::Simd;
+    int width_ = 1;
+    std::vector<std::string> slotNames_;
+    ScalarKernelFn scalar_ = nullptr;
+    BatchKernelFn batch_ = nullptr;
+    std::shared_ptr<FacetJit> jit_;
+    llvm::orc::JITDylib* dylib_ = nullptr;
+    std::string origin_;
+    double compileMillis_ = 0;
+};
+
+class Compiler {
+public:
+    Compiler();
+    ~Compiler();
+    // Compiles material `name` (empty: the first) of the file. On a user
+    // error returns null and fills diags.
+    std::unique_ptr<Kernel> compileFile(const std::string& path, const std::string& name,
+                                        const CompileOptions& options, DiagnosticEngine& diags);
+    std::unique_ptr<Kernel> compileText(const std::string& text, const std::string& path, const std::string& name,
+                                        const CompileOptions& options, DiagnosticEngine& diags);
+
+    // The optimized IR of a material, for `facet ir`. With `stages`, also the
+    // checked and specialized material and the IR before optimization.
+    std::string irText(const std::string& path, const std::string& name, const CompileOptions& options,
+                       bool simd, bool stages, DiagnosticEngine& diags);
+
+    FacetJit& jit() { return *jit_; }
+    int resolveWidth(const CompileOptions& options) const;
+    void setCacheDir(std::string dir) { cacheDir_ = std::move(dir); }
+    const std::string& cacheDir() const { return cacheDir_; }
+
+private:
+    std::shared_ptr<FacetJit> jit_;
+    std::string cacheDir_;
+    std::mutex cacheMutex_;
+    std::map<std::string, std::string> memoryCache_;  // key -> object bytes
+};
+
+}  // namespace facet

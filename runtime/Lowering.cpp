@@ -1,0 +1,787 @@
+// Lowering: per-lane BRDF formulas in IR, and the scalar and batch drivers
+// around them (see Lowering.h).
+#include "Lowering.h"
+
+#include "Diagnostics.h"
+#include "Interpreter.h"  // gaussianNdfNorm: the normalization table is filled from the reference quadrature
+#include "Specialize.h"
+#include "VectorMath.h"
+
+#include <llvm/IR/Constants.h>
+#include <llvm/IR/IRBuilder.h>
+#include <llvm/IR/Verifier.h>
+#include <llvm/Support/raw_ostream.h>
+
+#include <cmath>
+
+namespace facet {
+
+const char* mathModeName(MathMode m) { return m == MathMode::Exact ? "exact" : "fast"; }
+
+namespace {
+
+using llvm::Value;
+constexpr double kPi = 3.141592653589793238462643383279502884;
+
+// A lowered expression value: one channel for float, three for rgb. When the
+// three channel Values are the same pointer the rgb is gray and every
+// operation on it is emitted once ("computed once" specialization).
+struct LVal {
+    std::array<Value*, 3> c{};
+    bool rgb = false;
+    bool gray() const { return c[0] == c[1] && c[1] == c[2]; }
+    static LVal scalar(Value* v) { return {{v, v, v}, false}; }
+};
+
+// Gaussian NDF normalization N(alpha) tabulated as q(x) = ln N(e^x) over
+// x = ln alpha in [ln 1e-4, ln 1e4], for alphas that are only known per lane.
+// Cubic (4-point Lagrange) interpolation keeps the relative error < 1e-8.
+struct GaussianNormTable {
+    static constexpr int kSize = 1024;
+    static constexpr double kX0 = -9.210340371976184;  // ln 1e-4
+    static constexpr double kX1 = 9.210340371976184;   // ln 1e4
+    std::vector<double> q;
+    GaussianNormTable() : q(kSize) {
+        for (int i = 0; i < kSize; ++i) {
+            double x = kX0 + (kX1 - kX0) * i / (kSize - 1);
+            q[i] = std::log(gaussianNdfNorm<double>(std::exp(x)));
+        }
+    }
+    static const GaussianNormTable& get() {
+        static const GaussianNormTable table;  // immutable data, built once per process
+        return table;
+    }
+};
+
+class LaneEmitter {
+public:
+    LaneEmitter(const CheckedMaterial& m, const LoweringOptions& opt, llvm::IRBuilder<>& b, llvm::Type* F,
+                llvm::Module& module)
+        : mat_(m), opt_(opt), b_(b), f_(b, F), d_(b, doubleOf(b, F)), module_(module) {
+        invalid_ = llvm::Constant::getNullValue(boolType());
+    }
+
+    struct Result {
+        std::array<Value*, 3> rgb;
+        Value* invalid;
+    };
+
+    Result emit(std::array<Value*, 3> wi, std::array<Value*, 3> wo, const std::vector<Value*>& slots) {
+        MathEmitter& m = f_;
+        // SPEC 2: non-finite or non-unit directions are invalid lanes;
+        // valid ones are renormalized.
+        auto direction = [&](std::array<Value*, 3>& w) {
+            Value* finite = b_.CreateAnd(b_.CreateAnd(m.isFinite(w[0]), m.isFinite(w[1])), m.isFinite(w[2]));
+            Value* len = m.sqrt(m.fma(w[0], w[0], m.fma(w[1], w[1], m.mul(w[2], w[2]))));
+            Value* unit = m.le(m.abs(m.sub(len, m.c(1.0))), m.c(kUnitTolerance));
+            markInvalid(b_.CreateNot(b_.CreateAnd(finite, unit)));
+            Value* inv = m.div(m.c(1.0), len);
+            for (Value*& x : w) x = m.mul(x, inv);
+        };
+        direction(wi);
+        direction(wo);
+        // Inputs: non-finite values are invalid; in-range clamping.
+        inputs_.clear();
+        for (const CheckedInput& in : mat_.inputs) {
+            LVal v;
+            v.rgb = in.type == ValueType::Rgb;
+            for (int ch = 0; ch < in.slotCount(); ++ch) {
+                Value* x = slots.at(in.firstSlot + ch);
+                markInvalid(b_.CreateNot(m.isFinite(x)));
+                if (in.hasRange) x = m.maxnum(m.minnum(x, m.c(in.hi)), m.c(in.lo));
+                v.c[ch] = x;
+            }
+            if (!v.rgb) v.c[1] = v.c[2] = v.c[0];
+            inputs_.push_back(v);
+        }
+        lets_.clear();
+        for (const CheckedLet& let : mat_.lets) lets_.push_back(lower(*let.value));
+
+        Result r;
+        r.rgb = brdf(wi, wo);
+        for (Value*& x : r.rgb) {
+            // A value that overflows float is an invalid lane, never Inf/NaN.
+            markInvalid(b_.CreateNot(b_.CreateAnd(m.isFinite(x), m.ge(x, m.c(0.0)))));
+        }
+        for (Value*& x : r.rgb) x = m.select(invalid_, m.c(0.0), x);
+        r.invalid = invalid_;
+        return r;
+    }
+
+private:
+    static llvm::Type* doubleOf(llvm::IRBuilder<>& b, llvm::Type* F) {
+        if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(F))
+            return llvm::FixedVectorType::get(b.getDoubleTy(), vt->getNumElements());
+        return b.getDoubleTy();
+    }
+    llvm::Type* boolType() {
+        if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(f_.type()))
+            return llvm::FixedVectorType::get(b_.getInt1Ty(), vt->getNumElements());
+        return b_.getInt1Ty();
+    }
+    void markInvalid(Value* cond) { invalid_ = b_.CreateOr(invalid_, cond); }
+
+    // ---- expressions ----
+
+    // Applies `op` channel-wise, once for gray values.
+    template <typename Op>
+    LVal map(const std::vector<LVal>& args, bool rgb, Op op) {
+        LVal out;
+        out.rgb = rgb;
+        bool gray = true;
+        for (const LVal& a : args) gray &= a.gray();
+        for (int ch = 0; ch < 3; ++ch) {
+            if (gray && ch > 0) {
+                out.c[ch] = out.c[0];
+                continue;
+            }
+            std::vector<Value*> xs;
+            for (const LVal& a : args) xs.push_back(a.c[ch]);
+            out.c[ch] = op(xs);
+        }
+        return out;
+    }
+
+    // x^k for a small integer k, by repeated squaring (exact-ish and fast).
+    Value* powInt(Value* x, long k) {
+        MathEmitter& m = f_;
+        bool negative = k < 0;
+        unsigned long e = negative ? -k : k;
+        Value* result = m.c(1.0);
+        Value* base = x;
+        bool first = true;
+        while (e) {
+            if (e & 1) {
+                result = first ? base : m.mul(result, base);
+                first = false;
+            }
+            e >>= 1;
+            if (e) base = m.mul(base, base);
+        }
+        return negative ? m.div(m.c(1.0), result) : result;
+    }
+
+    std::optional<long> smallIntegerConstant(const Expr& e) {
+        if (e.kind != ExprKind::Number) return std::nullopt;
+        double v = static_cast<const NumberExpr&>(e).value;
+        if (v != std::floor(v) || std::fabs(v) > 64) return std::nullopt;
+        return long(v);
+    }
+
+    Value* applyBuiltin(BuiltinFn fn, const std::vector<Value*>& a) {
+        MathEmitter& m = f_;
+        switch (fn) {
+            case BuiltinFn::Sqrt: return m.sqrt(a[0]);
+            case BuiltinFn::Pow: return m.pow(a[0], a[1]);
+            case BuiltinFn::Exp: return m.exp(a[0]);
+            case BuiltinFn::Log: return m.log(a[0]);
+            case BuiltinFn::Abs: return m.abs(a[0]);
+            case BuiltinFn::Min: return m.min(a[0], a[1]);
+            case BuiltinFn::Max: return m.max(a[0], a[1]);
+            case BuiltinFn::Clamp: {
+                // As the reference: NaN anywhere gives NaN; otherwise lo wins
+                // over hi when the bounds are inverted.
+                Value* nan = b_.CreateOr(b_.CreateOr(m.isNan(a[0]), m.isNan(a[1])), m.isNan(a[2]));
+                Value* r = m.select(m.lt(a[0], a[1]), a[1], m.select(m.gt(a[0], a[2]), a[2], a[0]));
+                return m.select(nan, m.c(NAN), r);
+            }
+            case BuiltinFn::Mix: return m.fma(m.sub(a[1], a[0]), a[2], a[0]);
+            case BuiltinFn::PhongExponent: {
+                Value* r2 = m.mul(a[0], a[0]);
+                return m.sub(m.div(m.c(2.0), m.mul(r2, r2)), m.c(2.0));
+            }
+            case BuiltinFn::BeckmannToPhong: return m.sub(m.div(m.c(2.0), m.mul(a[0], a[0])), m.c(2.0));
+            case BuiltinFn::Rgb: break;
+        }
+        internal_error << "builtin has no channel-wise lowering";
+    }
+
+    LVal lower(const Expr& e) {
+        MathEmitter& m = f_;
+        switch (e.kind) {
+            case ExprKind::Number: return LVal::scalar(m.c(static_cast<const NumberExpr&>(e).value));
+            case ExprKind::Name: {
+                const auto& n = static_cast<const NameExpr&>(e);
+                return n.binding == BindingKind::Input ? inputs_.at(n.index) : lets_.at(n.index);
+            }
+            case ExprKind::Unary: {
+                LVal v = lower(*static_cast<const UnaryExpr&>(e).operand);
+                return map({v}, v.rgb, [&](auto& x) { return m.neg(x[0]); });
+            }
+            case ExprKind::Binary: {
+                const auto& bin = static_cast<const BinaryExpr&>(e);
+                LVal l = lower(*bin.lhs), r = lower(*bin.rhs);
+                bool rgb = l.rgb || r.rgb;
+                if (bin.op == BinaryOp::Pow)
+                    if (auto k = smallIntegerConstant(*bin.rhs))
+                        return map({l}, rgb, [&](auto& x) { return powInt(x[0], *k); });
+                return map({l, r}, rgb, [&](auto& x) -> Value* {
+                    switch (bin.op) {
+                        case BinaryOp::Add: return m.add(x[0], x[1]);
+                        case BinaryOp::Sub: return m.sub(x[0], x[1]);
+                        case BinaryOp::Mul: return m.mul(x[0], x[1]);
+                        case BinaryOp::Div: return m.div(x[0], x[1]);
+                        case BinaryOp::Pow: return m.pow(x[0], x[1]);
+                    }
+                    return nullptr;
+                });
+            }
+            case ExprKind::Call: {
+                const auto& call = static_cast<const CallExpr&>(e);
+                internal_assert(call.function) << "unresolved call " << call.callee;
+                std::vector<LVal> args;
+                for (const Argument& a : call.args) args.push_back(lower(*a.value));
+                if (call.function->id == BuiltinFn::Rgb) return {{args[0].c[0], args[1].c[0], args[2].c[0]}, true};
+                if (call.function->id == BuiltinFn::Pow)
+                    if (auto k = smallIntegerConstant(*call.args[1].value))
+                        return map({args[0]}, e.type == ValueType::Rgb, [&](auto& x) { return powInt(x[0], *k); });
+                return map(args, e.type == ValueType::Rgb,
+                           [&](auto& x) { return applyBuiltin(call.function->id, x); });
+            }
+        }
+        internal_error << "unknown expression kind";
+    }
+
+    // Model parameter, clamped to [lo, hi]; NaN, or infinite after clamping,
+    // marks the lane invalid (as in the reference).
+    Value* clampParam(Value* x, double lo, double hi) {
+        MathEmitter& m = f_;
+        markInvalid(m.isNan(x));
+        if (std::isfinite(hi)) x = m.minnum(x, m.c(hi));
+        x = m.maxnum(x, m.c(lo));
+        markInvalid(b_.CreateNot(m.isFinite(x)));
+        return x;
+    }
+    Value* scalarParam(const ModelUse& use, int p, double lo, double hi) {
+        return clampParam(lower(*use.args.at(p)).c[0], lo, hi);
+    }
+    LVal rgbParam(const ModelUse& use, int p, double lo, double hi) {
+        LVal v = lower(*use.args.at(p));
+        return map({v}, true, [&](auto& x) { return clampParam(x[0], lo, hi); });
+    }
+
+    // ---- model terms ----
+
+    struct Ndf {
+        Value *ax = nullptr, *ay = nullptr;  // ggx, beckmann, ward, gtr, gaussian
+        bool isotropic = false;
+        Value* exponent = nullptr;  // blinn_phong
+        Value* gamma = nullptr;     // gtr
+        Value* gaussianNorm = nullptr;
+    };
+
+    Ndf ndfParams() {
+        MathEmitter& m = f_;
+        Ndf n;
+        const ModelUse& use = mat_.ndf;
+        switch (mat_.ndfModel()) {
+            case NdfModel::Ggx:
+            case NdfModel::Beckmann:
+            case NdfModel::Ward:
+                n.ax = scalarParam(use, param::AlphaX, kMinAlpha, INFINITY);
+                n.isotropic = use.args[param::AlphaX] == use.args[param::AlphaY];
+                n.ay = n.isotropic ? n.ax : scalarParam(use, param::AlphaY, kMinAlpha, INFINITY);
+                break;
+            case NdfModel::BlinnPhong: n.exponent = scalarParam(use, param::Exponent, 0, kMaxPhongExponent); break;
+            case NdfModel::Gtr:
+                n.ax = n.ay = scalarParam(use, param::GtrAlpha, kMinAlpha, INFINITY);
+                n.gamma = scalarParam(use, param::GtrGamma, 0, INFINITY);
+                n.isotropic = true;
+                break;
+            case NdfModel::Gaussian: {
+                n.ax = n.ay = scalarParam(use, param::GaussianAlpha, kMinAlpha, INFINITY);
+                n.isotropic = true;
+                const Expr& arg = *use.args[param::GaussianAlpha];
+                if (isConstantExpr(arg)) {
+                    double alpha = std::max(constantValue(arg)[0], kMinAlpha);
+                    n.gaussianNorm = m.c(gaussianNdfNorm<double>(alpha));
+                } else {
+                    n.gaussianNorm = gaussianNormLookup(n.ax);
+                }
+                break;
+            }
+        }
+        return n;
+    }
+
+    // N(alpha) per lane from GaussianNormTable: 4-point Lagrange in double,
+    // table entries fetched with gathers.
+    Value* gaussianNormLookup(Value* alpha) {
+        const GaussianNormTable& t = GaussianNormTable::get();
+        MathEmitter& d = d_;
+        llvm::LLVMContext& ctx = module_.getContext();
+        auto* arrTy = llvm::ArrayType::get(b_.getDoubleTy(), t.q.size());
+        llvm::GlobalVariable* gv = module_.getNamedGlobal("facet_gaussian_norm_table");
+        if (!gv) {
+            gv = new llvm::GlobalVariable(module_, arrTy, true, llvm::GlobalValue::PrivateLinkage,
+                                          llvm::ConstantDataArray::get(ctx, t.q), "facet_gaussian_norm_table");
+        }
+        double h = (GaussianNormTable::kX1 - GaussianNormTable::kX0) / (GaussianNormTable::kSize - 1);
+        Value* x = d.log(d.convert(alpha, d.type()));
+        Value* u = d.div(d.sub(x, d.c(GaussianNormTable::kX0)), d.c(h));
+        // Keep the 4-point stencil inside the table: i in [1, size - 3].
+        u = d.minnum(d.maxnum(u, d.c(1.0)), d.c(GaussianNormTable::kSize - 2.0));
+        Value* fi = d.minnum(intrinsic(llvm::Intrinsic::floor, u), d.c(GaussianNormTable::kSize - 3.0));
+        Value* s = d.sub(u, fi);
+        llvm::Type* i32 = b_.getInt32Ty();
+        llvm::Type* idxTy = d.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, d.width()) : i32;
+        Value* idx = b_.CreateFPToSI(fi, idxTy);
+        auto fetch = [&](int offset) -> Value* {
+            Value* j = b_.CreateAdd(idx, llvm::ConstantInt::get(idxTy, offset, true));
+            Value* ptr = b_.CreateGEP(b_.getDoubleTy(), gv, j);
+            if (d.width() == 1) return b_.CreateLoad(b_.getDoubleTy(), ptr);
+            return b_.CreateMaskedGather(d.type(), ptr, llvm::Align(8));
+        };
+        Value *p0 = fetch(-1), *p1 = fetch(0), *p2 = fetch(1), *p3 = fetch(2);
+        // Lagrange weights at s for nodes -1, 0, 1, 2.
+        Value* sm1 = d.add(s, d.c(1.0));
+        Value* s1 = d.sub(s, d.c(1.0));
+        Value* s2 = d.sub(s, d.c(2.0));
+        Value* w0 = d.mul(d.mul(s, d.mul(s1, s2)), d.c(-1.0 / 6.0));
+        Value* w1 = d.mul(d.mul(sm1, d.mul(s1, s2)), d.c(0.5));
+        Value* w2 = d.mul(d.mul(sm1, d.mul(s, s2)), d.c(-0.5));
+        Value* w3 = d.mul(d.mul(sm1, d.mul(s, s1)), d.c(1.0 / 6.0));
+        Value* q = d.fma(w0, p0, d.fma(w1, p1, d.fma(w2, p2, d.mul(w3, p3))));
+        return f_.convert(d.exp(q), f_.type());
+    }
+
+    Value* intrinsic(llvm::Intrinsic::ID id, Value* a) { return b_.CreateIntrinsic(id, {a->getType()}, {a}); }
+
+    // expm1(y)/y in double, continuous at 0.
+    Value* expm1OverX(Value* y) {
+        MathEmitter& d = d_;
+        Value* series = d.poly(y, {1.0, 0.5, 1.0 / 6.0, 1.0 / 24.0});
+        Value* direct = d.div(d.sub(d.exp(y), d.c(1.0)), y);
+        return d.select(d.lt(d.abs(y), d.c(1e-5)), series, direct);
+    }
+
+    // mx^2/ax^2 + my^2/ay^2 (one division when isotropic).
+    Value* slope2(const Ndf& n, const std::array<Value*, 3>& h) {
+        MathEmitter& m = f_;
+        Value *x2 = m.mul(h[0], h[0]), *y2 = m.mul(h[1], h[1]);
+        if (n.isotropic) return m.div(m.add(x2, y2), m.mul(n.ax, n.ax));
+        return m.add(m.div(x2, m.mul(n.ax, n.ax)), m.div(y2, m.mul(n.ay, n.ay)));
+    }
+
+    Value* D(const Ndf& n, const std::array<Value*, 3>& h) {
+        MathEmitter& m = f_;
+        Value *x2 = m.mul(h[0], h[0]), *y2 = m.mul(h[1], h[1]), *z2 = m.mul(h[2], h[2]);
+        auto slope2 = [&]() { return this->slope2(n, h); };
+        switch (mat_.ndfModel()) {
+            case NdfModel::Ggx: {
+                Value* t = m.add(slope2(), z2);
+                return m.div(m.c(1.0 / kPi), m.mul(m.mul(n.ax, n.ay), m.mul(t, t)));
+            }
+            case NdfModel::Beckmann: {
+                Value* e = m.div(slope2(), z2);
+                Value* D = m.div(m.exp(m.neg(e)), m.mul(m.mul(m.c(kPi), m.mul(n.ax, n.ay)), m.mul(z2, z2)));
+                return m.select(m.gt(e, m.c(100.0)), m.c(0.0), D);  // exp underflowed; avoid 0/0
+            }
+            case NdfModel::BlinnPhong: {
+                // mz^e = exp(e/2 log1p(-(mx^2 + my^2))) in double: mz itself
+                // is too coarse in float once e is large (1e6).
+                MathEmitter& d = d_;
+                Value *X = d.convert(h[0], d.type()), *Y = d.convert(h[1], d.type());
+                Value* s2 = d.fma(X, X, d.mul(Y, Y));
+                Value* E = d.convert(n.exponent, d.type());
+                Value* p = d.exp(d.mul(d.mul(E, d.c(0.5)), d.log1p(d.neg(s2))));
+                p = d.select(d.eq(E, d.c(0.0)), d.c(1.0), p);
+                Value* norm = d.mul(d.add(E, d.c(2.0)), d.c(1.0 / (2 * kPi)));
+                return f_.convert(d.mul(norm, p), f_.type());
+            }
+            case NdfModel::Gtr: {
+                // c / t^gamma, c = phi(L) / (pi phi((1 - gamma) L)), L = ln a^2,
+                // t = a^2 mz^2 + mx^2 + my^2; all in double.
+                MathEmitter& d = d_;
+                Value* A = d.convert(n.ax, d.type());
+                Value* A2 = d.mul(A, A);
+                Value* L = d.log(A2);
+                Value* G = d.convert(n.gamma, d.type());
+                Value* c = d.div(expm1OverX(L), d.mul(d.c(kPi), expm1OverX(d.mul(d.sub(d.c(1.0), G), L))));
+                Value *X = d.convert(h[0], d.type()), *Y = d.convert(h[1], d.type()), *Z = d.convert(h[2], d.type());
+                Value* t = d.fma(A2, d.mul(Z, Z), d.fma(X, X, d.mul(Y, Y)));
+                return f_.convert(d.mul(c, d.exp(d.neg(d.mul(G, d.log(t))))), f_.type());
+            }
+            case NdfModel::Gaussian: {
+                Value* theta = m.atan2(m.sqrt(m.add(x2, y2)), h[2]);
+                Value* e = m.div(m.mul(theta, theta), m.mul(n.ax, n.ax));
+                return m.div(m.exp(m.neg(e)), n.gaussianNorm);
+            }
+            case NdfModel::Ward: break;
+        }
+        internal_error << "D for ward";
+    }
+
+    // Smith Lambda(v) for ggx, beckmann and blinn_phong.
+    Value* lambda(const Ndf& n, const std::array<Value*, 3>& v) {
+        MathEmitter& m = f_;
+        Value *ax = n.ax, *ay = n.ay;
+        bool iso = n.isotropic;
+        if (mat_.ndfModel() == NdfModel::BlinnPhong) {
+            ax = ay = m.sqrt(m.div(m.c(2.0), m.add(n.exponent, m.c(2.0))));
+            iso = true;
+        }
+        Value* proj = iso ? m.mul(m.mul(ax, ax), m.fma(v[0], v[0], m.mul(v[1], v[1])))
+                          : m.fma(m.mul(v[0], ax), m.mul(v[0], ax), m.mul(m.mul(v[1], ay), m.mul(v[1], ay)));
+        if (mat_.ndfModel() == NdfModel::Ggx) {
+            // t = alpha tan(theta); Lambda = (sqrt(1 + t^2) - 1)/2 written as
+            // t^2 / (2 (1 + sqrt(1 + t^2))), and (t - 1)/2 once t^2 would overflow.
+            Value* t = m.div(m.sqrt(proj), v[2]);
+            Value* t2 = m.mul(t, t);
+            Value* small = m.div(t2, m.mul(m.c(2.0), m.add(m.c(1.0), m.sqrt(m.add(m.c(1.0), t2)))));
+            return m.select(m.gt(t, m.c(1e7)), m.mul(m.sub(t, m.c(1.0)), m.c(0.5)), small);
+        }
+        // Beckmann: a = cot / alpha; Lambda = (exp(-a^2)/(a sqrt(pi)) - erfc(a)) / 2.
+        Value* a = m.div(v[2], m.sqrt(proj));
+        Value* l = m.mul(m.c(0.5), m.sub(m.div(m.exp(m.neg(m.mul(a, a))), m.mul(a, m.c(std::sqrt(kPi)))), m.erfc(a)));
+        l = m.maxnum(l, m.c(0.0));
+        return m.select(m.eq(proj, m.c(0.0)), m.c(0.0), l);
+    }
+
+    Value* G(const Ndf& n, const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo,
+             const std::array<Value*, 3>& h, Value* ci, Value* co, Value* oh) {
+        MathEmitter& m = f_;
+        Value* nh = h[2];
+        Value* one = m.c(1.0);
+        auto azimuthWeight = [&] {
+            Value* cross = m.abs(m.sub(m.mul(wi[0], wo[1]), m.mul(wi[1], wo[0])));
+            Value* dot = m.fma(wi[0], wo[0], m.mul(wi[1], wo[1]));
+            Value* phi = m.mul(m.c(4.41), m.atan2(cross, dot));
+            return m.div(phi, m.add(phi, one));
+        };
+        switch (mat_.maskingModel()) {
+            case MaskingModel::None: return one;
+            case MaskingModel::Implicit: return m.mul(ci, co);
+            case MaskingModel::CookTorrance: {
+                Value* k = m.div(m.mul(m.c(2.0), nh), oh);
+                return m.minnum(one, m.mul(k, m.minnum(ci, co)));
+            }
+            case MaskingModel::Kelemen: return m.div(m.mul(ci, co), m.mul(oh, oh));
+            case MaskingModel::Neumann: return m.div(m.mul(ci, co), m.maxnum(ci, co));
+            case MaskingModel::SchlickSmith: {
+                Value* k = scalarParam(mat_.masking, param::SchlickK, 0, 1);
+                Value* omk = m.sub(one, k);
+                auto g1 = [&](Value* c) { return m.div(c, m.fma(c, omk, k)); };
+                return m.mul(g1(ci), g1(co));
+            }
+            case MaskingModel::SmithSeparable:
+                return m.div(one, m.mul(m.add(one, lambda(n, wi)), m.add(one, lambda(n, wo))));
+            case MaskingModel::SmithHeightCorrelated:
+                return m.div(one, m.add(one, m.add(lambda(n, wi), lambda(n, wo))));
+            case MaskingModel::SmithDirectionCorrelated: {
+                Value* g1i = m.div(one, m.add(one, lambda(n, wi)));
+                Value* g1o = m.div(one, m.add(one, lambda(n, wo)));
+                Value* w = azimuthWeight();
+                return m.fma(w, m.mul(g1i, g1o), m.mul(m.sub(one, w), m.minnum(g1i, g1o)));
+            }
+            case MaskingModel::SmithHeightDirectionCorrelated: {
+                Value *li = lambda(n, wi), *lo = lambda(n, wo);
+                return m.div(one, m.add(one, m.fma(azimuthWeight(), m.minnum(li, lo), m.maxnum(li, lo))));
+            }
+        }
+        internal_error << "unknown masking";
+    }
+
+    LVal fresnel(Value* c) {
+        MathEmitter& m = f_;
+        Value* one = m.c(1.0);
+        const ModelUse& use = mat_.fresnel;
+        switch (mat_.fresnelModel()) {
+            case FresnelModel::None: return LVal::scalar(one);
+            case FresnelModel::Schlick: {
+                Value* q = m.sub(one, c);
+                Value* q2 = m.mul(q, q);
+                Value* q5 = m.mul(m.mul(q2, q2), q);
+                LVal f0;
+                if (use.has(param::F0)) {
+                    f0 = rgbParam(use, param::F0, 0, 1);
+                } else {
+                    LVal eta = rgbParam(use, param::SchlickEta, kMinEta, INFINITY);
+                    f0 = map({eta}, true, [&](auto& x) {
+                        Value* r = m.div(m.sub(x[0], one), m.add(x[0], one));
+                        return m.mul(r, r);
+                    });
+                }
+                return map({f0}, true, [&](auto& x) { return m.fma(m.sub(one, x[0]), q5, x[0]); });
+            }
+            case FresnelModel::Dielectric: {
+                LVal eta = rgbParam(use, param::DielectricEta, kMinEta, INFINITY);
+                Value* c2 = m.mul(c, c);
+                return map({eta}, true, [&](auto& x) {
+                    // g^2 = eta^2 - sin^2; g - c = (eta^2 - 1)/(g + c) without cancellation.
+                    Value* n = x[0];
+                    Value* e2m1 = m.mul(m.sub(n, one), m.add(n, one));
+                    Value* g2 = m.add(e2m1, c2);
+                    Value* g = m.sqrt(m.maxnum(g2, m.c(0.0)));
+                    Value* gp = m.add(g, c);
+                    Value* gm = m.div(e2m1, gp);
+                    Value* A = m.div(gm, gp);
+                    Value* B = m.div(m.fma(c, gp, m.c(-1.0)), m.fma(c, gm, one));
+                    Value* F = m.mul(m.mul(m.c(0.5), m.mul(A, A)), m.fma(B, B, one));
+                    Value* tir = b_.CreateOr(m.le(g2, m.c(0.0)), m.eq(gp, m.c(0.0)));
+                    return m.select(tir, one, F);
+                });
+            }
+            case FresnelModel::Conductor: {
+                LVal eta = rgbParam(use, param::ConductorEta, kMinEta, INFINITY);
+                LVal k = rgbParam(use, param::ConductorK, 0, INFINITY);
+                Value* c2 = m.mul(c, c);
+                Value* s2 = m.mul(m.sub(one, c), m.add(one, c));
+                return map({eta, k}, true, [&](auto& x) {
+                    // |N cos_t|^2 = a^2 + b^2 with N = eta + ik (Born & Wolf):
+                    // t0 = eta^2 - k^2 - sin^2, a2b2 = sqrt(t0^2 + 4 eta^2 k^2).
+                    Value *n = x[0], *kk = x[1];
+                    Value* n2 = m.mul(n, n);
+                    Value* k2 = m.mul(kk, kk);
+                    Value* t0 = m.sub(m.sub(n2, k2), s2);
+                    Value* a2b2 = m.sqrt(m.fma(t0, t0, m.mul(m.c(4.0), m.mul(n2, k2))));
+                    Value* a = m.sqrt(m.maxnum(m.mul(m.c(0.5), m.add(a2b2, t0)), m.c(0.0)));
+                    Value* t1 = m.add(a2b2, c2);
+                    Value* t2 = m.mul(m.mul(m.c(2.0), c), a);
+                    Value* Rs = m.div(m.sub(t1, t2), m.add(t1, t2));
+                    Value* t3 = m.fma(c2, a2b2, m.mul(s2, s2));
+                    Value* t4 = m.mul(t2, s2);
+                    Value* Rp = m.mul(Rs, m.div(m.sub(t3, t4), m.add(t3, t4)));
+                    return m.mul(m.c(0.5), m.add(Rs, Rp));
+                });
+            }
+        }
+        internal_error << "unknown fresnel";
+    }
+
+    std::array<Value*, 3> brdf(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo) {
+        MathEmitter& m = f_;
+        Value *ci = wi[2], *co = wo[2];
+        Value* above = b_.CreateAnd(m.gt(ci, m.c(0.0)), m.gt(co, m.c(0.0)));
+        std::array<Value*, 3> h = {m.add(wi[0], wo[0]), m.add(wi[1], wo[1]), m.add(wi[2], wo[2])};
+        Value* hlen = m.sqrt(m.fma(h[0], h[0], m.fma(h[1], h[1], m.mul(h[2], h[2]))));
+        Value* hinv = m.div(m.c(1.0), hlen);
+        for (Value*& x : h) x = m.mul(x, hinv);
+        Value* oh = m.fma(wo[0], h[0], m.fma(wo[1], h[1], m.mul(wo[2], h[2])));
+        Value* cosD = m.minnum(m.maxnum(oh, m.c(0.0)), m.c(1.0));
+
+        Ndf n = ndfParams();
+        Value* spec;
+        if (mat_.ndfModel() == NdfModel::Ward) {
+            Value* e = m.div(slope2(n, h), m.mul(h[2], h[2]));
+            Value* lobe = m.div(m.exp(m.neg(e)),
+                                m.mul(m.mul(m.c(4 * kPi), m.mul(n.ax, n.ay)), m.sqrt(m.mul(ci, co))));
+            spec = m.select(m.gt(e, m.c(100.0)), m.c(0.0), lobe);
+        } else {
+            Value* d = D(n, h);
+            Value* g = G(n, wi, wo, h, ci, co, oh);
+            spec = m.div(m.mul(d, g), m.mul(m.mul(m.c(4.0), ci), co));
+        }
+        LVal F = fresnel(cosD);
+        LVal diffuse = LVal::scalar(m.c(0.0));
+        bool hasDiffuse = mat_.diffuseModel() == DiffuseModel::Lambert;
+        if (hasDiffuse) {
+            LVal albedo = rgbParam(mat_.diffuse, param::Albedo, 0, INFINITY);
+            diffuse = map({albedo}, true, [&](auto& x) { return m.mul(x[0], m.c(1.0 / kPi)); });
+        }
+        LVal specV = LVal::scalar(spec);
+        LVal total = map({F, specV, diffuse}, true, [&](auto& x) {
+            Value* s = m.mul(x[0], x[1]);
+            return hasDiffuse ? m.add(s, x[2]) : s;
+        });
+        // Below the horizon (or wi + wo = 0): f = 0, a valid lane.
+        Value* valid = b_.CreateAnd(above, m.gt(hlen, m.c(0.0)));
+        return map({total}, true, [&](auto& x) { return m.select(valid, x[0], m.c(0.0)); }).c;
+    }
+
+    const CheckedMaterial& mat_;
+    const LoweringOptions& opt_;
+    llvm::IRBuilder<>& b_;
+    MathEmitter f_;  // float lanes
+    MathEmitter d_;  // double lanes of the same width
+    llvm::Module& module_;
+    Value* invalid_;
+    std::vector<LVal> inputs_, lets_;
+};
+
+// Builds the constant global array of slot defaults, `count` copies of
+// each slot's default (the batch kernel reads `width` lanes of a default
+// with stride 0; the scalar kernel reads one).
+llvm::GlobalVariable* defaultsArray(llvm::Module& module, const std::vector<float>& values, const std::string& name) {
+    auto* arr = llvm::ConstantDataArray::get(module.getContext(), values);
+    return new llvm::GlobalVariable(module, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
+}
+
+void addKernelAttributes(llvm::Function* fn, int width) {
+    fn->addFnAttr(llvm::Attribute::NoUnwind);
+    fn->addFnAttr(llvm::Attribute::NoFree);
+    fn->addFnAttr(llvm::Attribute::WillReturn);
+    // Explicit 512-bit vectors should stay in zmm registers even on CPUs
+    // whose default preference is 256-bit.
+    std::string bits = std::to_string(width * 32);
+    fn->addFnAttr("min-legal-vector-width", bits);
+    fn->addFnAttr("prefer-vector-width", bits);
+}
+
+void emitScalarEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llvm::Module& module,
+                     const std::string& name) {
+    llvm::LLVMContext& ctx = module.getContext();
+    llvm::IRBuilder<> b(ctx);
+    llvm::Type* ptr = b.getPtrTy();
+    auto* fnTy = llvm::FunctionType::get(b.getVoidTy(), {ptr, ptr, ptr, ptr}, false);
+    auto* fn = llvm::Function::Create(fnTy, llvm::Function::ExternalLinkage, name, module);
+    addKernelAttributes(fn, 1);
+    b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", fn));
+    llvm::Value *wiP = fn->getArg(0), *woP = fn->getArg(1), *inP = fn->getArg(2), *outP = fn->getArg(3);
+    llvm::Type* f32 = b.getFloatTy();
+    std::array<llvm::Value*, 3> wi, wo;
+    for (int i = 0; i < 3; ++i) {
+        wi[i] = b.CreateLoad(f32, b.CreateConstGEP1_32(f32, wiP, i));
+        wo[i] = b.CreateLoad(f32, b.CreateConstGEP1_32(f32, woP, i));
+    }
+    std::vector<llvm::Value*> slots;
+    if (mat.slotCount > 0) {
+        // inputs == NULL means all defaults: read from a constant array instead.
+        std::vector<double> d = mat.defaultSlots();
+        auto* defaults = defaultsArray(module, std::vector<float>(d.begin(), d.end()), name + ".defaults");
+        llvm::Value* base = b.CreateSelect(b.CreateIsNull(inP), defaults, inP);
+        for (int s = 0; s < mat.slotCount; ++s) slots.push_back(b.CreateLoad(f32, b.CreateConstGEP1_32(f32, base, s)));
+    }
+    LaneEmitter lanes(mat, opt, b, f32, module);
+    LaneEmitter::Result r = lanes.emit(wi, wo, slots);
+    for (int i = 0; i < 3; ++i) b.CreateStore(r.rgb[i], b.CreateConstGEP1_32(f32, outP, i));
+    b.CreateRetVoid();
+}
+
+void emitBatchEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llvm::Module& module,
+                    const std::string& name) {
+    llvm::LLVMContext& ctx = module.getContext();
+    llvm::IRBuilder<> b(ctx);
+    const int W = opt.width;
+    llvm::Type* ptr = b.getPtrTy();
+    llvm::Type* i64 = b.getInt64Ty();
+    llvm::Type* f32 = b.getFloatTy();
+    auto* vecTy = llvm::FixedVectorType::get(f32, W);
+    auto* fnTy = llvm::FunctionType::get(i64, {i64, ptr, ptr, ptr, ptr}, false);
+    auto* fn = llvm::Function::Create(fnTy, llvm::Function::ExternalLinkage, name, module);
+    addKernelAttributes(fn, W);
+    llvm::Value *n = fn->getArg(0), *wiA = fn->getArg(1), *woA = fn->getArg(2), *inA = fn->getArg(3),
+                *outA = fn->getArg(4);
+    auto* entry = llvm::BasicBlock::Create(ctx, "entry", fn);
+    auto* header = llvm::BasicBlock::Create(ctx, "loop.header", fn);
+    auto* body = llvm::BasicBlock::Create(ctx, "loop.body", fn);
+    auto* tailCheck = llvm::BasicBlock::Create(ctx, "tail.check", fn);
+    auto* tail = llvm::BasicBlock::Create(ctx, "tail", fn);
+    auto* exit = llvm::BasicBlock::Create(ctx, "exit", fn);
+
+    b.SetInsertPoint(entry);
+    std::array<llvm::Value*, 3> wiP, woP, outP;
+    for (int i = 0; i < 3; ++i) {
+        wiP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, wiA, i), "wi.ptr");
+        woP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, woA, i), "wo.ptr");
+        outP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, outA, i), "rgb.ptr");
+    }
+    // Per slot: a base pointer and a stride (1 for a caller array, 0 for the
+    // constant array of defaults when inputs or inputs[s] is NULL).
+    std::vector<llvm::Value*> slotBase, slotStep;
+    std::vector<double> defaults = mat.defaultSlots();
+    for (int s = 0; s < mat.slotCount; ++s) {
+        auto* dflt = defaultsArray(module, std::vector<float>(W, float(defaults[s])), name + ".default" + std::to_string(s));
+        llvm::Value* inputsNull = b.CreateIsNull(inA);
+        llvm::Value* slotPtrAddr = b.CreateSelect(inputsNull, dflt, b.CreateConstGEP1_32(ptr, inA, s));
+        // When inputs is NULL, slotPtrAddr points at the defaults (non-null
+        // data), and the loaded "pointer" is discarded below.
+        llvm::Value* loaded = b.CreateLoad(ptr, slotPtrAddr);
+        llvm::Value* useDefault = b.CreateOr(inputsNull, b.CreateIsNull(loaded));
+        slotBase.push_back(b.CreateSelect(useDefault, dflt, loaded));
+        slotStep.push_back(b.CreateSelect(useDefault, llvm::ConstantInt::get(i64, 0), llvm::ConstantInt::get(i64, 1)));
+    }
+    b.CreateBr(header);
+
+    auto popcount = [&](llvm::Value* mask) {
+        llvm::Value* bits = b.CreateBitCast(mask, b.getIntNTy(W));
+        llvm::Value* cnt = b.CreateUnaryIntrinsic(llvm::Intrinsic::ctpop, bits);
+        return b.CreateZExt(cnt, i64);
+    };
+    auto emitStep = [&](llvm::Value* i, llvm::Value* mask /* null = all lanes */) {
+        auto load = [&](llvm::Value* base, llvm::Value* index, float passthru) -> llvm::Value* {
+            llvm::Value* p = b.CreateGEP(f32, base, index);
+            if (!mask) return b.CreateAlignedLoad(vecTy, p, llvm::Align(4));
+            return b.CreateMaskedLoad(vecTy, p, llvm::Align(4), mask, llvm::ConstantFP::get(vecTy, passthru));
+        };
+        std::array<llvm::Value*, 3> wi, wo;
+        for (int c = 0; c < 3; ++c) {
+            // Masked-off lanes read a valid direction (0,0,1) so they cost nothing.
+            wi[c] = load(wiP[c], i, c == 2 ? 1.0f : 0.0f);
+            wo[c] = load(woP[c], i, c == 2 ? 1.0f : 0.0f);
+        }
+        std::vector<llvm::Value*> slots;
+        for (int s = 0; s < mat.slotCount; ++s)
+            slots.push_back(load(slotBase[s], b.CreateMul(i, slotStep[s]), float(defaults[s])));
+        LaneEmitter lanes(mat, opt, b, vecTy, module);
+        LaneEmitter::Result r = lanes.emit(wi, wo, slots);
+        for (int c = 0; c < 3; ++c) {
+            llvm::Value* p = b.CreateGEP(f32, outP[c], i);
+            if (mask) b.CreateMaskedStore(r.rgb[c], p, llvm::Align(4), mask);
+            else b.CreateAlignedStore(r.rgb[c], p, llvm::Align(4));
+        }
+        return popcount(mask ? b.CreateAnd(r.invalid, mask) : r.invalid);
+    };
+
+    b.SetInsertPoint(header);
+    llvm::PHINode* i = b.CreatePHI(i64, 2, "i");
+    llvm::PHINode* count = b.CreatePHI(i64, 2, "invalid");
+    i->addIncoming(llvm::ConstantInt::get(i64, 0), entry);
+    count->addIncoming(llvm::ConstantInt::get(i64, 0), entry);
+    llvm::Value* next = b.CreateAdd(i, llvm::ConstantInt::get(i64, W));
+    b.CreateCondBr(b.CreateICmpSLE(next, n), body, tailCheck);
+
+    b.SetInsertPoint(body);
+    llvm::Value* bodyCount = b.CreateAdd(count, emitStep(i, nullptr));
+    i->addIncoming(next, b.GetInsertBlock());
+    count->addIncoming(bodyCount, b.GetInsertBlock());
+    b.CreateBr(header);
+
+    b.SetInsertPoint(tailCheck);
+    llvm::Value* remaining = b.CreateSub(n, i);
+    b.CreateCondBr(b.CreateICmpSGT(remaining, llvm::ConstantInt::get(i64, 0)), tail, exit);
+
+    b.SetInsertPoint(tail);
+    std::vector<llvm::Constant*> laneIds;
+    for (int l = 0; l < W; ++l) laneIds.push_back(llvm::ConstantInt::get(i64, l));
+    llvm::Value* mask = b.CreateICmpSLT(llvm::ConstantVector::get(laneIds), b.CreateVectorSplat(W, remaining));
+    llvm::Value* tailCount = b.CreateAdd(count, emitStep(i, mask));
+    llvm::BasicBlock* tailEnd = b.GetInsertBlock();
+    b.CreateBr(exit);
+
+    b.SetInsertPoint(exit);
+    llvm::PHINode* result = b.CreatePHI(i64, 2, "result");
+    result->addIncoming(count, tailCheck);
+    result->addIncoming(tailCount, tailEnd);
+    b.CreateRet(result);
+}
+
+}  // namespace
+
+LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringOptions& options,
+                            llvm::LLVMContext& context, const std::string& symbolPrefix) {
+    internal_assert(options.width == 4 || options.width == 8 || options.width == 16)
+        << "unsupported vector width " << options.width;
+    LoweredModule out;
+    out.module = std::make_unique<llvm::Module>(symbolPrefix, context);
+    if (options.emitScalar) {
+        out.scalarSymbol = symbolPrefix + "_scalar";
+        emitScalarEntry(material, options, *out.module, out.scalarSymbol);
+    }
+    if (options.emitBatch) {
+        out.batchSymbol = symbolPrefix + "_batch";
+        emitBatchEntry(material, options, *out.module, out.batchSymbol);
+    }
+    std::string errors;
+    llvm::raw_string_ostream os(errors);
+    for (llvm::Function& fn : *out.module)
+        if (!fn.isDeclaration() && llvm::verifyFunction(fn, &os)) internal_error << "invalid IR for " << fn.getName().str() << ": " << os.str();
+    if (llvm::verifyModule(*out.module, &os)) internal_error << "invalid module: " << os.str();
+    return out;
+}
+
+}  // namespace facet
+
+namespace facet {
+extern const char* const kLoweringBuildStamp = __DATE__ " " __TIME__ " lowering";
+}

@@ -1,0 +1,48 @@
+// Lowering: a checked (and usually specialized) material to LLVM IR.
+//
+// Emits up to two entry points with a C ABI (SPEC section 4):
+//   void  <prefix>_scalar(const float wi[3], const float wo[3], const float* inputs, float rgb[3])
+//   int64 <prefix>_batch(int64 n, const float* const wi[3], const float* const wo[3],
+//                        const float* const* inputs, float* const rgb[3])
+// The batch kernel works on explicit LLVM vectors of `width` lanes (a main
+// loop over full vectors, then one masked remainder step) and returns the
+// number of invalid lanes. Both entry points are generated from the same
+// per-lane emitter, instantiated once with float and once with <W x float>,
+// so scalar and SIMD compute the same formulas.
+//
+// The per-lane formulas follow SPEC section 3 but are written for float:
+// sin^2 from components, Lambda forms that do not cancel, pow and the GTR
+// normalization through double-precision log/exp, and no libm calls.
+#pragma once
+
+#include "Material.h"
+
+#include <llvm/IR/LLVMContext.h>
+#include <llvm/IR/Module.h>
+
+#include <memory>
+#include <string>
+
+namespace facet {
+
+enum class MathMode { Exact, Fast };
+const char* mathModeName(MathMode m);
+
+struct LoweringOptions {
+    MathMode math = MathMode::Exact;
+    int width = 16;  // lanes of the batch kernel: 4, 8 or 16
+    bool emitScalar = true;
+    bool emitBatch = true;
+};
+
+struct LoweredModule {
+    std::unique_ptr<llvm::Module> module;
+    std::string scalarSymbol, batchSymbol;  // empty when not emitted
+};
+
+// `material` must be checked. Throws InternalError on a lowering bug (the
+// module is verified before it is returned).
+LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringOptions& options,
+                            llvm::LLVMContext& context, const std::string& symbolPrefix);
+
+}  // namespace facet

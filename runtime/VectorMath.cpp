@@ -1,0 +1,209 @@
+// VectorMath: the polynomial and bit-manipulation kernels behind exp, log,
+// log1p, pow, erfc and atan2 (see VectorMath.h for accuracies).
+#include "VectorMath.h"
+
+#include <llvm/IR/Constants.h>
+#include <llvm/IR/Intrinsics.h>
+
+#include <cmath>
+
+namespace facet {
+
+using llvm::Value;
+
+MathEmitter::MathEmitter(llvm::IRBuilder<>& builder, llvm::Type* type) : b(builder), type_(type) {
+    llvm::Type* elem = type->getScalarType();
+    isDouble_ = elem->isDoubleTy();
+    llvm::Type* intElem = isDouble_ ? b.getInt64Ty() : b.getInt32Ty();
+    if (auto* vt = llvm::dyn_cast<llvm::VectorType>(type))
+        intType_ = llvm::VectorType::get(intElem, vt->getElementCount());
+    else
+        intType_ = intElem;
+}
+
+unsigned MathEmitter::width() const {
+    if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(type_)) return vt->getNumElements();
+    return 1;
+}
+
+Value* MathEmitter::c(double v) { return llvm::ConstantFP::get(type_, v); }
+Value* MathEmitter::ci(int64_t v) { return llvm::ConstantInt::get(intType_, v, true); }
+Value* MathEmitter::add(Value* a, Value* x) { return b.CreateFAdd(a, x); }
+Value* MathEmitter::sub(Value* a, Value* x) { return b.CreateFSub(a, x); }
+Value* MathEmitter::mul(Value* a, Value* x) { return b.CreateFMul(a, x); }
+Value* MathEmitter::div(Value* a, Value* x) { return b.CreateFDiv(a, x); }
+Value* MathEmitter::neg(Value* a) { return b.CreateFNeg(a); }
+Value* MathEmitter::fma(Value* a, Value* x, Value* y) {
+    return b.CreateIntrinsic(llvm::Intrinsic::fmuladd, {type_}, {a, x, y});
+}
+Value* MathEmitter::select(Value* cond, Value* a, Value* x) { return b.CreateSelect(cond, a, x); }
+Value* MathEmitter::lt(Value* a, Value* x) { return b.CreateFCmpOLT(a, x); }
+Value* MathEmitter::le(Value* a, Value* x) { return b.CreateFCmpOLE(a, x); }
+Value* MathEmitter::gt(Value* a, Value* x) { return b.CreateFCmpOGT(a, x); }
+Value* MathEmitter::ge(Value* a, Value* x) { return b.CreateFCmpOGE(a, x); }
+Value* MathEmitter::eq(Value* a, Value* x) { return b.CreateFCmpOEQ(a, x); }
+Value* MathEmitter::isNan(Value* a) { return b.CreateFCmpUNO(a, a); }
+Value* MathEmitter::isFinite(Value* a) { return b.CreateFCmpOLT(abs(a), c(INFINITY)); }
+
+Value* MathEmitter::intrinsic(llvm::Intrinsic::ID id, Value* a) { return b.CreateIntrinsic(id, {type_}, {a}); }
+Value* MathEmitter::intrinsic(llvm::Intrinsic::ID id, Value* a, Value* x) {
+    return b.CreateIntrinsic(id, {type_}, {a, x});
+}
+Value* MathEmitter::abs(Value* a) { return intrinsic(llvm::Intrinsic::fabs, a); }
+Value* MathEmitter::sqrt(Value* a) { return intrinsic(llvm::Intrinsic::sqrt, a); }
+Value* MathEmitter::minnum(Value* a, Value* x) { return intrinsic(llvm::Intrinsic::minnum, a, x); }
+Value* MathEmitter::maxnum(Value* a, Value* x) { return intrinsic(llvm::Intrinsic::maxnum, a, x); }
+Value* MathEmitter::min(Value* a, Value* x) { return intrinsic(llvm::Intrinsic::minimum, a, x); }
+Value* MathEmitter::max(Value* a, Value* x) { return intrinsic(llvm::Intrinsic::maximum, a, x); }
+Value* MathEmitter::rint(Value* a) { return intrinsic(llvm::Intrinsic::rint, a); }
+
+Value* MathEmitter::poly(Value* x, std::initializer_list<double> coeffs) {
+    // Horner from the highest coefficient down.
+    auto it = coeffs.end();
+    Value* acc = c(*--it);
+    while (it != coeffs.begin()) acc = fma(acc, x, c(*--it));
+    return acc;
+}
+
+Value* MathEmitter::convert(Value* v, llvm::Type* to) {
+    if (v->getType() == to) return v;
+    if (to->getScalarSizeInBits() > v->getType()->getScalarSizeInBits()) return b.CreateFPExt(v, to);
+    return b.CreateFPTrunc(v, to);
+}
+
+Value* MathEmitter::exp2Int(Value* n) {
+    // Build the IEEE bit pattern of 2^n directly.
+    int mantissa = isDouble_ ? 52 : 23, bias = isDouble_ ? 1023 : 127;
+    Value* i = b.CreateFPToSI(n, intType_);
+    Value* bits = b.CreateShl(b.CreateAdd(i, ci(bias)), ci(mantissa));
+    return b.CreateBitCast(bits, type_);
+}
+
+Value* MathEmitter::exp(Value* x) {
+    // exp(x) = 2^n e^r, n = rint(x / ln 2), |r| <= ln2/2, r computed with a
+    // two-part ln 2 so that n*C1 is exact. e^r by its Taylor series, one
+    // degree past the type's precision (r^8/8! < 2^-28 for float).
+    const double hi = isDouble_ ? 709.782712893384 : 88.72283935546875;
+    const double lo = isDouble_ ? -745.1332191019412 : -103.97208404541016;
+    Value* xc = minnum(maxnum(x, c(lo)), c(hi));
+    Value* n = rint(mul(xc, c(1.4426950408889634)));
+    Value *r;
+    if (isDouble_) {
+        r = fma(n, c(-6.93145751953125e-1), xc);
+        r = fma(n, c(-1.42860682030941723212e-6), r);
+    } else {
+        r = fma(n, c(-0.693359375), xc);
+        r = fma(n, c(2.12194440e-4), r);
+    }
+    Value* p;
+    if (isDouble_)
+        p = poly(r, {1, 1, 1 / 2.0, 1 / 6.0, 1 / 24.0, 1 / 120.0, 1 / 720.0, 1 / 5040.0, 1 / 40320.0,
+                     1 / 362880.0, 1 / 3628800.0, 1 / 39916800.0, 1 / 479001600.0, 1 / 6227020800.0});
+    else
+        p = poly(r, {1, 1, 1 / 2.0, 1 / 6.0, 1 / 24.0, 1 / 120.0, 1 / 720.0, 1 / 5040.0, 1 / 40320.0});
+    // Scale in two steps so that results in the subnormal range and up to
+    // the largest finite value are both reachable.
+    Value* n1 = intrinsic(llvm::Intrinsic::trunc, mul(n, c(0.5)));
+    Value* n2 = sub(n, n1);
+    Value* result = mul(mul(p, exp2Int(n1)), exp2Int(n2));
+    result = select(gt(x, c(hi)), c(INFINITY), result);
+    result = select(lt(x, c(lo)), c(0.0), result);
+    return select(isNan(x), x, result);
+}
+
+Value* MathEmitter::log(Value* x) {
+    // x = m 2^e with m in [sqrt(1/2), sqrt(2)); log(1+f), f = m - 1, from the
+    // series of 2 atanh(s), s = f/(2+f), arranged (as in fdlibm) so that the
+    // exactly known f carries the leading term.
+    int mantissa = isDouble_ ? 52 : 23, bias = isDouble_ ? 1023 : 127;
+    double minNormal = isDouble_ ? 2.2250738585072014e-308 : 1.1754943508222875e-38;
+    double denScale = isDouble_ ? 18014398509481984.0 /* 2^54 */ : 33554432.0 /* 2^25 */;
+    int denShift = isDouble_ ? 54 : 25;
+    Value* isDen = lt(x, c(minNormal));
+    Value* xs = select(isDen, mul(x, c(denScale)), x);
+    Value* bits = b.CreateBitCast(xs, intType_);
+    int64_t mantMask = isDouble_ ? 0x000fffffffffffffLL : 0x7fffff;
+    int64_t oneBits = isDouble_ ? 0x3ff0000000000000LL : 0x3f800000;
+    Value* e = b.CreateSub(b.CreateLShr(bits, ci(mantissa)), ci(bias));
+    Value* m = b.CreateBitCast(b.CreateOr(b.CreateAnd(bits, ci(mantMask)), ci(oneBits)), type_);
+    Value* big = gt(m, c(1.4142135623730951));
+    m = select(big, mul(m, c(0.5)), m);
+    e = b.CreateAdd(e, b.CreateZExt(big, intType_));
+    e = b.CreateSub(e, select(isDen, ci(denShift), ci(0)));
+    Value* f = sub(m, c(1.0));
+    Value* s = div(f, add(c(2.0), f));
+    Value* z = mul(s, s);
+    Value* R = isDouble_ ? mul(z, poly(z, {2 / 3.0, 2 / 5.0, 2 / 7.0, 2 / 9.0, 2 / 11.0, 2 / 13.0, 2 / 15.0,
+                                         2 / 17.0, 2 / 19.0}))
+                         : mul(z, poly(z, {2 / 3.0, 2 / 5.0, 2 / 7.0, 2 / 9.0, 2 / 11.0}));
+    Value* hfsq = mul(c(0.5), mul(f, f));
+    Value* lf = sub(f, sub(hfsq, mul(s, add(hfsq, R))));
+    Value* E = b.CreateSIToFP(e, type_);
+    double ln2hi = isDouble_ ? 6.93147180369123816490e-01 : 0.693145751953125;
+    double ln2lo = isDouble_ ? 1.90821492927058770002e-10 : 1.4286068203094172e-06;
+    Value* result = fma(E, c(ln2hi), fma(E, c(ln2lo), lf));
+    result = select(eq(x, c(0.0)), c(-INFINITY), result);
+    result = select(eq(x, c(INFINITY)), x, result);
+    // Negative or NaN input: NaN (the unordered compare catches NaN).
+    return select(b.CreateFCmpULT(x, c(0.0)), c(NAN), result);
+}
+
+Value* MathEmitter::log1p(Value* x) {
+    // log(u) * x / (u - 1) with u = 1 + x rounded: the quotient corrects the
+    // rounding of u (Goldberg 1991), so small x keep full relative accuracy.
+    Value* u = add(c(1.0), x);
+    Value* d = sub(u, c(1.0));
+    Value* r = mul(log(u), div(x, d));
+    r = select(eq(d, c(0.0)), x, r);
+    return select(eq(x, c(INFINITY)), x, r);
+}
+
+Value* MathEmitter::pow(Value* x, Value* y) {
+    // exp(y log|x|) evaluated in double so that the product's rounding
+    // (|y log x| up to ~100) does not cost float accuracy.
+    llvm::Type* dty = type_->getScalarType()->isDoubleTy()
+                          ? type_
+                          : (width() > 1 ? (llvm::Type*)llvm::VectorType::get(b.getDoubleTy(), width(), false)
+                                         : (llvm::Type*)b.getDoubleTy());
+    MathEmitter d(b, dty);
+    Value* X = d.convert(x, dty);
+    Value* Y = d.convert(y, dty);
+    Value* r = d.exp(d.mul(Y, d.log(d.abs(X))));
+    Value* yInt = d.eq(d.rint(Y), Y);
+    Value* yOdd = b.CreateAnd(yInt, b.CreateFCmpONE(d.mul(d.rint(d.mul(Y, d.c(0.5))), d.c(2.0)), Y));
+    Value* neg = d.lt(X, d.c(0.0));
+    r = d.select(b.CreateAnd(neg, yOdd), d.neg(r), r);
+    r = d.select(b.CreateAnd(neg, b.CreateNot(yInt)), d.c(NAN), r);
+    r = d.select(b.CreateOr(d.eq(Y, d.c(0.0)), d.eq(X, d.c(1.0))), d.c(1.0), r);
+    return convert(r, type_);
+}
+
+Value* MathEmitter::erfc(Value* x) {
+    // Chebyshev-fitted erfc(x) = t exp(-x^2 + P(t)), t = 1/(1 + x/2), with
+    // relative error below 1.2e-7 for all x >= 0 (Press et al., Numerical
+    // Recipes, sec. 6.2).
+    Value* t = div(c(1.0), fma(x, c(0.5), c(1.0)));
+    Value* P = poly(t, {-1.26551223, 1.00002368, 0.37409196, 0.09678418, -0.18628806, 0.27886807, -1.13520398,
+                        1.48851587, -0.82215223, 0.17087277});
+    return mul(t, exp(sub(P, mul(x, x))));
+}
+
+Value* MathEmitter::atan2(Value* y, Value* x) {
+    // Reduce to a = min/max in [0, 1], then to |t| <= tan(pi/8) with
+    // atan(a) = pi/4 + atan((a-1)/(a+1)); odd Taylor series to t^21.
+    Value* ax = abs(x);
+    Value* mx = maxnum(ax, y);
+    Value* mn = minnum(ax, y);
+    Value* a = select(eq(mx, c(0.0)), c(0.0), div(mn, mx));
+    Value* big = gt(a, c(0.41421356237309503));
+    Value* t = select(big, div(sub(a, c(1.0)), add(a, c(1.0))), a);
+    Value* z = mul(t, t);
+    Value* series = poly(z, {-1 / 3.0, 1 / 5.0, -1 / 7.0, 1 / 9.0, -1 / 11.0, 1 / 13.0, -1 / 15.0, 1 / 17.0,
+                             -1 / 19.0, 1 / 21.0});
+    Value* at = fma(mul(t, z), series, t);
+    at = select(big, add(at, c(M_PI / 4)), at);
+    Value* r = select(gt(y, ax), sub(c(M_PI / 2), at), at);
+    return select(lt(x, c(0.0)), sub(c(M_PI), r), r);
+}
+
+}  // namespace facet
