@@ -68,19 +68,44 @@ public:
 
     Result emit(std::array<Value*, 3> wi, std::array<Value*, 3> wo, const std::vector<Value*>& slots) {
         MathEmitter& m = f_;
-        // SPEC 2: non-finite or non-unit directions are invalid lanes;
-        // valid ones are renormalized.
-        auto direction = [&](std::array<Value*, 3>& w) {
+        MathEmitter& d = d_;
+        // SPEC 2: non-finite or non-unit directions are invalid lanes; valid
+        // ones are renormalized. Normalization and the half vector are
+        // computed in double: wi + wo cancels when the directions are nearly
+        // opposite, and the float rounding of the renormalization would then
+        // decide h (and so D, G and F) by itself.
+        std::array<Value*, 3> wiD, woD;
+        auto direction = [&](const std::array<Value*, 3>& w, std::array<Value*, 3>& out) {
             Value* finite = b_.CreateAnd(b_.CreateAnd(m.isFinite(w[0]), m.isFinite(w[1])), m.isFinite(w[2]));
-            Value* len = m.sqrt(m.fma(w[0], w[0], m.fma(w[1], w[1], m.mul(w[2], w[2]))));
-            Value* unit = m.le(m.abs(m.sub(len, m.c(1.0))), m.c(kUnitTolerance));
+            for (int i = 0; i < 3; ++i) out[i] = d.convert(w[i], d.type());
+            Value* len = d.sqrt(d.fma(out[0], out[0], d.fma(out[1], out[1], d.mul(out[2], out[2]))));
+            Value* unit = d.le(d.abs(d.sub(len, d.c(1.0))), d.c(kUnitTolerance));
             markInvalid(b_.CreateNot(b_.CreateAnd(finite, unit)));
-            Value* inv = m.div(m.c(1.0), len);
-            for (Value*& x : w) x = m.mul(x, inv);
+            for (Value*& x : out) x = d.div(x, len);
         };
-        direction(wi);
-        direction(wo);
-        // Inputs: non-finite values are invalid; in-range clamping.
+        direction(wi, wiD);
+        direction(wo, woD);
+        std::array<Value*, 3> hD = {d.add(wiD[0], woD[0]), d.add(wiD[1], woD[1]), d.add(wiD[2], woD[2])};
+        Value* hlen = d.sqrt(d.fma(hD[0], hD[0], d.fma(hD[1], hD[1], d.mul(hD[2], hD[2]))));
+        for (Value*& x : hD) x = d.div(x, hlen);
+        Value* ohD = d.fma(woD[0], hD[0], d.fma(woD[1], hD[1], d.mul(woD[2], hD[2])));
+        Geometry g;
+        for (int i = 0; i < 3; ++i) {
+            g.wi[i] = m.convert(wiD[i], m.type());
+            g.wo[i] = m.convert(woD[i], m.type());
+            g.h[i] = m.convert(hD[i], m.type());
+        }
+        g.hD = hD;
+        g.oh = m.convert(ohD, m.type());
+        g.cosD = d.minnum(d.maxnum(ohD, d.c(0.0)), d.c(1.0));
+        std::array<Value*, 3> diff = {d.sub(woD[0], hD[0]), d.sub(woD[1], hD[1]), d.sub(woD[2], hD[2])};
+        Value* q = d.mul(d.c(0.5), d.fma(diff[0], diff[0], d.fma(diff[1], diff[1], d.mul(diff[2], diff[2]))));
+        g.oneMinusCos = m.convert(d.minnum(q, d.c(1.0)), m.type());
+        g.hNonZero = d.gt(hlen, d.c(0.0));
+        // Inputs: non-finite values are invalid; in-range clamping. Inputs,
+        // lets and model parameters are evaluated in double: a parameter
+        // such as alpha enters exp() multiplied by tens in the NDF tails, and
+        // the user's arithmetic must not lose accuracy the reference keeps.
         inputs_.clear();
         for (const CheckedInput& in : mat_.inputs) {
             LVal v;
@@ -88,7 +113,8 @@ public:
             for (int ch = 0; ch < in.slotCount(); ++ch) {
                 Value* x = slots.at(in.firstSlot + ch);
                 markInvalid(b_.CreateNot(m.isFinite(x)));
-                if (in.hasRange) x = m.maxnum(m.minnum(x, m.c(in.hi)), m.c(in.lo));
+                x = d.convert(x, d.type());
+                if (in.hasRange) x = d.maxnum(d.minnum(x, d.c(in.hi)), d.c(in.lo));
                 v.c[ch] = x;
             }
             if (!v.rgb) v.c[1] = v.c[2] = v.c[0];
@@ -98,7 +124,7 @@ public:
         for (const CheckedLet& let : mat_.lets) lets_.push_back(lower(*let.value));
 
         Result r;
-        r.rgb = brdf(wi, wo);
+        r.rgb = brdf(g);
         for (Value*& x : r.rgb) {
             // A value that overflows float is an invalid lane, never Inf/NaN.
             markInvalid(b_.CreateNot(b_.CreateAnd(m.isFinite(x), m.ge(x, m.c(0.0)))));
@@ -120,6 +146,16 @@ private:
         return b_.getInt1Ty();
     }
     void markInvalid(Value* cond) { invalid_ = b_.CreateOr(invalid_, cond); }
+
+    // Unit directions, half vector and wo.h of one lane, in float (computed in double).
+    struct Geometry {
+        std::array<Value*, 3> wi, wo, h;
+        std::array<Value*, 3> hD;  // h in double, for NDFs whose exponent amplifies rounding
+        Value* cosD;               // wo.h clamped to [0, 1], double (exact Fresnel near its critical angle)
+        Value* oneMinusCos;        // 1 - wo.h = |wo - h|^2 / 2, float, without cancellation at wi = wo
+        Value* oh;
+        Value* hNonZero;
+    };
 
     // ---- expressions ----
 
@@ -144,7 +180,7 @@ private:
 
     // x^k for a small integer k, by repeated squaring (exact-ish and fast).
     Value* powInt(Value* x, long k) {
-        MathEmitter& m = f_;
+        MathEmitter& m = d_;
         bool negative = k < 0;
         unsigned long e = negative ? -k : k;
         Value* result = m.c(1.0);
@@ -169,7 +205,7 @@ private:
     }
 
     Value* applyBuiltin(BuiltinFn fn, const std::vector<Value*>& a) {
-        MathEmitter& m = f_;
+        MathEmitter& m = d_;
         switch (fn) {
             case BuiltinFn::Sqrt: return m.sqrt(a[0]);
             case BuiltinFn::Pow: return m.pow(a[0], a[1]);
@@ -196,8 +232,9 @@ private:
         internal_error << "builtin has no channel-wise lowering";
     }
 
+    // Lowers an expression in double (see emit()).
     LVal lower(const Expr& e) {
-        MathEmitter& m = f_;
+        MathEmitter& m = d_;
         switch (e.kind) {
             case ExprKind::Number: return LVal::scalar(m.c(static_cast<const NumberExpr&>(e).value));
             case ExprKind::Name: {
@@ -244,29 +281,34 @@ private:
 
     // Model parameter, clamped to [lo, hi]; NaN, or infinite after clamping,
     // marks the lane invalid (as in the reference).
-    Value* clampParam(Value* x, double lo, double hi) {
-        MathEmitter& m = f_;
-        markInvalid(m.isNan(x));
-        if (std::isfinite(hi)) x = m.minnum(x, m.c(hi));
-        x = m.maxnum(x, m.c(lo));
-        markInvalid(b_.CreateNot(m.isFinite(x)));
-        return x;
+    // Clamps a double parameter; the result is double (floatResult: float).
+    Value* clampParam(Value* x, double lo, double hi, bool floatResult) {
+        MathEmitter& d = d_;
+        markInvalid(d.isNan(x));
+        if (std::isfinite(hi)) x = d.minnum(x, d.c(hi));
+        x = d.maxnum(x, d.c(lo));
+        Value* xf = f_.convert(x, f_.type());
+        // Finite in double but not in float is still an invalid lane: the
+        // float formulas would overflow.
+        markInvalid(b_.CreateNot(f_.isFinite(xf)));
+        return floatResult ? xf : x;
     }
-    Value* scalarParam(const ModelUse& use, int p, double lo, double hi) {
-        return clampParam(lower(*use.args.at(p)).c[0], lo, hi);
+    Value* scalarParam(const ModelUse& use, int p, double lo, double hi, bool floatResult = true) {
+        return clampParam(lower(*use.args.at(p)).c[0], lo, hi, floatResult);
     }
-    LVal rgbParam(const ModelUse& use, int p, double lo, double hi) {
+    LVal rgbParam(const ModelUse& use, int p, double lo, double hi, bool floatResult = true) {
         LVal v = lower(*use.args.at(p));
-        return map({v}, true, [&](auto& x) { return clampParam(x[0], lo, hi); });
+        return map({v}, true, [&](auto& x) { return clampParam(x[0], lo, hi, floatResult); });
     }
 
     // ---- model terms ----
 
     struct Ndf {
-        Value *ax = nullptr, *ay = nullptr;  // ggx, beckmann, ward, gtr, gaussian
+        Value *ax = nullptr, *ay = nullptr;  // ggx, beckmann, ward, gtr, gaussian (float)
+        Value *axD = nullptr, *ayD = nullptr;  // the same in double
         bool isotropic = false;
-        Value* exponent = nullptr;  // blinn_phong
-        Value* gamma = nullptr;     // gtr
+        Value* exponent = nullptr;  // blinn_phong (double)
+        Value* gamma = nullptr;     // gtr (double)
         Value* gaussianNorm = nullptr;
     };
 
@@ -278,28 +320,32 @@ private:
             case NdfModel::Ggx:
             case NdfModel::Beckmann:
             case NdfModel::Ward:
-                n.ax = scalarParam(use, param::AlphaX, kMinAlpha, INFINITY);
+                n.axD = scalarParam(use, param::AlphaX, kMinAlpha, INFINITY, false);
                 n.isotropic = use.args[param::AlphaX] == use.args[param::AlphaY];
-                n.ay = n.isotropic ? n.ax : scalarParam(use, param::AlphaY, kMinAlpha, INFINITY);
+                n.ayD = n.isotropic ? n.axD : scalarParam(use, param::AlphaY, kMinAlpha, INFINITY, false);
                 break;
-            case NdfModel::BlinnPhong: n.exponent = scalarParam(use, param::Exponent, 0, kMaxPhongExponent); break;
+            case NdfModel::BlinnPhong: n.exponent = scalarParam(use, param::Exponent, 0, kMaxPhongExponent, false); break;
             case NdfModel::Gtr:
-                n.ax = n.ay = scalarParam(use, param::GtrAlpha, kMinAlpha, INFINITY);
-                n.gamma = scalarParam(use, param::GtrGamma, 0, INFINITY);
+                n.axD = n.ayD = scalarParam(use, param::GtrAlpha, kMinAlpha, INFINITY, false);
+                n.gamma = scalarParam(use, param::GtrGamma, 0, INFINITY, false);
                 n.isotropic = true;
                 break;
             case NdfModel::Gaussian: {
-                n.ax = n.ay = scalarParam(use, param::GaussianAlpha, kMinAlpha, INFINITY);
+                n.axD = n.ayD = scalarParam(use, param::GaussianAlpha, kMinAlpha, INFINITY, false);
                 n.isotropic = true;
                 const Expr& arg = *use.args[param::GaussianAlpha];
                 if (isConstantExpr(arg)) {
                     double alpha = std::max(constantValue(arg)[0], kMinAlpha);
                     n.gaussianNorm = m.c(gaussianNdfNorm<double>(alpha));
                 } else {
-                    n.gaussianNorm = gaussianNormLookup(n.ax);
+                    n.gaussianNorm = gaussianNormLookup(n.axD);
                 }
                 break;
             }
+        }
+        if (n.axD) {
+            n.ax = m.convert(n.axD, m.type());
+            n.ay = n.isotropic ? n.ax : m.convert(n.ayD, m.type());
         }
         return n;
     }
@@ -317,11 +363,14 @@ private:
                                           llvm::ConstantDataArray::get(ctx, t.q), "facet_gaussian_norm_table");
         }
         double h = (GaussianNormTable::kX1 - GaussianNormTable::kX0) / (GaussianNormTable::kSize - 1);
-        Value* x = d.log(d.convert(alpha, d.type()));
+        Value* x = d.log(alpha);
         Value* u = d.div(d.sub(x, d.c(GaussianNormTable::kX0)), d.c(h));
-        // Keep the 4-point stencil inside the table: i in [1, size - 3].
-        u = d.minnum(d.maxnum(u, d.c(1.0)), d.c(GaussianNormTable::kSize - 2.0));
-        Value* fi = d.minnum(intrinsic(llvm::Intrinsic::floor, u), d.c(GaussianNormTable::kSize - 3.0));
+        // Alphas beyond the table use its ends (N is flat in log alpha
+        // there); the 4-point stencil stays inside: i in [1, size - 3], and
+        // s = u - i in [-1, 2] then interpolates (or reaches the end nodes).
+        u = d.minnum(d.maxnum(u, d.c(0.0)), d.c(GaussianNormTable::kSize - 1.0));
+        Value* fi = d.minnum(d.maxnum(intrinsic(llvm::Intrinsic::floor, u), d.c(1.0)),
+                             d.c(GaussianNormTable::kSize - 3.0));
         Value* s = d.sub(u, fi);
         llvm::Type* i32 = b_.getInt32Ty();
         llvm::Type* idxTy = d.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, d.width()) : i32;
@@ -363,7 +412,19 @@ private:
         return m.add(m.div(x2, m.mul(n.ax, n.ax)), m.div(y2, m.mul(n.ay, n.ay)));
     }
 
-    Value* D(const Ndf& n, const std::array<Value*, 3>& h) {
+    // tan^2-weighted slope (mx^2/ax^2 + my^2/ay^2)/mz^2 in double: it is
+    // the argument of exp() for beckmann and ward, where its rounding error
+    // is multiplied by its size (tens) in the result.
+    Value* slopeExponentD(const Ndf& n, const std::array<Value*, 3>& hD) {
+        MathEmitter& d = d_;
+        Value *ax = n.axD, *ay = n.ayD;
+        Value *x2 = d.mul(hD[0], hD[0]), *y2 = d.mul(hD[1], hD[1]), *z2 = d.mul(hD[2], hD[2]);
+        Value* s = n.isotropic ? d.div(d.add(x2, y2), d.mul(ax, ax))
+                               : d.add(d.div(x2, d.mul(ax, ax)), d.div(y2, d.mul(ay, ay)));
+        return d.div(s, z2);
+    }
+
+    Value* D(const Ndf& n, const std::array<Value*, 3>& h, const std::array<Value*, 3>& hD) {
         MathEmitter& m = f_;
         Value *x2 = m.mul(h[0], h[0]), *y2 = m.mul(h[1], h[1]), *z2 = m.mul(h[2], h[2]);
         auto slope2 = [&]() { return this->slope2(n, h); };
@@ -373,16 +434,20 @@ private:
                 return m.div(m.c(1.0 / kPi), m.mul(m.mul(n.ax, n.ay), m.mul(t, t)));
             }
             case NdfModel::Beckmann: {
-                Value* e = m.div(slope2(), z2);
-                Value* D = m.div(m.exp(m.neg(e)), m.mul(m.mul(m.c(kPi), m.mul(n.ax, n.ay)), m.mul(z2, z2)));
-                return m.select(m.gt(e, m.c(100.0)), m.c(0.0), D);  // exp underflowed; avoid 0/0
+                MathEmitter& d = d_;
+                Value* e = slopeExponentD(n, hD);
+                Value* z2d = d.mul(hD[2], hD[2]);
+                Value* axy = d.mul(n.axD, n.ayD);
+                Value* D = d.div(d.exp(d.neg(e)), d.mul(d.mul(d.c(kPi), axy), d.mul(z2d, z2d)));
+                D = d.select(d.gt(e, d.c(700.0)), d.c(0.0), D);  // exp underflowed; avoid 0/0
+                return m.convert(D, m.type());
             }
             case NdfModel::BlinnPhong: {
                 // mz^e = exp(e/2 log1p(-(mx^2 + my^2))) in double: mz itself
                 // is too coarse in float once e is large (1e6).
                 MathEmitter& d = d_;
-                Value *X = d.convert(h[0], d.type()), *Y = d.convert(h[1], d.type());
-                Value* s2 = d.fma(X, X, d.mul(Y, Y));
+                // sin^2 from the double half vector, kept <= 1 against rounding.
+                Value* s2 = d.minnum(d.fma(hD[0], hD[0], d.mul(hD[1], hD[1])), d.c(1.0));
                 Value* E = d.convert(n.exponent, d.type());
                 Value* p = d.exp(d.mul(d.mul(E, d.c(0.5)), d.log1p(d.neg(s2))));
                 p = d.select(d.eq(E, d.c(0.0)), d.c(1.0), p);
@@ -393,19 +458,19 @@ private:
                 // c / t^gamma, c = phi(L) / (pi phi((1 - gamma) L)), L = ln a^2,
                 // t = a^2 mz^2 + mx^2 + my^2; all in double.
                 MathEmitter& d = d_;
-                Value* A = d.convert(n.ax, d.type());
-                Value* A2 = d.mul(A, A);
+                Value* A2 = d.mul(n.axD, n.axD);
                 Value* L = d.log(A2);
-                Value* G = d.convert(n.gamma, d.type());
+                Value* G = n.gamma;
                 Value* c = d.div(expm1OverX(L), d.mul(d.c(kPi), expm1OverX(d.mul(d.sub(d.c(1.0), G), L))));
-                Value *X = d.convert(h[0], d.type()), *Y = d.convert(h[1], d.type()), *Z = d.convert(h[2], d.type());
-                Value* t = d.fma(A2, d.mul(Z, Z), d.fma(X, X, d.mul(Y, Y)));
+                Value* t = d.fma(A2, d.mul(hD[2], hD[2]), d.fma(hD[0], hD[0], d.mul(hD[1], hD[1])));
                 return f_.convert(d.mul(c, d.exp(d.neg(d.mul(G, d.log(t))))), f_.type());
             }
             case NdfModel::Gaussian: {
-                Value* theta = m.atan2(m.sqrt(m.add(x2, y2)), h[2]);
-                Value* e = m.div(m.mul(theta, theta), m.mul(n.ax, n.ax));
-                return m.div(m.exp(m.neg(e)), n.gaussianNorm);
+                // theta^2/alpha^2 is an exponent too: double.
+                MathEmitter& d = d_;
+                Value* theta = d.atan2(d.sqrt(d.fma(hD[0], hD[0], d.mul(hD[1], hD[1]))), hD[2]);
+                Value* e = d.div(d.mul(theta, theta), d.mul(n.axD, n.axD));
+                return m.div(m.convert(d.exp(d.neg(e)), m.type()), n.gaussianNorm);
             }
             case NdfModel::Ward: break;
         }
@@ -418,7 +483,7 @@ private:
         Value *ax = n.ax, *ay = n.ay;
         bool iso = n.isotropic;
         if (mat_.ndfModel() == NdfModel::BlinnPhong) {
-            ax = ay = m.sqrt(m.div(m.c(2.0), m.add(n.exponent, m.c(2.0))));
+            ax = ay = m.convert(d_.sqrt(d_.div(d_.c(2.0), d_.add(n.exponent, d_.c(2.0)))), m.type());
             iso = true;
         }
         Value* proj = iso ? m.mul(m.mul(ax, ax), m.fma(v[0], v[0], m.mul(v[1], v[1])))
@@ -482,14 +547,17 @@ private:
         internal_error << "unknown masking";
     }
 
-    LVal fresnel(Value* c) {
+    LVal fresnel(const Geometry& geo) {
         MathEmitter& m = f_;
+        MathEmitter& d = d_;
         Value* one = m.c(1.0);
+        Value* dOne = d.c(1.0);
+        Value* c = geo.cosD;  // double
         const ModelUse& use = mat_.fresnel;
         switch (mat_.fresnelModel()) {
             case FresnelModel::None: return LVal::scalar(one);
             case FresnelModel::Schlick: {
-                Value* q = m.sub(one, c);
+                Value* q = geo.oneMinusCos;
                 Value* q2 = m.mul(q, q);
                 Value* q5 = m.mul(m.mul(q2, q2), q);
                 LVal f0;
@@ -505,74 +573,73 @@ private:
                 return map({f0}, true, [&](auto& x) { return m.fma(m.sub(one, x[0]), q5, x[0]); });
             }
             case FresnelModel::Dielectric: {
-                LVal eta = rgbParam(use, param::DielectricEta, kMinEta, INFINITY);
-                Value* c2 = m.mul(c, c);
+                // In double: near the critical angle F depends on sqrt(g^2)
+                // with g^2 -> 0, which turns float rounding of cos into
+                // visible error.
+                LVal eta = rgbParam(use, param::DielectricEta, kMinEta, INFINITY, false);
+                Value* c2 = d.mul(c, c);
                 return map({eta}, true, [&](auto& x) {
                     // g^2 = eta^2 - sin^2; g - c = (eta^2 - 1)/(g + c) without cancellation.
                     Value* n = x[0];
-                    Value* e2m1 = m.mul(m.sub(n, one), m.add(n, one));
-                    Value* g2 = m.add(e2m1, c2);
-                    Value* g = m.sqrt(m.maxnum(g2, m.c(0.0)));
-                    Value* gp = m.add(g, c);
-                    Value* gm = m.div(e2m1, gp);
-                    Value* A = m.div(gm, gp);
-                    Value* B = m.div(m.fma(c, gp, m.c(-1.0)), m.fma(c, gm, one));
-                    Value* F = m.mul(m.mul(m.c(0.5), m.mul(A, A)), m.fma(B, B, one));
-                    Value* tir = b_.CreateOr(m.le(g2, m.c(0.0)), m.eq(gp, m.c(0.0)));
-                    return m.select(tir, one, F);
+                    Value* e2m1 = d.mul(d.sub(n, dOne), d.add(n, dOne));
+                    Value* g2 = d.add(e2m1, c2);
+                    Value* g = d.sqrt(d.maxnum(g2, d.c(0.0)));
+                    Value* gp = d.add(g, c);
+                    Value* gm = d.div(e2m1, gp);
+                    Value* A = d.div(gm, gp);
+                    Value* B = d.div(d.fma(c, gp, d.c(-1.0)), d.fma(c, gm, dOne));
+                    Value* F = d.mul(d.mul(d.c(0.5), d.mul(A, A)), d.fma(B, B, dOne));
+                    Value* tir = b_.CreateOr(d.le(g2, d.c(0.0)), d.eq(gp, d.c(0.0)));
+                    return m.convert(d.select(tir, dOne, F), m.type());
                 });
             }
             case FresnelModel::Conductor: {
-                LVal eta = rgbParam(use, param::ConductorEta, kMinEta, INFINITY);
-                LVal k = rgbParam(use, param::ConductorK, 0, INFINITY);
-                Value* c2 = m.mul(c, c);
-                Value* s2 = m.mul(m.sub(one, c), m.add(one, c));
+                LVal eta = rgbParam(use, param::ConductorEta, kMinEta, INFINITY, false);
+                LVal k = rgbParam(use, param::ConductorK, 0, INFINITY, false);
+                Value* c2 = d.mul(c, c);
+                Value* s2 = d.mul(d.sub(dOne, c), d.add(dOne, c));
                 return map({eta, k}, true, [&](auto& x) {
                     // |N cos_t|^2 = a^2 + b^2 with N = eta + ik (Born & Wolf):
                     // t0 = eta^2 - k^2 - sin^2, a2b2 = sqrt(t0^2 + 4 eta^2 k^2).
                     Value *n = x[0], *kk = x[1];
-                    Value* n2 = m.mul(n, n);
-                    Value* k2 = m.mul(kk, kk);
-                    Value* t0 = m.sub(m.sub(n2, k2), s2);
-                    Value* a2b2 = m.sqrt(m.fma(t0, t0, m.mul(m.c(4.0), m.mul(n2, k2))));
-                    Value* a = m.sqrt(m.maxnum(m.mul(m.c(0.5), m.add(a2b2, t0)), m.c(0.0)));
-                    Value* t1 = m.add(a2b2, c2);
-                    Value* t2 = m.mul(m.mul(m.c(2.0), c), a);
-                    Value* Rs = m.div(m.sub(t1, t2), m.add(t1, t2));
-                    Value* t3 = m.fma(c2, a2b2, m.mul(s2, s2));
-                    Value* t4 = m.mul(t2, s2);
-                    Value* Rp = m.mul(Rs, m.div(m.sub(t3, t4), m.add(t3, t4)));
-                    return m.mul(m.c(0.5), m.add(Rs, Rp));
+                    Value* n2 = d.mul(n, n);
+                    Value* k2 = d.mul(kk, kk);
+                    Value* t0 = d.sub(d.sub(n2, k2), s2);
+                    Value* a2b2 = d.sqrt(d.fma(t0, t0, d.mul(d.c(4.0), d.mul(n2, k2))));
+                    Value* a = d.sqrt(d.maxnum(d.mul(d.c(0.5), d.add(a2b2, t0)), d.c(0.0)));
+                    Value* t1 = d.add(a2b2, c2);
+                    Value* t2 = d.mul(d.mul(d.c(2.0), c), a);
+                    Value* Rs = d.div(d.sub(t1, t2), d.add(t1, t2));
+                    Value* t3 = d.fma(c2, a2b2, d.mul(s2, s2));
+                    Value* t4 = d.mul(t2, s2);
+                    Value* Rp = d.mul(Rs, d.div(d.sub(t3, t4), d.add(t3, t4)));
+                    return m.convert(d.mul(d.c(0.5), d.add(Rs, Rp)), m.type());
                 });
             }
         }
         internal_error << "unknown fresnel";
     }
 
-    std::array<Value*, 3> brdf(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo) {
+    std::array<Value*, 3> brdf(const Geometry& geo) {
         MathEmitter& m = f_;
-        Value *ci = wi[2], *co = wo[2];
+        const std::array<Value*, 3>&wi = geo.wi, &wo = geo.wo, &h = geo.h;
+        Value *ci = wi[2], *co = wo[2], *oh = geo.oh;
         Value* above = b_.CreateAnd(m.gt(ci, m.c(0.0)), m.gt(co, m.c(0.0)));
-        std::array<Value*, 3> h = {m.add(wi[0], wo[0]), m.add(wi[1], wo[1]), m.add(wi[2], wo[2])};
-        Value* hlen = m.sqrt(m.fma(h[0], h[0], m.fma(h[1], h[1], m.mul(h[2], h[2]))));
-        Value* hinv = m.div(m.c(1.0), hlen);
-        for (Value*& x : h) x = m.mul(x, hinv);
-        Value* oh = m.fma(wo[0], h[0], m.fma(wo[1], h[1], m.mul(wo[2], h[2])));
-        Value* cosD = m.minnum(m.maxnum(oh, m.c(0.0)), m.c(1.0));
 
         Ndf n = ndfParams();
         Value* spec;
         if (mat_.ndfModel() == NdfModel::Ward) {
-            Value* e = m.div(slope2(n, h), m.mul(h[2], h[2]));
-            Value* lobe = m.div(m.exp(m.neg(e)),
+            MathEmitter& d = d_;
+            Value* e = slopeExponentD(n, geo.hD);
+            Value* lobe = m.div(m.convert(d.exp(d.neg(e)), m.type()),
                                 m.mul(m.mul(m.c(4 * kPi), m.mul(n.ax, n.ay)), m.sqrt(m.mul(ci, co))));
-            spec = m.select(m.gt(e, m.c(100.0)), m.c(0.0), lobe);
+            spec = lobe;
         } else {
-            Value* d = D(n, h);
+            Value* dv = D(n, h, geo.hD);
             Value* g = G(n, wi, wo, h, ci, co, oh);
-            spec = m.div(m.mul(d, g), m.mul(m.mul(m.c(4.0), ci), co));
+            spec = m.div(m.mul(dv, g), m.mul(m.mul(m.c(4.0), ci), co));
         }
-        LVal F = fresnel(cosD);
+        LVal F = fresnel(geo);
         LVal diffuse = LVal::scalar(m.c(0.0));
         bool hasDiffuse = mat_.diffuseModel() == DiffuseModel::Lambert;
         if (hasDiffuse) {
@@ -585,7 +652,7 @@ private:
             return hasDiffuse ? m.add(s, x[2]) : s;
         });
         // Below the horizon (or wi + wo = 0): f = 0, a valid lane.
-        Value* valid = b_.CreateAnd(above, m.gt(hlen, m.c(0.0)));
+        Value* valid = b_.CreateAnd(above, geo.hNonZero);
         return map({total}, true, [&](auto& x) { return m.select(valid, x[0], m.c(0.0)); }).c;
     }
 

@@ -1,0 +1,198 @@
+// DiffHarness: sampling and error statistics (see DiffHarness.h).
+#include "DiffHarness.h"
+
+#include <cmath>
+#include <cstring>
+#include <fmt/format.h>
+#include <fstream>
+#include <sstream>
+
+namespace facet::test {
+
+std::string readFile(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+namespace {
+void addSlots(const CheckedMaterial& m, Sample& s, std::mt19937_64& rng, size_t n) {
+    s.slots.assign(m.slotCount, {});
+    std::uniform_real_distribution<double> u(0, 1);
+    for (const CheckedInput& in : m.inputs) {
+        for (int c = 0; c < in.slotCount(); ++c) {
+            std::vector<float>& col = s.slots[in.firstSlot + c];
+            for (size_t i = 0; i < n; ++i) {
+                double lo = in.hasRange ? in.lo : 0.0, hi = in.hasRange ? in.hi : 2 * in.defaultValue[c] + 0.1;
+                double v = lo + (hi - lo) * u(rng);
+                if (u(rng) < 0.05) v = in.hasRange ? (u(rng) < 0.5 ? lo - 0.5 : hi + 0.5) : in.defaultValue[c];
+                col.push_back(float(v));
+            }
+        }
+    }
+}
+}  // namespace
+
+Sample randomSample(const CheckedMaterial& m, size_t n, uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    Sample s;
+    for (size_t i = 0; i < n; ++i) {
+        for (int d = 0; d < 2; ++d) {
+            double z = u(rng), phi = 2 * M_PI * u(rng);
+            if (u(rng) < 0.05) z = -z;  // below the horizon
+            double r = std::sqrt(std::max(0.0, 1 - z * z));
+            s.dir[3 * d + 0].push_back(float(r * std::cos(phi)));
+            s.dir[3 * d + 1].push_back(float(r * std::sin(phi)));
+            s.dir[3 * d + 2].push_back(float(z));
+        }
+    }
+    addSlots(m, s, rng, n);
+    return s;
+}
+
+Sample hardSample(const CheckedMaterial& m) {
+    Sample s;
+    auto push = [&](double ax, double ay, double az, double bx, double by, double bz) {
+        double la = std::sqrt(ax * ax + ay * ay + az * az), lb = std::sqrt(bx * bx + by * by + bz * bz);
+        double v[6] = {ax / la, ay / la, az / la, bx / lb, by / lb, bz / lb};
+        for (int d = 0; d < 6; ++d) s.dir[d].push_back(float(v[d]));
+    };
+    const double zs[] = {1.0, 0.5, 1e-2, 1e-4, 1e-7};
+    for (double zi : zs)
+        for (double zo : zs)
+            for (double phi : {0.0, M_PI / 2, M_PI, M_PI - 1e-3, 1.0}) {
+                double ri = std::sqrt(1 - zi * zi), ro = std::sqrt(1 - zo * zo);
+                push(ri, 0, zi, ro * std::cos(phi), ro * std::sin(phi), zo);
+                push(-ri, 0, zi, ro * std::cos(phi), ro * std::sin(phi), zo);  // mirror-ish pairs
+            }
+    push(0, 0, 1, 0, 0, 1);
+    push(0.6, 0, 0.8, -0.6, 0, 0.8);                // exact mirror: n.h = 1
+    push(0.6, 1e-7, 0.8, -0.6, 0, 0.8);             // n.h within 1e-7 of 1
+    push(0.999999, 0, 1e-3, -0.999999, 1e-4, 1e-3);  // wi + wo nearly zero
+    push(0.6, 0, -0.8, 0, 0, 1);                    // wi below the horizon
+    std::mt19937_64 rng(7);
+    addSlots(m, s, rng, s.size());
+    return s;
+}
+
+bool DiffStats::ok(std::string& why) const {
+    if (nonFinite || negative) {
+        why = fmt::format("{} non-finite and {} negative outputs", nonFinite, negative);
+        return false;
+    }
+    if (beyond2e3) {
+        why = fmt::format("{} values beyond 2e-3 relative; worst: {}", beyond2e3, worst);
+        return false;
+    }
+    if (finiteRef && double(within1e5) < 0.999 * double(finiteRef)) {
+        why = fmt::format("only {}/{} within 1e-5; worst: {}", within1e5, finiteRef, worst);
+        return false;
+    }
+    if (ulpViolations) {
+        why = fmt::format("{} lanes differ by more than 4 ulp between scalar and SIMD (max {})", ulpViolations,
+                          maxUlpScalarSimd);
+        return false;
+    }
+    return true;
+}
+
+void compare(const Kernel& kernel, const CheckedMaterial& reference, const Sample& s, DiffStats& stats) {
+    size_t n = s.size();
+    // Kernel slots are the reference slots minus bound inputs; map by name.
+    std::vector<int> kernelSlotOf(reference.slotCount, -1);
+    for (int k = 0; k < kernel.inputCount(); ++k)
+        for (int r = 0; r < reference.slotCount; ++r)
+            if (reference.slotName(r) == kernel.inputName(k)) kernelSlotOf[r] = k;
+    std::vector<const float*> inputs(kernel.inputCount());
+    for (int r = 0; r < reference.slotCount; ++r)
+        if (kernelSlotOf[r] >= 0) inputs[kernelSlotOf[r]] = s.slots[r].data();
+    std::vector<float> out[3];
+    for (auto& o : out) o.assign(n, -1.0f);
+    float* rgb[3] = {out[0].data(), out[1].data(), out[2].data()};
+    const float* wi[3] = {s.dir[0].data(), s.dir[1].data(), s.dir[2].data()};
+    const float* wo[3] = {s.dir[3].data(), s.dir[4].data(), s.dir[5].data()};
+    if (kernel.backend() == Backend::Scalar) {
+        for (size_t i = 0; i < n; ++i) {
+            float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, o[3];
+            std::vector<float> in(kernel.inputCount());
+            for (int k = 0; k < kernel.inputCount(); ++k) in[k] = inputs[k][i];
+            kernel.eval(a, b, in.data(), o);
+            for (int c = 0; c < 3; ++c) rgb[c][i] = o[c];
+        }
+    } else {
+        kernel.evalBatch(int64_t(n), wi, wo, kernel.inputCount() ? inputs.data() : nullptr, rgb);
+    }
+    // Bound inputs: the kernel's material has them folded; the reference gets
+    // the defaults of the specialized material for its remaining slots and the
+    // bound values via the kernel's material (evaluate the specialized one).
+    Interpreter<double> interp(kernel.material());
+    std::vector<double> slots(std::max(1, kernel.inputCount()));
+    for (size_t i = 0; i < n; ++i) {
+        double a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]};
+        for (int k = 0; k < kernel.inputCount(); ++k) slots[k] = inputs[k][i];
+        EvalResult<double> ref = interp.eval(a, b, slots.data());
+        for (int c = 0; c < 3; ++c) {
+            double got = rgb[c][i], want = ref.valid ? ref.rgb[c] : 0.0;
+            ++stats.compared;
+            if (!std::isfinite(got)) {
+                ++stats.nonFinite;
+                continue;
+            }
+            if (got < 0) ++stats.negative;
+            // A reference beyond float range cannot be represented: the
+            // kernel must report the lane invalid (0), which we accept.
+            if (std::fabs(want) > 3.0e38) continue;
+            ++stats.finiteRef;
+            double err = std::fabs(got - want);
+            double rel = std::fabs(want) > 1e-30 ? err / std::fabs(want) : 0.0;
+            bool okAbs = err <= 1e-30;
+            if (rel <= 1e-5 || okAbs) ++stats.within1e5;
+            if (rel > 2e-3 && !okAbs) ++stats.beyond2e3;
+            if (rel > stats.maxRel && !okAbs) {
+                stats.maxRel = rel;
+                std::string in;
+                for (int k = 0; k < kernel.inputCount(); ++k)
+                    in += fmt::format(" {}={:.9g}", kernel.inputName(k), inputs[k][i]);
+                stats.worst = fmt::format("rel {:.3g} ch {} wi=({:.9g},{:.9g},{:.9g}) wo=({:.9g},{:.9g},{:.9g}){} "
+                                          "got {:.9g} want {:.17g}",
+                                          rel, c, a[0], a[1], a[2], b[0], b[1], b[2], in, got, want);
+            }
+        }
+    }
+}
+
+namespace {
+int64_t orderedBits(float f) {
+    int32_t i;
+    std::memcpy(&i, &f, 4);
+    return i < 0 ? int64_t(INT32_MIN) - i : i;
+}
+}  // namespace
+
+void compareUlp(const Kernel& scalar, const Kernel& simd, const Sample& s, DiffStats& stats) {
+    size_t n = s.size();
+    int slots = simd.inputCount();
+    std::vector<const float*> inputs;
+    for (int k = 0; k < slots; ++k) inputs.push_back(s.slots[k].data());
+    std::vector<float> out[3];
+    for (auto& o : out) o.assign(n, 0.0f);
+    float* rgb[3] = {out[0].data(), out[1].data(), out[2].data()};
+    const float* wi[3] = {s.dir[0].data(), s.dir[1].data(), s.dir[2].data()};
+    const float* wo[3] = {s.dir[3].data(), s.dir[4].data(), s.dir[5].data()};
+    simd.evalBatch(int64_t(n), wi, wo, slots ? inputs.data() : nullptr, rgb);
+    for (size_t i = 0; i < n; ++i) {
+        float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, o[3];
+        std::vector<float> in(slots);
+        for (int k = 0; k < slots; ++k) in[k] = inputs[k][i];
+        scalar.eval(a, b, in.data(), o);
+        for (int c = 0; c < 3; ++c) {
+            double ulps = std::fabs(double(orderedBits(o[c]) - orderedBits(rgb[c][i])));
+            stats.maxUlpScalarSimd = std::max(stats.maxUlpScalarSimd, ulps);
+            if (ulps > 4) ++stats.ulpViolations;
+        }
+    }
+}
+
+}  // namespace facet::test

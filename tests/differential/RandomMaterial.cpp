@@ -1,0 +1,142 @@
+// RandomMaterial: see RandomMaterial.h.
+#include "RandomMaterial.h"
+
+#include <fmt/format.h>
+#include <vector>
+
+namespace facet::test {
+
+namespace {
+
+struct Combo {
+    const char* ndf;
+    const char* masking;
+    const char* fresnel;
+    const char* diffuse;
+};
+
+std::vector<Combo> combinations() {
+    const char* ndfs[] = {"ggx", "ggx_aniso", "beckmann", "beckmann_aniso", "blinn_phong", "gtr", "gaussian", "ward"};
+    const char* maskings[] = {"none", "implicit", "cook_torrance", "kelemen", "neumann", "schlick_smith",
+                              "smith_separable", "smith_height_correlated", "smith_direction_correlated",
+                              "smith_height_direction_correlated"};
+    const char* fresnels[] = {"none", "schlick_f0", "schlick_eta", "dielectric", "dielectric_tir", "conductor"};
+    const char* diffuses[] = {"none", "lambert"};
+    std::vector<Combo> out;
+    for (const char* n : ndfs)
+        for (const char* m : maskings) {
+            std::string ns = n, ms = m;
+            bool smith = ms.rfind("smith_", 0) == 0;
+            if (ns == "ward" && ms != "none") continue;
+            if ((ns == "gtr" || ns == "gaussian") && smith) continue;
+            for (const char* f : fresnels)
+                for (const char* d : diffuses) out.push_back({n, m, f, d});
+        }
+    return out;
+}
+
+class Gen {
+public:
+    explicit Gen(uint64_t seed) : rng_(seed) {}
+    double uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng_); }
+    int pick(int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng_); }
+
+    std::vector<std::string> floatInputs;  // names of float inputs in [0, 1]
+    std::vector<std::string> rgbInputs;
+
+    // An expression with values in [0, 1], well conditioned.
+    std::string unit(int depth = 0) {
+        int choice = pick(depth > 2 ? 2 : 9);
+        switch (choice) {
+            case 0: return fmt::format("{:.6g}", uniform(0, 1));
+            case 1:
+                if (floatInputs.empty()) return fmt::format("{:.6g}", uniform(0, 1));
+                return floatInputs[pick(int(floatInputs.size()))];
+            case 2: return fmt::format("({} * {})", unit(depth + 1), unit(depth + 1));
+            case 3: return fmt::format("sqrt({})", unit(depth + 1));
+            case 4: return fmt::format("mix({}, {}, {})", unit(depth + 1), unit(depth + 1), unit(depth + 1));
+            case 5: return fmt::format("min({}, {})", unit(depth + 1), unit(depth + 1));
+            case 6: return fmt::format("max({}, {})", unit(depth + 1), unit(depth + 1));
+            case 7: return fmt::format("exp(-{})", unit(depth + 1));
+            default: return fmt::format("clamp(({} + {}) * 0.5, 0, 1)", unit(depth + 1), unit(depth + 1));
+        }
+    }
+    // A float parameter in [lo, hi]: constant or driven by inputs.
+    std::string ranged(double lo, double hi) {
+        if (pick(3) == 0) return fmt::format("{:.6g}", uniform(lo, hi));
+        return fmt::format("({} + {} * {})", lo, hi - lo, unit());
+    }
+    // An rgb parameter with channels in [lo, hi].
+    std::string rgbRanged(double lo, double hi) {
+        switch (pick(3)) {
+            case 0: return ranged(lo, hi);  // float promoted to rgb
+            case 1: return fmt::format("rgb({}, {}, {})", ranged(lo, hi), ranged(lo, hi), ranged(lo, hi));
+            default:
+                if (rgbInputs.empty()) return ranged(lo, hi);
+                return fmt::format("({} + {} * {} * {})", lo, hi - lo, rgbInputs[pick(int(rgbInputs.size()))], unit());
+        }
+    }
+
+private:
+    std::mt19937_64 rng_;
+};
+
+}  // namespace
+
+int randomMaterialCombinationCount() { return int(combinations().size()); }
+
+RandomMaterial randomMaterial(uint64_t seed, int i) {
+    static const std::vector<Combo> combos = combinations();
+    const Combo& c = combos[size_t(i) % combos.size()];
+    Gen g(seed * 1000003u + uint64_t(i));
+    std::string body;
+    int nFloat = g.pick(3), nRgb = g.pick(2);
+    for (int k = 0; k < nFloat; ++k) {
+        std::string name = fmt::format("u{}", k);
+        body += fmt::format("    input {} = {:.4g} in 0 .. 1;\n", name, g.uniform(0, 1));
+        g.floatInputs.push_back(name);
+    }
+    for (int k = 0; k < nRgb; ++k) {
+        std::string name = fmt::format("c{}", k);
+        body += fmt::format("    input {} = rgb({:.4g}, {:.4g}, {:.4g}) in 0 .. 1;\n", name, g.uniform(0, 1),
+                            g.uniform(0, 1), g.uniform(0, 1));
+        g.rgbInputs.push_back(name);
+    }
+    if (g.pick(2)) {
+        body += fmt::format("    let l0 = {};\n", g.unit());
+        g.floatInputs.push_back("l0");  // lets are usable like inputs from here on
+    }
+    std::string ndf = c.ndf;
+    if (ndf == "ggx") body += fmt::format("    ndf = ggx({});\n", g.ranged(0.02, 1.0));
+    else if (ndf == "ggx_aniso")
+        body += fmt::format("    ndf = ggx(alpha_x = {}, alpha_y = {});\n", g.ranged(0.02, 1.0), g.ranged(0.02, 1.0));
+    else if (ndf == "beckmann") body += fmt::format("    ndf = beckmann({});\n", g.ranged(0.02, 1.0));
+    else if (ndf == "beckmann_aniso")
+        body += fmt::format("    ndf = beckmann({}, {});\n", g.ranged(0.02, 1.0), g.ranged(0.02, 1.0));
+    else if (ndf == "blinn_phong")
+        body += g.pick(2) ? fmt::format("    ndf = blinn_phong(beckmann_to_phong({}));\n", g.ranged(0.05, 1.0))
+                          : fmt::format("    ndf = blinn_phong({});\n", g.ranged(1, 2000));
+    else if (ndf == "gtr") body += fmt::format("    ndf = gtr({}, {});\n", g.ranged(0.02, 1.0), g.ranged(0.5, 3.0));
+    else if (ndf == "gaussian") body += fmt::format("    ndf = gaussian({});\n", g.ranged(0.05, 1.0));
+    else body += fmt::format("    ndf = ward({}, {});\n", g.ranged(0.05, 0.6), g.ranged(0.05, 0.6));
+
+    std::string masking = c.masking;
+    if (masking == "schlick_smith") body += fmt::format("    masking = schlick_smith({});\n", g.ranged(0, 1));
+    else body += fmt::format("    masking = {};\n", masking);
+
+    std::string fresnel = c.fresnel;
+    if (fresnel == "schlick_f0") body += fmt::format("    fresnel = schlick({});\n", g.rgbRanged(0, 1));
+    else if (fresnel == "schlick_eta") body += fmt::format("    fresnel = schlick(eta = {});\n", g.rgbRanged(1.1, 3.0));
+    else if (fresnel == "dielectric") body += fmt::format("    fresnel = dielectric({});\n", g.rgbRanged(1.1, 2.5));
+    else if (fresnel == "dielectric_tir") body += fmt::format("    fresnel = dielectric({});\n", g.rgbRanged(0.4, 0.9));
+    else if (fresnel == "conductor")
+        body += fmt::format("    fresnel = conductor(eta = {}, k = {});\n", g.rgbRanged(0.1, 3.0), g.rgbRanged(0, 5));
+    if (std::string(c.diffuse) == "lambert") body += fmt::format("    diffuse = lambert({});\n", g.rgbRanged(0, 1));
+
+    RandomMaterial out;
+    out.combination = fmt::format("{}/{}/{}/{}", c.ndf, c.masking, c.fresnel, c.diffuse);
+    out.text = fmt::format("material random_{} {{\n{}}}\n", i, body);
+    return out;
+}
+
+}  // namespace facet::test

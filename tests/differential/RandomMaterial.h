@@ -1,0 +1,24 @@
+// RandomMaterial: a generator of random, valid materials for differential
+// testing. Covers every NDF x masking x Fresnel x diffuse combination the
+// checker accepts, with constant and input-driven parameters built from
+// random well-conditioned expressions (so that float-vs-double differences
+// measure the kernels, not cancellation in the user's arithmetic).
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <string>
+
+namespace facet::test {
+
+struct RandomMaterial {
+    std::string text;  // the material source
+    std::string combination;  // "ndf/masking/fresnel/diffuse"
+};
+
+// The i-th material of the stream for `seed`; `i` also steers the
+// combination so that consecutive indices cycle through all of them.
+RandomMaterial randomMaterial(uint64_t seed, int i);
+int randomMaterialCombinationCount();
+
+}  // namespace facet::test
