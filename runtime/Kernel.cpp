@@ -177,58 +177,47 @@ Kernel::~Kernel() {
 }
 
 void Kernel::eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]) const {
-    if (scalar_) return scalar_(wi, wo, inputs, rgb);
-    if (batch_) {
-        // A SIMD-only kernel evaluates one lane through the batch entry.
-        const float* wiP[3] = {&wi[0], &wi[1], &wi[2]};
-        const float* woP[3] = {&wo[0], &wo[1], &wo[2]};
-        std::vector<const float*> in;
-        if (inputs)
-            for (int s = 0; s < inputCount(); ++s) in.push_back(&inputs[s]);
-        float* out[3] = {&rgb[0], &rgb[1], &rgb[2]};
-        batch_(1, wiP, woP, inputs ? in.data() : nullptr, out);
+    if (scalar_) {
+        scalar_(wi, wo, inputs, rgb);
         return;
     }
-    Interpreter<double> interp(material_);
-    double w[2][3], slots[256];
-    std::vector<double> slotVec(std::max(1, inputCount()));
-    for (int i = 0; i < 3; ++i) {
-        w[0][i] = wi[i];
-        w[1][i] = wo[i];
-    }
-    std::vector<double> defaults = material_.defaultSlots();
-    for (int s = 0; s < inputCount(); ++s) slotVec[s] = inputs ? inputs[s] : defaults[s];
-    (void)slots;
-    EvalResult<double> r = interp.eval(w[0], w[1], slotVec.data());
-    for (int i = 0; i < 3; ++i) rgb[i] = r.valid ? float(r.rgb[i]) : 0.0f;
+    // A SIMD kernel evaluates one lane through its batch entry.
+    const float* const wiP[3] = {&wi[0], &wi[1], &wi[2]};
+    const float* const woP[3] = {&wo[0], &wo[1], &wo[2]};
+    std::vector<const float*> in;
+    if (inputs)
+        for (int s = 0; s < inputCount(); ++s) in.push_back(&inputs[s]);
+    float* const out[3] = {&rgb[0], &rgb[1], &rgb[2]};
+    evalBatch(1, wiP, woP, inputs ? in.data() : nullptr, out);
 }
 
 int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
                           float* const rgb[3]) const {
     if (n <= 0) return 0;
     if (batch_) return batch_(n, wi, wo, inputs, rgb);
+    // Scalar and interpreter kernels: one lane at a time, same conventions.
     int64_t invalid = 0;
+    int slots = inputCount();
     std::vector<double> defaults = material_.defaultSlots();
-    std::vector<double> slots(std::max(1, inputCount()));
-    Interpreter<double> interp(material_);
+    std::vector<float> laneInputs(std::max(1, slots));
+    std::vector<double> laneSlots(std::max(1, slots));
+    std::optional<Interpreter<double>> interp;
+    if (!scalarStatus_) interp.emplace(material_);
     for (int64_t i = 0; i < n; ++i) {
-        double w[2][3];
-        for (int c = 0; c < 3; ++c) {
-            w[0][c] = wi[c][i];
-            w[1][c] = wo[c][i];
+        for (int s = 0; s < slots; ++s) {
+            laneSlots[s] = inputs && inputs[s] ? double(inputs[s][i]) : defaults[s];
+            laneInputs[s] = float(laneSlots[s]);
         }
-        for (int s = 0; s < inputCount(); ++s)
-            slots[s] = inputs && inputs[s] ? double(inputs[s][i]) : defaults[s];
-        if (scalar_) {
-            float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, out[3];
-            std::vector<float> fs(slots.begin(), slots.end());
-            scalar_(a, b, fs.data(), out);
-            for (int c = 0; c < 3; ++c) rgb[c][i] = out[c];
-            continue;
+        float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, out[3];
+        if (scalarStatus_) {
+            invalid += scalarStatus_(a, b, laneInputs.data(), out);
+        } else {
+            double da[3] = {a[0], a[1], a[2]}, db[3] = {b[0], b[1], b[2]};
+            EvalResult<double> r = interp->eval(da, db, laneSlots.data());
+            invalid += !r.valid;
+            for (int c = 0; c < 3; ++c) out[c] = r.valid ? float(r.rgb[c]) : 0.0f;
         }
-        EvalResult<double> r = interp.eval(w[0], w[1], slots.data());
-        if (!r.valid) ++invalid;
-        for (int c = 0; c < 3; ++c) rgb[c][i] = r.valid ? float(r.rgb[c]) : 0.0f;
+        for (int c = 0; c < 3; ++c) rgb[c][i] = out[c];
     }
     return invalid;
 }
@@ -323,8 +312,11 @@ std::unique_ptr<Kernel> Compiler::compileText(const std::string& text, const std
     }
     kernel->jit_ = jit_;
     kernel->dylib_ = &jit_->addObject(llvm::MemoryBuffer::getMemBufferCopy(*object, prefix));
-    if (lowering.emitScalar)
+    if (lowering.emitScalar) {
         kernel->scalar_ = reinterpret_cast<ScalarKernelFn>(jit_->lookup(*kernel->dylib_, prefix + "_scalar"));
+        kernel->scalarStatus_ =
+            reinterpret_cast<ScalarStatusFn>(jit_->lookup(*kernel->dylib_, prefix + "_scalar_status"));
+    }
     if (lowering.emitBatch)
         kernel->batch_ = reinterpret_cast<BatchKernelFn>(jit_->lookup(*kernel->dylib_, prefix + "_batch"));
     kernel->compileMillis_ = millisSince(start);

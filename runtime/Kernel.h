@@ -45,6 +45,8 @@ struct CompileOptions {
 };
 
 using ScalarKernelFn = void (*)(const float*, const float*, const float*, float*);
+// The scalar kernel's twin that also reports whether the lane was invalid.
+using ScalarStatusFn = int32_t (*)(const float*, const float*, const float*, float*);
 using BatchKernelFn = int64_t (*)(int64_t, const float* const*, const float* const*, const float* const*,
                                   float* const*);
 
@@ -73,6 +75,7 @@ private:
     int width_ = 1;
     std::vector<std::string> slotNames_;
     ScalarKernelFn scalar_ = nullptr;
+    ScalarStatusFn scalarStatus_ = nullptr;
     BatchKernelFn batch_ = nullptr;
     std::shared_ptr<FacetJit> jit_;
     llvm::orc::JITDylib* dylib_ = nullptr;

@@ -685,13 +685,15 @@ void addKernelAttributes(llvm::Function* fn, int width) {
     fn->addFnAttr("prefer-vector-width", bits);
 }
 
+// The scalar kernel: `<name>_status` computes one lane and returns 1 if it
+// was invalid; `<name>` is the SPEC's void entry point, a thin wrapper.
 void emitScalarEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llvm::Module& module,
                      const std::string& name) {
     llvm::LLVMContext& ctx = module.getContext();
     llvm::IRBuilder<> b(ctx);
     llvm::Type* ptr = b.getPtrTy();
-    auto* fnTy = llvm::FunctionType::get(b.getVoidTy(), {ptr, ptr, ptr, ptr}, false);
-    auto* fn = llvm::Function::Create(fnTy, llvm::Function::ExternalLinkage, name, module);
+    auto* statusTy = llvm::FunctionType::get(b.getInt32Ty(), {ptr, ptr, ptr, ptr}, false);
+    auto* fn = llvm::Function::Create(statusTy, llvm::Function::ExternalLinkage, name + "_status", module);
     addKernelAttributes(fn, 1);
     b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", fn));
     llvm::Value *wiP = fn->getArg(0), *woP = fn->getArg(1), *inP = fn->getArg(2), *outP = fn->getArg(3);
@@ -712,6 +714,13 @@ void emitScalarEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llv
     LaneEmitter lanes(mat, opt, b, f32, module);
     LaneEmitter::Result r = lanes.emit(wi, wo, slots);
     for (int i = 0; i < 3; ++i) b.CreateStore(r.rgb[i], b.CreateConstGEP1_32(f32, outP, i));
+    b.CreateRet(b.CreateZExt(r.invalid, b.getInt32Ty()));
+
+    auto* voidTy = llvm::FunctionType::get(b.getVoidTy(), {ptr, ptr, ptr, ptr}, false);
+    auto* entry = llvm::Function::Create(voidTy, llvm::Function::ExternalLinkage, name, module);
+    addKernelAttributes(entry, 1);
+    b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", entry));
+    b.CreateCall(fn, {entry->getArg(0), entry->getArg(1), entry->getArg(2), entry->getArg(3)});
     b.CreateRetVoid();
 }
 

@@ -1,0 +1,54 @@
+/* facet.h: the C API of Facet (libfacet.so), for C, Rust or Python hosts.
+ *
+ * Compile a material once, then evaluate its BRDF (1/sr, rgb, without the
+ * cosine factor) per direction pair or in SoA batches. Kernels are immutable
+ * and may be evaluated from many threads at once. All kernels share one JIT
+ * session per process, created on first use.
+ */
+#ifndef FACET_FACET_H
+#define FACET_FACET_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct facet_kernel facet_kernel;
+
+/* options: "key=value" pairs separated by ';' -- backend=scalar|simd|interp,
+   math=exact|fast, tolerance=1e-4, width=4|8|16, set.NAME=VALUE (rgb:
+   set.NAME=r,g,b), cache=on|off|memory. NULL or "" = defaults (simd, exact,
+   the host's width). NULL material = the first in the file. On failure
+   returns NULL and writes the diagnostic ("file:line:col: error: ...") into
+   err (truncated to err_len, always NUL-terminated when err_len > 0). */
+facet_kernel* facet_compile_file(const char* path, const char* material, const char* options, char* err,
+                                 size_t err_len);
+/* The same from material source text; `name` is used in diagnostics. */
+facet_kernel* facet_compile_text(const char* text, const char* name, const char* material, const char* options,
+                                 char* err, size_t err_len);
+
+/* Float input slots (an rgb input takes 3: "tint.r", "tint.g", "tint.b").
+   Inputs bound with set.NAME are not slots. */
+int facet_input_count(const facet_kernel* k);
+/* NULL when slot is out of range. The string lives as long as the kernel. */
+const char* facet_input_name(const facet_kernel* k, int slot);
+
+/* inputs holds one value per slot, or is NULL (all defaults). */
+void facet_eval(const facet_kernel* k, const float wi[3], const float wo[3], const float* inputs, float rgb[3]);
+
+/* SoA: wi[0..2], wo[0..2], rgb[0..2] each point to n floats; inputs is NULL
+   (all defaults) or inputs[s] points to n floats (or is NULL: that slot's
+   default). Returns the number of invalid lanes (non-finite or non-unit
+   directions, non-finite inputs or parameters); their rgb is 0. */
+int64_t facet_eval_batch(const facet_kernel* k, int64_t n, const float* const wi[3], const float* const wo[3],
+                         const float* const* inputs, float* const rgb[3]);
+
+void facet_release(facet_kernel* k);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* FACET_FACET_H */

@@ -1,0 +1,256 @@
+// JIT tests: compilers and JITs side by side, thread safety, the kernel
+// caches (memory, disk, corrupted files), specialization visible in the
+// optimized IR, and vectorized math (no libm calls in SIMD kernels).
+#include "Checker.h"
+#include "Jit.h"
+#include "Kernel.h"
+#include "Lowering.h"
+#include "Specialize.h"
+
+#include <doctest/doctest.h>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <llvm/IR/Instructions.h>
+#include <llvm/IR/Module.h>
+#include <random>
+#include <thread>
+
+using namespace facet;
+
+namespace {
+
+const char* kGold = R"(
+material gold {
+    input roughness = 0.35 in 0 .. 1;
+    input tint = rgb(1, 1, 1);
+    let alpha = roughness * roughness;
+    ndf = ggx(alpha);
+    masking = smith_height_correlated;
+    fresnel = conductor(eta = rgb(0.143, 0.374, 1.442) * tint, k = rgb(3.983, 2.385, 1.603));
+}
+)";
+
+struct Batch {
+    size_t n;
+    std::vector<float> dir[6], rough;
+    std::vector<float> out[3];
+    explicit Batch(size_t count, uint64_t seed) : n(count) {
+        std::mt19937 rng(seed);
+        std::uniform_real_distribution<float> u(0, 1);
+        for (size_t i = 0; i < n; ++i) {
+            for (int d = 0; d < 2; ++d) {
+                float z = u(rng), phi = 6.2831853f * u(rng), r = std::sqrt(1 - z * z);
+                dir[3 * d].push_back(r * std::cos(phi));
+                dir[3 * d + 1].push_back(r * std::sin(phi));
+                dir[3 * d + 2].push_back(z);
+            }
+            rough.push_back(u(rng));
+        }
+        for (auto& o : out) o.assign(n, 0.0f);
+    }
+    int64_t run(const Kernel& k, size_t begin = 0, size_t count = SIZE_MAX) {
+        count = std::min(count, n - begin);
+        const float* wi[3] = {&dir[0][begin], &dir[1][begin], &dir[2][begin]};
+        const float* wo[3] = {&dir[3][begin], &dir[4][begin], &dir[5][begin]};
+        const float* inputs[4] = {&rough[begin], nullptr, nullptr, nullptr};
+        float* rgb[3] = {&out[0][begin], &out[1][begin], &out[2][begin]};
+        return k.evalBatch(int64_t(count), wi, wo, inputs, rgb);
+    }
+};
+
+CompileOptions opts(const std::string& spec) {
+    CompileOptions o;
+    std::string err = CompileOptions::parse(spec, o);
+    REQUIRE_MESSAGE(err.empty(), err);
+    return o;
+}
+
+std::unique_ptr<Kernel> compile(Compiler& c, const std::string& text, const std::string& spec) {
+    DiagnosticEngine d;
+    auto k = c.compileText(text, "t.mat", "", opts(spec), d);
+    REQUIRE_MESSAGE(k, d.str());
+    return k;
+}
+
+// Instructions of the optimized module's kernel functions.
+size_t optimizedInstructionCount(const std::string& text, const InputBindings& bindings, bool simd) {
+    DiagnosticEngine d;
+    CheckedProgram p = loadProgramText(text, "t.mat", d);
+    REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+    CheckedMaterial m = specializeMaterial(p.materials[0], bindings, d);
+    REQUIRE(!d.hasErrors());
+    auto jit = FacetJit::Create();
+    llvm::LLVMContext ctx;
+    LoweringOptions lo;
+    lo.emitScalar = !simd;
+    lo.emitBatch = simd;
+    lo.width = 16;
+    LoweredModule mod = lowerMaterial(m, lo, ctx, "k");
+    jit->optimize(*mod.module);
+    size_t count = 0;
+    for (llvm::Function& f : *mod.module)
+        if (!f.isDeclaration())
+            for (llvm::BasicBlock& bb : f) count += bb.size();
+    return count;
+}
+
+std::string tempDir(const std::string& name) {
+    auto dir = std::filesystem::temp_directory_path() / fmt::format("facet-test-{}-{}", name, ::getpid());
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir.string();
+}
+
+}  // namespace
+
+TEST_CASE("two compilers with two JITs in one process give identical results") {
+    Compiler a, b;
+    auto ka = compile(a, kGold, "backend=simd;cache=off");
+    auto kb = compile(b, kGold, "backend=simd;cache=off");
+    Batch x(4099, 1), y(4099, 1);
+    CHECK(x.run(*ka) == 0);
+    CHECK(y.run(*kb) == 0);
+    for (int c = 0; c < 3; ++c) CHECK(x.out[c] == y.out[c]);
+    // The same material compiled twice in one compiler loads twice (one
+    // dylib each) without symbol clashes, and releases independently.
+    auto kc = compile(a, kGold, "backend=simd;cache=memory");
+    auto kd = compile(a, kGold, "backend=simd;cache=memory");
+    CHECK(kd->origin() == "memory cache");
+    kc.reset();
+    Batch z(100, 1);
+    z.run(*kd);
+    for (int c = 0; c < 3; ++c)
+        for (size_t i = 0; i < 100; ++i) CHECK(z.out[c][i] == x.out[c][i]);
+}
+
+TEST_CASE("concurrent batches from two threads on one kernel equal the serial result") {
+    Compiler compiler;
+    auto k = compile(compiler, kGold, "backend=simd;cache=off");
+    Batch serial(200000, 2), parallel(200000, 2);
+    serial.run(*k);
+    std::thread t1([&] { parallel.run(*k, 0, 100003); });
+    std::thread t2([&] { parallel.run(*k, 100003); });
+    t1.join();
+    t2.join();
+    for (int c = 0; c < 3; ++c) CHECK(serial.out[c] == parallel.out[c]);
+}
+
+TEST_CASE("disk cache: hit, and truncated or corrupted files are detected and recompiled") {
+    std::string dir = tempDir("cache");
+    Batch reference(1000, 3);
+    {
+        Compiler c;
+        c.setCacheDir(dir);
+        auto k = compile(c, kGold, "backend=simd");
+        CHECK(k->origin() == "compiled");
+        reference.run(*k);
+    }
+    std::vector<std::filesystem::path> files;
+    for (auto& e : std::filesystem::directory_iterator(dir)) files.push_back(e.path());
+    REQUIRE(files.size() == 1);
+    auto reload = [&](const char* expectedOrigin) {
+        Compiler c;  // a fresh process-like compiler: no memory cache
+        c.setCacheDir(dir);
+        auto k = compile(c, kGold, "backend=simd");
+        CHECK(k->origin() == expectedOrigin);
+        Batch b(1000, 3);
+        b.run(*k);
+        for (int ch = 0; ch < 3; ++ch) CHECK(b.out[ch] == reference.out[ch]);
+    };
+    reload("disk cache");
+    auto size = std::filesystem::file_size(files[0]);
+    std::filesystem::resize_file(files[0], size / 2);  // truncated
+    reload("compiled");
+    {
+        std::fstream f(files[0], std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(std::streamoff(size - 100));
+        char byte = 0;
+        f.read(&byte, 1);
+        f.seekp(std::streamoff(size - 100));
+        byte ^= 0x5a;
+        f.write(&byte, 1);  // corrupted payload byte
+    }
+    reload("compiled");
+    reload("disk cache");  // rewritten by the recompile
+    std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("cache keys separate options and bound values") {
+    Compiler c;
+    c.setCacheDir("");
+    auto k1 = compile(c, kGold, "backend=simd;cache=memory;set.roughness=0.2");
+    auto k2 = compile(c, kGold, "backend=simd;cache=memory;set.roughness=0.3");
+    auto k3 = compile(c, kGold, "backend=simd;cache=memory;width=8");
+    CHECK(k2->origin() == "compiled");
+    CHECK(k3->origin() == "compiled");
+    CHECK(k3->width() == 8);
+    float n[3] = {0, 0, 1}, a[3], b[3];
+    k1->eval(n, n, nullptr, a);
+    k2->eval(n, n, nullptr, b);
+    CHECK(a[0] > b[0]);  // smoother surface, higher peak
+}
+
+TEST_CASE("specialization shrinks the optimized IR") {
+    size_t unbound = optimizedInstructionCount(kGold, {}, true);
+    size_t bound = optimizedInstructionCount(kGold, {{"roughness", {0.3}}, {"tint", {1.0}}}, true);
+    MESSAGE("gold SIMD kernel: " << unbound << " instructions unbound, " << bound << " with roughness and tint bound");
+    CHECK(bound < unbound);
+
+    // Terms that cannot matter are removed: F = none and G = none.
+    const char* full = "material m { input r = 0.5; ndf = beckmann(r); masking = smith_separable; fresnel = dielectric(1.5); }";
+    const char* bare = "material m { input r = 0.5; ndf = beckmann(r); }";
+    CHECK(optimizedInstructionCount(bare, {}, false) < optimizedInstructionCount(full, {}, false));
+
+    // An rgb whose channels are provably equal is computed once.
+    const char* gray = "material m { input r = 0.5; ndf = ggx(r); fresnel = conductor(eta = 0.2, k = 3.0); }";
+    const char* color = "material m { input r = 0.5; ndf = ggx(r); fresnel = conductor(eta = rgb(0.2, 0.3, 0.4), k = 3.0); }";
+    size_t grayCount = optimizedInstructionCount(gray, {}, false), colorCount = optimizedInstructionCount(color, {}, false);
+    MESSAGE("gray conductor " << grayCount << " instructions, rgb conductor " << colorCount);
+    CHECK(grayCount < colorCount);
+}
+
+TEST_CASE("SIMD kernels keep their math vectorized: no libm calls") {
+    const char* text = R"(material b { input r = 0.4 in 0 .. 1; input e = 2;
+        ndf = beckmann(r * r); masking = smith_height_correlated;
+        fresnel = dielectric(1.5); diffuse = lambert(pow(r, e) * exp(-r) + log(1 + r)); })";
+    std::string path = tempDir("ir") + "/b.mat";
+    std::ofstream(path) << text;
+    Compiler c;
+    DiagnosticEngine d;
+    CompileOptions o = opts("backend=simd");
+    std::string ir = c.irText(path, "", o, true, false, d);
+    REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+    size_t calls = 0, vectorOps = 0;
+    std::istringstream lines(ir);
+    for (std::string line; std::getline(lines, line);) {
+        size_t call = line.find(" call ");
+        if (call != std::string::npos) {
+            size_t at = line.find('@', call);
+            INFO(line);
+            CHECK(line.compare(at, 6, "@llvm.") == 0);  // only intrinsics
+            ++calls;
+        }
+        if (line.find("<16 x float>") != std::string::npos) ++vectorOps;
+    }
+    CHECK(vectorOps > 50);
+    CHECK(ir.find("@exp") == std::string::npos);
+    CHECK(ir.find("@erfc") == std::string::npos);
+    CHECK(ir.find("@pow") == std::string::npos);
+}
+
+TEST_CASE("option strings are validated") {
+    CompileOptions o;
+    CHECK(CompileOptions::parse("backend=simd; math=fast ;width=8;set.tint=1,0.5,0.25", o) == "");
+    CHECK(o.width == 8);
+    CHECK(o.math == MathMode::Fast);
+    CHECK(o.bindings.at("tint") == std::vector<double>{1, 0.5, 0.25});
+    CHECK(CompileOptions::parse("width=7", o) == "width '7' is not 4, 8 or 16");
+    CHECK(CompileOptions::parse("tolerance=-1", o) == "tolerance '-1' is not a positive number");
+    CHECK(CompileOptions::parse("set.x=nan", o) == "set.x: 'nan' is not a finite number");
+    CHECK(CompileOptions::parse("colour=red", o).find("unknown option 'colour'") == 0);
+    Compiler c;
+    DiagnosticEngine d;
+    CHECK(c.compileText(kGold, "t.mat", "", opts("set.shine=1"), d) == nullptr);
+    CHECK(d.str() == "t.mat:2:10: error: cannot bind 'shine': material 'gold' has no such input (inputs: roughness, tint)\n");
+}
