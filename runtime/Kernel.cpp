@@ -243,20 +243,24 @@ std::unique_ptr<Kernel> Compiler::compileFile(const std::string& path, const std
 std::unique_ptr<Kernel> Compiler::compileText(const std::string& text, const std::string& path,
                                               const std::string& name, const CompileOptions& options,
                                               DiagnosticEngine& diags) {
-    auto start = std::chrono::steady_clock::now();
-    auto program = std::make_shared<CheckedProgram>(loadProgramText(text, path, diags));
+    CheckedProgram program = loadProgramText(text, path, diags);
     if (diags.hasErrors()) return nullptr;
-    const CheckedMaterial* material = program->find(name);
+    const CheckedMaterial* material = program.find(name);
     if (!material) {
         diags.error({std::make_shared<const std::string>(path), 0, 0},
                     fmt::format("no material named '{}'", name));
         return nullptr;
     }
-    CheckedMaterial specialized = specializeMaterial(*material, options.bindings, diags);
+    return compileMaterial(*material, options, diags);
+}
+
+std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& material, const CompileOptions& options,
+                                                  DiagnosticEngine& diags) {
+    auto start = std::chrono::steady_clock::now();
+    CheckedMaterial specialized = specializeMaterial(material, options.bindings, diags);
     if (diags.hasErrors()) return nullptr;
 
     std::unique_ptr<Kernel> kernel(new Kernel());
-    kernel->program_ = program;
     kernel->material_ = std::move(specialized);
     kernel->backend_ = options.backend;
     for (int s = 0; s < kernel->material_.slotCount; ++s) kernel->slotNames_.push_back(kernel->material_.slotName(s));

@@ -69,8 +69,7 @@ public:
 private:
     friend class Compiler;
     Kernel() = default;
-    CheckedMaterial material_;
-    std::shared_ptr<const CheckedProgram> program_;  // keeps the AST alive
+    CheckedMaterial material_;  // holds its expression trees by shared pointer
     Backend backend_ = Backend::Simd;
     int width_ = 1;
     std::vector<std::string> slotNames_;
@@ -93,6 +92,9 @@ public:
                                         const CompileOptions& options, DiagnosticEngine& diags);
     std::unique_ptr<Kernel> compileText(const std::string& text, const std::string& path, const std::string& name,
                                         const CompileOptions& options, DiagnosticEngine& diags);
+    // Compiles an already checked material (bindings in options are applied).
+    std::unique_ptr<Kernel> compileMaterial(const CheckedMaterial& material, const CompileOptions& options,
+                                            DiagnosticEngine& diags);
 
     // The optimized IR of a material, for `facet ir`. With `stages`, also the
     // checked and specialized material and the IR before optimization.

@@ -6,11 +6,11 @@
 // vectorized (no per-lane calls into scalar libm) and how the scalar kernel
 // gets the very same formulas, so scalar and SIMD agree bit for bit.
 //
-// Accuracy (exact mode), measured against long double in tests/unit:
-//   exp, log, log1p  (float):  <= 1 ulp          (double): <= 2 ulp
+// Accuracy (exact mode), measured against long double in tests/jit/MathTests:
+//   exp, log (float): <= 1 ulp;  log1p (float): <= 2 ulp
 //   pow  (float, computed through double log/exp): <= 1 ulp
-//   erfc (float): <= 1.2e-7 relative (Chebyshev fit, x >= 0)
-//   atan2 (float): <= 2 ulp
+//   erfc (float): <= 5e-7 relative (fit 1.2e-7 + rounding) while erfc(x) is a normal float (x <= 9)
+//   atan2 (float): <= 3 ulp
 #pragma once
 
 #include <llvm/IR/IRBuilder.h>
@@ -64,6 +64,8 @@ public:
     // with an integer exponent, pow(x, 0) = 1, pow(0, y).
     llvm::Value* pow(llvm::Value* x, llvm::Value* y);
     llvm::Value* erfc(llvm::Value* x);  // x >= 0
+    // exp(extra - x^2), accurate even where x^2 is large (Gaussian tails).
+    llvm::Value* expNegSquare(llvm::Value* x, llvm::Value* extra);
     // atan2(y, x) for y >= 0, in [0, pi].
     llvm::Value* atan2(llvm::Value* y, llvm::Value* x);
     // 2^n for an integer-valued n in [-126, 127] given in this floating type.
