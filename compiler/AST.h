@@ -32,6 +32,7 @@ struct Expr {
     ExprKind kind;
     SourceLoc loc;
     ValueType type = ValueType::Unknown;  // set by the checker
+    int depth = 1;  // height of this subtree; the parser bounds it so that no pass can overflow the stack
     explicit Expr(ExprKind k, SourceLoc l) : kind(k), loc(std::move(l)) {}
     virtual ~Expr() = default;
 };

@@ -2,6 +2,7 @@
 #include "Checker.h"
 
 #include "ExprEval.h"
+#include "KullaConty.h"
 #include "Parser.h"
 
 #include <algorithm>
@@ -59,10 +60,15 @@ size_t editDistance(std::string_view a, std::string_view b) {
 }
 
 // " (did you mean 'x'?)" for the closest candidate within 2 edits, or "".
+// Names longer than 64 bytes get no suggestion: edit distance is quadratic in
+// the length, and no one misspells a name that long.
 std::string suggestion(std::string_view name, const std::vector<std::string>& candidates) {
+    constexpr size_t kMaxSuggestLength = 64;
+    if (name.size() > kMaxSuggestLength) return "";
     size_t best = 3;
     std::string bestName;
     for (const std::string& c : candidates) {
+        if (c.size() > name.size() + 2 || c.size() + 2 < name.size()) continue;  // > 2 edits apart
         size_t d = editDistance(name, c);
         if (d < best) {
             best = d;
@@ -103,6 +109,7 @@ public:
     MaterialChecker(const MaterialDecl& decl, DiagnosticEngine& diags) : decl_(decl), diags_(diags) {}
 
     CheckedMaterial run() {
+        const size_t errorsBefore = diags_.diagnostics().size();
         out_.loc = decl_.loc;
         out_.name = decl_.name;
         collectNames();
@@ -125,10 +132,9 @@ public:
             }
         }
         if (seen[int(ModelSlot::Ndf)] && out_.ndf.model) checkCombination(seen);
-        if (out_.energy.model->id == int(EnergyModel::KullaConty)) {
-            diags_.error(out_.energy.loc, "energy 'kulla_conty' is not available in this version of Facet "
-                                          "(its albedo tables are not built yet); use 'energy = none'");
-        }
+        if (out_.energy.model->id == int(EnergyModel::KullaConty) && seen[int(ModelSlot::Ndf)] && out_.ndf.model &&
+            diags_.diagnostics().size() == errorsBefore && !diags_.full())
+            if (auto why = kullaContyUnsupported(out_)) diags_.error(why->loc, why->message);  // KullaConty.h
         return std::move(out_);
     }
 
@@ -157,7 +163,8 @@ private:
             if (it != names_.end()) {
                 diags_.error(loc, fmt::format("duplicate definition of '{}'; first defined at {}", *name,
                                               it->second.loc.str()));
-                duplicateStatements_.push_back(i);
+                duplicateStatements_.resize(decl_.statements.size());
+                duplicateStatements_[i] = true;
                 continue;
             }
             names_.emplace(*name, info);
@@ -165,8 +172,7 @@ private:
     }
 
     bool isDuplicate(size_t statement) const {
-        return std::find(duplicateStatements_.begin(), duplicateStatements_.end(), statement) !=
-               duplicateStatements_.end();
+        return statement < duplicateStatements_.size() && duplicateStatements_[statement];
     }
 
     void checkInput(const InputDecl& in) {
@@ -288,18 +294,30 @@ private:
     bool matchArguments(const ModelStmt& stmt, const ModelInfo& model, ModelUse& use) {
         const char* slotName = modelSlotName(stmt.slot);
         std::string modelName = fmt::format("{} '{}'", slotName, model.name);
+        // No form has more than a few parameters: reject absurdly long lists
+        // before the per-argument checks below (the duplicate-name check is
+        // quadratic in the list), with the count message they would end in.
+        constexpr size_t kMaxCheckedArguments = 64;
+        if (stmt.args.size() > kMaxCheckedArguments) {
+            std::vector<std::string> forms;
+            for (const ModelForm& f : model.forms) forms.push_back(fmt::format("({})", describeForm(f)));
+            diags_.error(stmt.args.front().value->loc,
+                         fmt::format("{} takes {}, got {} argument{}", modelName, joinNames(forms), stmt.args.size(),
+                                     stmt.args.size() == 1 ? "" : "s"));
+            return false;
+        }
         // Named arguments must each exist in some form, and appear once.
+        bool seenNamed = false;
         for (size_t i = 0; i < stmt.args.size(); ++i) {
             const Argument& a = stmt.args[i];
             if (a.name.empty()) {
-                bool laterNamed = false;
-                for (size_t j = 0; j < i; ++j) laterNamed |= !stmt.args[j].name.empty();
-                if (laterNamed) {
+                if (seenNamed) {
                     diags_.error(a.value->loc, fmt::format("positional argument after a named argument in {}", modelName));
                     return false;
                 }
                 continue;
             }
+            seenNamed = true;
             bool known = false;
             std::vector<std::string> all;
             for (const ModelForm& f : model.forms)
@@ -442,6 +460,7 @@ private:
         }
         auto it = names_.find(n.name);
         if (it == names_.end()) {
+            if (diags_.full()) return ValueType::Unknown;  // not reported anyway: skip the suggestion search
             std::vector<std::string> candidates;
             for (const auto& [name, info] : names_) candidates.push_back(name);
             std::string hint = suggestion(n.name, candidates);
@@ -509,7 +528,7 @@ private:
     DiagnosticEngine& diags_;
     CheckedMaterial out_;
     std::map<std::string, NameInfo> names_;
-    std::vector<size_t> duplicateStatements_;
+    std::vector<bool> duplicateStatements_;  // by statement index
     size_t current_ = 0;
     const std::string* constantContext_ = nullptr;
 };

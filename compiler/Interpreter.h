@@ -13,9 +13,11 @@
 
 #include "Builtins.h"
 #include "ExprEval.h"
+#include "KullaConty.h"
 #include "Material.h"
 
 #include <array>
+#include <memory>
 #include <vector>
 
 namespace facet {
@@ -40,20 +42,40 @@ struct ResolvedMaterial {
     Real schlickK = 0;            // schlick_smith
     std::array<Real, 3> f0{}, eta{}, k{}, albedo{};
     bool schlickFromEta = false;
+    // energy = kulla_conty (KullaContyEval.h): the E table, the roughness it
+    // is looked up with, 1 - E_avg there, and F_avg per channel.
+    EnergyModel energy = EnergyModel::None;
+    std::shared_ptr<const EnergyTable> energyTable;
+    Real energyAlpha = 1, ecAvg = 0;
+    std::array<Real, 3> favg{};
 
     // Microfacet normal distribution D(m), m a unit vector (zero below the horizon).
     Real D(const Vec3<Real>& m) const;
     // Smith Lambda(v) of the NDF (ggx, beckmann, blinn_phong only).
     Real lambda(const Vec3<Real>& v) const;
+    // (n.v) Lambda(v): finite at grazing, where Lambda itself grows like 1/(n.v).
+    Real cosLambda(const Vec3<Real>& v) const;
     // Smith G1(v, m) = chi+(v.m) / (1 + Lambda(v)).
     Real smithG1(const Vec3<Real>& v, const Vec3<Real>& m) const;
-    // Shadowing-masking G(wi, wo, h) of the material's masking model.
-    Real G(const Vec3<Real>& wi, const Vec3<Real>& wo, const Vec3<Real>& h) const;
+    // Shadowing-masking G(wi, wo, h) of the material's masking model, for
+    // any microfacet normal h. brdf() passes cosHalf = wi.h = wo.h = |wi+wo|/2
+    // for the half vector, one value for both so that f stays reciprocal.
+    Real G(const Vec3<Real>& wi, const Vec3<Real>& wo, const Vec3<Real>& h, Real cosHalf = -1) const;
+    // scale * G / ((n.wi)(n.wo)), formed without G or the product (the BRDF's
+    // factor with scale = D; no 0/0 or 0 * Inf when they underflow at grazing).
+    // oh = wi.h = wo.h.
+    Real GOverCosines(const Vec3<Real>& wi, const Vec3<Real>& wo, const Vec3<Real>& h, Real oh,
+                      Real scale = 1) const;
     // Fresnel reflectance of channel ch at cos = wi.h.
     Real F(Real cosTheta, int ch) const;
+    // The same, given also sin^2 = 1 - cos^2 (accurate near cos = 1).
+    Real fresnelAt(Real cosTheta, Real sin2Theta, int ch) const;
     // The BRDF (without the cosine factor), rgb; wi and wo must be unit
     // vectors. Zero for directions below the horizon.
     std::array<Real, 3> brdf(const Vec3<Real>& wi, const Vec3<Real>& wo) const;
+    // The same with wi + wo given (eval() computes it more accurately than
+    // the sum of the rounded unit vectors).
+    std::array<Real, 3> brdf(const Vec3<Real>& wi, const Vec3<Real>& wo, const Vec3<Real>& sum) const;
 };
 
 template <typename Real>
@@ -65,7 +87,14 @@ struct EvalResult {
 template <typename Real>
 class Interpreter {
 public:
-    explicit Interpreter(const CheckedMaterial& material) : material_(material) {}
+    // A material with energy = kulla_conty uses `energyTable` (e.g. from a
+    // TableCache, compiler/tables/TableCache.h); without one, the interpreter
+    // builds its table in memory on first use (~0.5 s).
+    explicit Interpreter(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> energyTable = nullptr)
+        : material_(material),
+          energy_(material.energy.model && material.energyModel() == EnergyModel::KullaConty
+                      ? std::make_shared<EnergyTableSlot>(energyTableKey(material), std::move(energyTable))
+                      : nullptr) {}
 
     // Evaluates every let and model argument for the given slot values
     // (material().slotCount of them; null means all defaults). Inputs are
@@ -82,6 +111,7 @@ public:
 
 private:
     const CheckedMaterial& material_;
+    std::shared_ptr<EnergyTableSlot> energy_;  // kulla_conty only
 };
 
 // Normalization integral of the Gaussian NDF, 2 pi Int_0^{pi/2} exp(-t^2/a^2) cos t sin t dt.
@@ -92,5 +122,8 @@ extern template class Interpreter<double>;
 extern template class Interpreter<long double>;
 extern template struct ResolvedMaterial<double>;
 extern template struct ResolvedMaterial<long double>;
+// __float128 (libquadmath): include QuadMath.h before this header to compute with it.
+extern template class Interpreter<__float128>;
+extern template struct ResolvedMaterial<__float128>;
 
 }  // namespace facet

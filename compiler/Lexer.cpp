@@ -41,15 +41,21 @@ public:
         : src_(src), file_(std::move(file)) {}
 
     std::vector<Token> run() {
+        // The parser reports at most DiagnosticEngine::kMaxErrors errors, so
+        // error tokens past that many are never read: stop there instead of
+        // allocating one per bad byte of a large garbage file.
+        constexpr size_t kMaxErrorTokens = 64;
         std::vector<Token> tokens;
+        size_t errors = 0;
         for (;;) {
             skipSpaceAndComments(tokens);
             SourceLoc loc = here();
-            if (pos_ >= src_.size()) {
+            if (pos_ >= src_.size() || errors >= kMaxErrorTokens) {
                 tokens.push_back({TokenKind::End, "", loc});
                 return tokens;
             }
             tokens.push_back(next(loc));
+            errors += tokens.back().kind == TokenKind::Error;
         }
     }
 
@@ -95,6 +101,11 @@ private:
                 return;
             }
         }
+    }
+
+    // Echoes at most 40 bytes of user text in a message.
+    static std::string clip(std::string_view text) {
+        return text.size() <= 40 ? std::string(text) : std::string(text.substr(0, 40)) + "...";
     }
 
     static bool isIdentStart(char c) { return std::isalpha((unsigned char)c) || c == '_'; }
@@ -171,8 +182,7 @@ private:
         }
         if (isIdentStart(peek())) {
             while (pos_ < src_.size() && isIdentChar(peek())) advance();
-            return {TokenKind::Error,
-                    fmt::format("malformed number '{}'", src_.substr(start, pos_ - start)), loc};
+            return {TokenKind::Error, fmt::format("malformed number '{}'", clip(src_.substr(start, pos_ - start))), loc};
         }
         return {TokenKind::Number, std::string(src_.substr(start, pos_ - start)), loc};
     }

@@ -3,6 +3,7 @@
 
 #include "Lexer.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -185,8 +186,9 @@ private:
         while (at(TokenKind::Plus) || at(TokenKind::Minus)) {
             Token op = advance();
             ExprPtr rhs = multiplicative();
-            lhs = std::make_shared<BinaryExpr>(op.loc, op.kind == TokenKind::Plus ? BinaryOp::Add : BinaryOp::Sub,
-                                               lhs, rhs);
+            lhs = bounded(std::make_shared<BinaryExpr>(op.loc, op.kind == TokenKind::Plus ? BinaryOp::Add : BinaryOp::Sub,
+                                                       lhs, rhs),
+                          {&lhs, &rhs});
         }
         return lhs;
     }
@@ -197,8 +199,9 @@ private:
         while (at(TokenKind::Star) || at(TokenKind::Slash)) {
             Token op = advance();
             ExprPtr rhs = unary();
-            lhs = std::make_shared<BinaryExpr>(op.loc, op.kind == TokenKind::Star ? BinaryOp::Mul : BinaryOp::Div,
-                                               lhs, rhs);
+            lhs = bounded(std::make_shared<BinaryExpr>(op.loc, op.kind == TokenKind::Star ? BinaryOp::Mul : BinaryOp::Div,
+                                                       lhs, rhs),
+                          {&lhs, &rhs});
         }
         return lhs;
     }
@@ -213,7 +216,7 @@ private:
             }
             ExprPtr operand = unary();
             --depth_;
-            return std::make_shared<UnaryExpr>(op.loc, operand);
+            return bounded(std::make_shared<UnaryExpr>(op.loc, operand), {&operand});
         }
         return power();
     }
@@ -229,7 +232,7 @@ private:
             }
             ExprPtr exponent = unary();
             --depth_;
-            return std::make_shared<BinaryExpr>(op.loc, BinaryOp::Pow, base, exponent);
+            return bounded(std::make_shared<BinaryExpr>(op.loc, BinaryOp::Pow, base, exponent), {&base, &exponent});
         }
         return base;
     }
@@ -243,14 +246,27 @@ private:
                 errno = 0;
                 double v = std::strtod(tok.text.c_str(), nullptr);
                 if (std::isinf(v)) {
-                    report(tok, fmt::format("number '{}' is too large", tok.text));
+                    report(tok, fmt::format("number '{}' is too large",
+                                            tok.text.size() <= 40 ? tok.text : tok.text.substr(0, 40) + "..."));
                     throw SyntaxError{};
                 }
                 return std::make_shared<NumberExpr>(tok.loc, v);
             }
             case TokenKind::Identifier: {
                 Token name = advance();
-                if (match(TokenKind::LParen)) return std::make_shared<CallExpr>(name.loc, name.text, argumentList());
+                if (match(TokenKind::LParen)) {
+                    auto call = std::make_shared<CallExpr>(name.loc, name.text, argumentList());
+                    int depth = 0;
+                    for (const Argument& a : call->args) depth = std::max(depth, a.value->depth);
+                    call->depth = depth + 1;
+                    if (call->depth > kMaxNesting) {
+                        diags_.error(call->loc, fmt::format("expression nested too deeply (more than {} levels); "
+                                                            "split it with 'let'",
+                                                            kMaxNesting));
+                        throw SyntaxError{};
+                    }
+                    return call;
+                }
                 return std::make_shared<NameExpr>(name.loc, name.text);
             }
             case TokenKind::LParen: {
@@ -266,6 +282,21 @@ private:
     }
 
     // ---- helpers ----
+
+    // Sets e's depth from its children and rejects trees deeper than
+    // kMaxNesting: a left-associative chain (1+1+...+1) nests without any
+    // parenthesis, and every later pass walks the tree recursively.
+    ExprPtr bounded(ExprPtr e, std::initializer_list<const ExprPtr*> children) {
+        int depth = 0;
+        for (const ExprPtr* c : children) depth = std::max(depth, (*c)->depth);
+        e->depth = depth + 1;
+        if (e->depth > kMaxNesting) {
+            diags_.error(e->loc, fmt::format("expression nested too deeply (more than {} levels); split it with 'let'",
+                                             kMaxNesting));
+            throw SyntaxError{};
+        }
+        return e;
+    }
 
     // After a syntax error: skip past the next ';' (or up to a '}' that
     // closes the material) so that the next statement parses cleanly.

@@ -4,6 +4,8 @@
 #include "Checker.h"
 #include "Interpreter.h"
 #include "Jit.h"
+#include "KullaConty.h"
+#include "TableCache.h"
 
 #include <llvm/Config/llvm-config.h>
 #include <llvm/IR/LLVMContext.h>
@@ -12,7 +14,10 @@
 #include <llvm/Support/raw_ostream.h>
 #include <llvm/Support/xxhash.h>
 
+#include <atomic>
 #include <chrono>
+#include <random>
+#include <unistd.h>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -56,46 +61,58 @@ std::string defaultCacheDir() {
     return "";
 }
 
-constexpr char kCacheMagic[8] = {'F', 'A', 'C', 'E', 'T', 'K', 'O', '1'};
+constexpr char kCacheMagic[8] = {'F', 'A', 'C', 'E', 'T', 'K', 'O', '2'};
 
-// Reads a cached object; any mismatch (truncation, wrong key, bad checksum)
+// Reads a string field written by writeField.
+bool readField(std::istream& in, std::string& out, uint64_t limit) {
+    uint64_t len = 0;
+    if (!in.read(reinterpret_cast<char*>(&len), 8) || len > limit) return false;
+    out.assign(len, '\0');
+    return bool(in.read(out.data(), std::streamsize(len)));
+}
+void writeField(std::ostream& out, const std::string& s) {
+    uint64_t len = s.size();
+    out.write(reinterpret_cast<const char*>(&len), 8);
+    out.write(s.data(), std::streamsize(len));
+}
+
+// Reads a cached kernel; any mismatch (truncation, wrong key, bad checksum)
 // returns nullopt so the caller recompiles.
-std::optional<std::string> readCacheFile(const std::string& path, const std::string& key) {
+std::optional<CachedKernel> readCacheFile(const std::string& path, const std::string& key) {
     std::ifstream in(path, std::ios::binary);
     if (!in) return std::nullopt;
     char magic[8];
-    uint64_t keyLen = 0, size = 0, checksum = 0;
+    std::string storedKey;
+    CachedKernel k;
+    uint64_t checksum = 0;
     if (!in.read(magic, 8) || std::memcmp(magic, kCacheMagic, 8) != 0) return std::nullopt;
-    if (!in.read(reinterpret_cast<char*>(&keyLen), 8) || keyLen != key.size()) return std::nullopt;
-    std::string storedKey(keyLen, '\0');
-    if (!in.read(storedKey.data(), keyLen) || storedKey != key) return std::nullopt;
-    if (!in.read(reinterpret_cast<char*>(&size), 8) || !in.read(reinterpret_cast<char*>(&checksum), 8))
-        return std::nullopt;
-    if (size > (256u << 20)) return std::nullopt;
-    std::string payload(size, '\0');
-    if (!in.read(payload.data(), size)) return std::nullopt;
+    if (!readField(in, storedKey, 4096) || storedKey != key) return std::nullopt;
+    if (!readField(in, k.variant, 4096)) return std::nullopt;
+    if (!in.read(reinterpret_cast<char*>(&k.measuredError), 8)) return std::nullopt;
+    if (!in.read(reinterpret_cast<char*>(&checksum), 8)) return std::nullopt;
+    if (!readField(in, k.object, 256u << 20)) return std::nullopt;
     if (in.peek() != std::char_traits<char>::eof()) return std::nullopt;
-    if (llvm::xxh3_64bits(llvm::StringRef(payload)) != checksum) return std::nullopt;
-    return payload;
+    if (llvm::xxh3_64bits(llvm::StringRef(k.object)) != checksum) return std::nullopt;
+    return k;
 }
 
-void writeCacheFile(const std::string& dir, const std::string& path, const std::string& key,
-                    const std::string& payload) {
+void writeCacheFile(const std::string& dir, const std::string& path, const std::string& key, const CachedKernel& k) {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) return;  // a cache that cannot be written is only slower
-    // Write to a temporary name and rename, so a concurrent reader never
-    // sees a half-written file.
-    std::string tmp = path + ".tmp" + std::to_string(std::hash<std::string>()(key + std::to_string(std::rand())));
+    // Write to a unique temporary name and rename, so a concurrent reader
+    // never sees a half-written file.
+    static std::atomic<uint64_t> counter{0};
+    std::string tmp = fmt::format("{}.tmp{}.{}", path, ::getpid(), counter++);
     {
         std::ofstream out(tmp, std::ios::binary);
-        uint64_t keyLen = key.size(), size = payload.size(), checksum = llvm::xxh3_64bits(llvm::StringRef(payload));
+        uint64_t checksum = llvm::xxh3_64bits(llvm::StringRef(k.object));
         out.write(kCacheMagic, 8);
-        out.write(reinterpret_cast<const char*>(&keyLen), 8);
-        out.write(key.data(), keyLen);
-        out.write(reinterpret_cast<const char*>(&size), 8);
+        writeField(out, key);
+        writeField(out, k.variant);
+        out.write(reinterpret_cast<const char*>(&k.measuredError), 8);
         out.write(reinterpret_cast<const char*>(&checksum), 8);
-        out.write(payload.data(), size);
+        writeField(out, k.object);
         if (!out) {
             std::filesystem::remove(tmp, ec);
             return;
@@ -105,6 +122,76 @@ void writeCacheFile(const std::string& dir, const std::string& path, const std::
     if (ec) std::filesystem::remove(tmp, ec);
 }
 
+// Candidate variants for a tolerance, fastest first. The model
+// substitutions only appear where they apply to the material.
+std::vector<MathVariant> toleranceCandidates(const CheckedMaterial& m) {
+    bool smithBeckmann = (m.ndfModel() == NdfModel::Beckmann || m.ndfModel() == NdfModel::BlinnPhong) &&
+                         modelInfo(ModelSlot::Masking, int(m.maskingModel())).smith;
+    bool dielectric = m.fresnelModel() == FresnelModel::Dielectric;
+    std::vector<MathVariant> out;
+    for (bool walter : {true, false})
+        for (bool schlick : {true, false}) {
+            if ((walter && !smithBeckmann) || (schlick && !dielectric)) continue;
+            MathVariant v = MathVariant::fast();
+            v.walterLambda = walter;
+            v.schlickDielectric = schlick;
+            out.push_back(v);
+        }
+    out.push_back(MathVariant::exact());
+    return out;
+}
+
+}  // namespace
+
+double measureKernelError(const Kernel& kernel, const CheckedMaterial& material, size_t samples) {
+    // Directions cosine-uniform over the hemisphere (where a renderer
+    // evaluates), inputs uniform over their ranges; fixed seed so a
+    // tolerance choice is reproducible.
+    std::mt19937_64 rng(0x5eed);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::vector<float> dir[6];
+    std::vector<std::vector<float>> slots(material.slotCount);
+    for (size_t i = 0; i < samples; ++i) {
+        for (int d = 0; d < 2; ++d) {
+            double z = std::sqrt(u(rng)), phi = 2 * M_PI * u(rng), r = std::sqrt(std::max(0.0, 1 - z * z));
+            dir[3 * d].push_back(float(r * std::cos(phi)));
+            dir[3 * d + 1].push_back(float(r * std::sin(phi)));
+            dir[3 * d + 2].push_back(float(z));
+        }
+        for (const CheckedInput& in : material.inputs)
+            for (int c = 0; c < in.slotCount(); ++c) {
+                double lo = in.hasRange ? in.lo : 0.0, hi = in.hasRange ? in.hi : 2 * in.defaultValue[c];
+                slots[in.firstSlot + c].push_back(float(lo + (hi - lo) * u(rng)));
+            }
+    }
+    std::vector<float> out[3];
+    for (auto& o : out) o.assign(samples, 0.0f);
+    const float* wi[3] = {dir[0].data(), dir[1].data(), dir[2].data()};
+    const float* wo[3] = {dir[3].data(), dir[4].data(), dir[5].data()};
+    std::vector<const float*> in;
+    for (auto& sl : slots) in.push_back(sl.data());
+    float* rgb[3] = {out[0].data(), out[1].data(), out[2].data()};
+    kernel.evalBatch(int64_t(samples), wi, wo, in.empty() ? nullptr : in.data(), rgb);
+    Interpreter<double> interp(material, kernel.energyTable());
+    double worst = 0;
+    std::vector<double> laneSlots(std::max(1, material.slotCount));
+    for (size_t i = 0; i < samples; ++i) {
+        double a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]};
+        for (int s = 0; s < material.slotCount; ++s) laneSlots[s] = slots[s][i];
+        EvalResult<double> ref = interp.eval(a, b, laneSlots.data());
+        for (int c = 0; c < 3; ++c) {
+            double want = ref.valid ? ref.rgb[c] : 0.0, got = rgb[c][i];
+            if (!std::isfinite(got)) return INFINITY;
+            if (std::fabs(want) > 3.0e38) continue;  // beyond float: reported invalid, as allowed
+            double err = std::fabs(got - want);
+            if (err <= 1e-30) continue;
+            worst = std::max(worst, want != 0 ? err / std::fabs(want) : INFINITY);
+        }
+    }
+    return worst;
+}
+
+namespace {
 }  // namespace
 
 std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) {
@@ -202,7 +289,7 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
     std::vector<float> laneInputs(std::max(1, slots));
     std::vector<double> laneSlots(std::max(1, slots));
     std::optional<Interpreter<double>> interp;
-    if (!scalarStatus_) interp.emplace(material_);
+    if (!scalarStatus_) interp.emplace(material_, energyTable_);
     for (int64_t i = 0; i < n; ++i) {
         for (int s = 0; s < slots; ++s) {
             laneSlots[s] = inputs && inputs[s] ? double(inputs[s][i]) : defaults[s];
@@ -222,7 +309,8 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
     return invalid;
 }
 
-Compiler::Compiler() : jit_(FacetJit::Create()), cacheDir_(defaultCacheDir()) {}
+Compiler::Compiler()
+    : jit_(FacetJit::Create()), tables_(std::make_unique<TableCache>()), cacheDir_(defaultCacheDir()) {}
 Compiler::~Compiler() = default;
 
 int Compiler::resolveWidth(const CompileOptions& options) const {
@@ -263,6 +351,8 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
     std::unique_ptr<Kernel> kernel(new Kernel());
     kernel->material_ = std::move(specialized);
     kernel->backend_ = options.backend;
+    if (kernel->material_.energyModel() == EnergyModel::KullaConty)
+        kernel->energyTable_ = tables_->getFor(kernel->material_);
     for (int s = 0; s < kernel->material_.slotCount; ++s) kernel->slotNames_.push_back(kernel->material_.slotName(s));
     if (options.backend == Backend::Interp) {
         kernel->origin_ = "interpreter";
@@ -272,59 +362,98 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
     kernel->width_ = options.backend == Backend::Simd ? resolveWidth(options) : 1;
 
     LoweringOptions lowering;
+    lowering.energyTable = kernel->energyTable_.get();
     lowering.math = options.math;
+    lowering.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
     lowering.width = options.backend == Backend::Simd ? kernel->width_ : 4;
     lowering.emitScalar = options.backend == Backend::Scalar;
     lowering.emitBatch = options.backend == Backend::Simd;
 
     // The cache key: what the kernel computes (the specialized material,
-    // printed), how (options, width), and with what (LLVM, CPU, codegen build).
-    std::string keyText = fmt::format("{}|{}|{}|w{}|{}|{}|{}|{}", printMaterial(kernel->material_), options.canonical(),
-                                      mathModeName(lowering.math), lowering.width, LLVM_VERSION_STRING,
-                                      jit_->cpuName(), jit_->cpuFeatures(), kLoweringBuildStamp);
+    // printed), how (options incl. tolerance, width), and with what (LLVM,
+    // CPU, codegen build).
+    std::string tableId = kernel->energyTable_ ? fmt::format("{}/v{}/{}", kernel->energyTable_->key.name(),
+                                                             kEnergyTableVersion, kernel->energyTable_->quadrature.describe())
+                                               : "";
+    std::string keyText = fmt::format("{}|{}|w{}|{}|{}|{}|{}|{}", printMaterial(kernel->material_), options.canonical(),
+                                      lowering.width, LLVM_VERSION_STRING, jit_->cpuName(), jit_->cpuFeatures(),
+                                      kLoweringBuildStamp, tableId);
     auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(keyText));
     std::string key = llvm::toHex(digest, true);
     std::string prefix = "facet_" + key.substr(0, 16);
     std::string cachePath = cacheDir_.empty() ? "" : cacheDir_ + "/" + key + ".fko";
 
-    std::optional<std::string> object;
+    std::optional<CachedKernel> cached;
     if (options.cache != CompileOptions::Cache::Off) {
         std::lock_guard<std::mutex> lock(cacheMutex_);
         auto it = memoryCache_.find(key);
         if (it != memoryCache_.end()) {
-            object = it->second;
+            cached = it->second;
             kernel->origin_ = "memory cache";
         }
     }
-    if (!object && options.cache == CompileOptions::Cache::On && !cachePath.empty()) {
-        object = readCacheFile(cachePath, key);
-        if (object) kernel->origin_ = "disk cache";
+    if (!cached && options.cache == CompileOptions::Cache::On && !cachePath.empty()) {
+        cached = readCacheFile(cachePath, key);
+        if (cached) kernel->origin_ = "disk cache";
     }
-    if (!object) {
-        llvm::LLVMContext context;
-        LoweredModule lowered = lowerMaterial(kernel->material_, lowering, context, prefix);
-        jit_->optimize(*lowered.module);
-        std::unique_ptr<llvm::MemoryBuffer> buffer = jit_->emitObject(*lowered.module);
-        object = buffer->getBuffer().str();
+    if (!cached) {
+        cached = options.tolerance ? searchVariants(kernel->material_, lowering, *options.tolerance, prefix)
+                                   : CachedKernel{compileObject(kernel->material_, lowering, prefix),
+                                                  lowering.variant.name(), -1.0};
         kernel->origin_ = "compiled";
         if (options.cache == CompileOptions::Cache::On && !cachePath.empty())
-            writeCacheFile(cacheDir_, cachePath, key, *object);
+            writeCacheFile(cacheDir_, cachePath, key, *cached);
     }
     if (options.cache != CompileOptions::Cache::Off) {
         std::lock_guard<std::mutex> lock(cacheMutex_);
-        memoryCache_.emplace(key, *object);
+        memoryCache_.emplace(key, *cached);
     }
-    kernel->jit_ = jit_;
-    kernel->dylib_ = &jit_->addObject(llvm::MemoryBuffer::getMemBufferCopy(*object, prefix));
-    if (lowering.emitScalar) {
-        kernel->scalar_ = reinterpret_cast<ScalarKernelFn>(jit_->lookup(*kernel->dylib_, prefix + "_scalar"));
-        kernel->scalarStatus_ =
-            reinterpret_cast<ScalarStatusFn>(jit_->lookup(*kernel->dylib_, prefix + "_scalar_status"));
-    }
-    if (lowering.emitBatch)
-        kernel->batch_ = reinterpret_cast<BatchKernelFn>(jit_->lookup(*kernel->dylib_, prefix + "_batch"));
+    link(*kernel, cached->object, prefix, lowering);
+    kernel->variant_ = cached->variant;
+    kernel->measuredError_ = cached->measuredError;
     kernel->compileMillis_ = millisSince(start);
     return kernel;
+}
+
+std::string Compiler::compileObject(const CheckedMaterial& material, const LoweringOptions& lowering,
+                                    const std::string& prefix) {
+    llvm::LLVMContext context;
+    LoweredModule lowered = lowerMaterial(material, lowering, context, prefix);
+    jit_->optimize(*lowered.module);
+    return jit_->emitObject(*lowered.module)->getBuffer().str();
+}
+
+void Compiler::link(Kernel& kernel, const std::string& object, const std::string& prefix,
+                    const LoweringOptions& lowering) {
+    kernel.jit_ = jit_;
+    kernel.dylib_ = &jit_->addObject(llvm::MemoryBuffer::getMemBufferCopy(object, prefix));
+    if (lowering.emitScalar) {
+        kernel.scalar_ = reinterpret_cast<ScalarKernelFn>(jit_->lookup(*kernel.dylib_, prefix + "_scalar"));
+        kernel.scalarStatus_ = reinterpret_cast<ScalarStatusFn>(jit_->lookup(*kernel.dylib_, prefix + "_scalar_status"));
+    }
+    if (lowering.emitBatch)
+        kernel.batch_ = reinterpret_cast<BatchKernelFn>(jit_->lookup(*kernel.dylib_, prefix + "_batch"));
+}
+
+CachedKernel Compiler::searchVariants(const CheckedMaterial& material, LoweringOptions lowering, double tolerance,
+                                      const std::string& prefix) {
+    // Fastest first; the first whose measured error meets the tolerance wins.
+    // Exact is always last: if even it does not meet the tolerance, it is
+    // returned with its (larger) measured error for the caller to report.
+    CachedKernel best;
+    for (const MathVariant& v : toleranceCandidates(material)) {
+        lowering.variant = v;
+        CachedKernel candidate{compileObject(material, lowering, prefix), v.name(), 0.0};
+        Kernel probe;
+        probe.material_ = material;
+        if (lowering.energyTable) probe.energyTable_ = tables_->getFor(material);
+        probe.backend_ = lowering.emitBatch ? Backend::Simd : Backend::Scalar;
+        link(probe, candidate.object, prefix, lowering);
+        candidate.measuredError = measureKernelError(probe, material);
+        best = std::move(candidate);
+        if (best.measuredError <= tolerance) break;
+    }
+    return best;
 }
 
 std::string Compiler::irText(const std::string& path, const std::string& name, const CompileOptions& options,
@@ -339,7 +468,11 @@ std::string Compiler::irText(const std::string& path, const std::string& name, c
     CheckedMaterial specialized = specializeMaterial(*material, options.bindings, diags);
     if (diags.hasErrors()) return "";
     LoweringOptions lowering;
+    std::shared_ptr<const EnergyTable> table;
+    if (specialized.energyModel() == EnergyModel::KullaConty) table = tables_->getFor(specialized);
+    lowering.energyTable = table.get();
     lowering.math = options.math;
+    lowering.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
     lowering.width = simd ? resolveWidth(options) : 4;
     lowering.emitScalar = !simd;
     lowering.emitBatch = simd;

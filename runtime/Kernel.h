@@ -27,6 +27,22 @@ namespace llvm::orc { class JITDylib; }
 namespace facet {
 
 class FacetJit;
+class Kernel;
+class EnergyTable;
+class TableCache;
+
+// A compiled kernel as the caches keep it: object code, the math variant it
+// was compiled with, and (for tolerance builds) its measured error.
+struct CachedKernel {
+    std::string object;
+    std::string variant;
+    double measuredError = -1;  // < 0: not measured
+};
+
+// Max relative error of `kernel` against the double interpreter of
+// `material` on a fixed sample (cosine-distributed directions, inputs
+// uniform in their ranges); values below 1e-30 compare absolutely.
+double measureKernelError(const Kernel& kernel, const CheckedMaterial& material, size_t samples = 4096);
 
 enum class Backend { Interp, Scalar, Simd };
 const char* backendName(Backend b);
@@ -60,6 +76,13 @@ public:
     const std::string& inputName(int slot) const { return slotNames_.at(slot); }
     // How this kernel was obtained: "compiled", "memory cache", "disk cache".
     const std::string& origin() const { return origin_; }
+    // The math variant compiled ("exact", "fast", "fast+walter", ...), and for
+    // tolerance builds the error measured when it was chosen (else < 0).
+    const std::string& variant() const { return variant_; }
+    // energy = kulla_conty: the E table the kernel was built with (null
+    // otherwise); a reference Interpreter of material() should use it too.
+    const std::shared_ptr<const EnergyTable>& energyTable() const { return energyTable_; }
+    double measuredError() const { return measuredError_; }
     double compileMillis() const { return compileMillis_; }
 
     void eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]) const;
@@ -79,6 +102,9 @@ private:
     std::shared_ptr<FacetJit> jit_;
     llvm::orc::JITDylib* dylib_ = nullptr;
     std::string origin_;
+    std::string variant_ = "reference";
+    std::shared_ptr<const EnergyTable> energyTable_;
+    double measuredError_ = -1;
     double compileMillis_ = 0;
 };
 
@@ -107,10 +133,17 @@ public:
     const std::string& cacheDir() const { return cacheDir_; }
 
 private:
+    std::string compileObject(const CheckedMaterial& material, const LoweringOptions& lowering,
+                              const std::string& prefix);
+    void link(Kernel& kernel, const std::string& object, const std::string& prefix, const LoweringOptions& lowering);
+    CachedKernel searchVariants(const CheckedMaterial& material, LoweringOptions lowering, double tolerance,
+                                const std::string& prefix);
+
     std::shared_ptr<FacetJit> jit_;
+    std::unique_ptr<TableCache> tables_;  // Kulla-Conty E tables (memory + EXR on disk)
     std::string cacheDir_;
     std::mutex cacheMutex_;
-    std::map<std::string, std::string> memoryCache_;  // key -> object bytes
+    std::map<std::string, CachedKernel> memoryCache_;  // key -> compiled kernel
 };
 
 }  // namespace facet

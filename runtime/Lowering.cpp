@@ -4,6 +4,7 @@
 
 #include "Diagnostics.h"
 #include "Interpreter.h"  // gaussianNdfNorm: the normalization table is filled from the reference quadrature
+#include "KullaConty.h"
 #include "Specialize.h"
 #include "VectorMath.h"
 
@@ -17,6 +18,13 @@
 namespace facet {
 
 const char* mathModeName(MathMode m) { return m == MathMode::Exact ? "exact" : "fast"; }
+
+std::string MathVariant::name() const {
+    std::string s = precise && !estimates && !shortPolynomials ? "exact" : (!precise && estimates && shortPolynomials ? "fast" : "custom");
+    if (walterLambda) s += "+walter";
+    if (schlickDielectric) s += "+schlick";
+    return s;
+}
 
 namespace {
 
@@ -57,8 +65,20 @@ class LaneEmitter {
 public:
     LaneEmitter(const CheckedMaterial& m, const LoweringOptions& opt, llvm::IRBuilder<>& b, llvm::Type* F,
                 llvm::Module& module)
-        : mat_(m), opt_(opt), b_(b), f_(b, F), d_(b, doubleOf(b, F)), module_(module) {
+        : mat_(m), opt_(opt), b_(b), f_(b, F, opt.variant.shortPolynomials),
+          d_(b, opt.variant.precise ? doubleOf(b, F) : F, opt.variant.shortPolynomials),
+          wide_(b, doubleOf(b, F)), module_(module) {
         invalid_ = llvm::Constant::getNullValue(boolType());
+        if (opt.variant.estimates) {
+            // Lets the backend replace division and sqrt by rcp/rsqrt
+            // estimates plus a Newton step ("reciprocal-estimates" below).
+            // No nnan/ninf: the NaN and overflow checks must stay exact.
+            llvm::FastMathFlags fmf;
+            fmf.setAllowReciprocal();
+            fmf.setApproxFunc();
+            fmf.setAllowContract();
+            b_.setFastMathFlags(fmf);
+        }
     }
 
     struct Result {
@@ -81,14 +101,22 @@ public:
             Value* len = d.sqrt(d.fma(out[0], out[0], d.fma(out[1], out[1], d.mul(out[2], out[2]))));
             Value* unit = d.le(d.abs(d.sub(len, d.c(1.0))), d.c(kUnitTolerance));
             markInvalid(b_.CreateNot(b_.CreateAnd(finite, unit)));
-            for (Value*& x : out) x = d.div(x, len);
+            Value* inv = d.div(d.c(1.0), len);
+            for (Value*& x : out) x = d.mul(x, inv);
         };
         direction(wi, wiD);
         direction(wo, woD);
         std::array<Value*, 3> hD = {d.add(wiD[0], woD[0]), d.add(wiD[1], woD[1]), d.add(wiD[2], woD[2])};
         Value* hlen = d.sqrt(d.fma(hD[0], hD[0], d.fma(hD[1], hD[1], d.mul(hD[2], hD[2]))));
-        for (Value*& x : hD) x = d.div(x, hlen);
-        Value* ohD = d.fma(woD[0], hD[0], d.fma(woD[1], hD[1], d.mul(woD[2], hD[2])));
+        Value* hinv = d.div(d.c(1.0), hlen);
+        for (Value*& x : hD) x = d.mul(x, hinv);
+        // wi.h = wo.h = |wi + wo| / 2 for unit vectors: one value for both
+        // keeps f exactly reciprocal. 1 - cos = |wi - wo|^2 / (2 (2 + |wi + wo|))
+        // (from |wi + wo|^2 + |wi - wo|^2 = 4) has no cancellation at wi = wo.
+        Value* cosD = d.minnum(d.mul(hlen, d.c(0.5)), d.c(1.0));
+        std::array<Value*, 3> diff = {d.sub(wiD[0], woD[0]), d.sub(wiD[1], woD[1]), d.sub(wiD[2], woD[2])};
+        Value* diff2 = d.fma(diff[0], diff[0], d.fma(diff[1], diff[1], d.mul(diff[2], diff[2])));
+        Value* oneMinusCos = d.div(diff2, d.mul(d.c(2.0), d.add(d.c(2.0), hlen)));
         Geometry g;
         for (int i = 0; i < 3; ++i) {
             g.wi[i] = m.convert(wiD[i], m.type());
@@ -96,11 +124,9 @@ public:
             g.h[i] = m.convert(hD[i], m.type());
         }
         g.hD = hD;
-        g.oh = m.convert(ohD, m.type());
-        g.cosD = d.minnum(d.maxnum(ohD, d.c(0.0)), d.c(1.0));
-        std::array<Value*, 3> diff = {d.sub(woD[0], hD[0]), d.sub(woD[1], hD[1]), d.sub(woD[2], hD[2])};
-        Value* q = d.mul(d.c(0.5), d.fma(diff[0], diff[0], d.fma(diff[1], diff[1], d.mul(diff[2], diff[2]))));
-        g.oneMinusCos = m.convert(d.minnum(q, d.c(1.0)), m.type());
+        g.oh = m.convert(cosD, m.type());
+        g.cosD = cosD;
+        g.oneMinusCos = m.convert(d.minnum(oneMinusCos, d.c(1.0)), m.type());
         g.hNonZero = d.gt(hlen, d.c(0.0));
         // Inputs: non-finite values are invalid; in-range clamping. Inputs,
         // lets and model parameters are evaluated in double: a parameter
@@ -151,7 +177,7 @@ private:
     struct Geometry {
         std::array<Value*, 3> wi, wo, h;
         std::array<Value*, 3> hD;  // h in double, for NDFs whose exponent amplifies rounding
-        Value* cosD;               // wo.h clamped to [0, 1], double (exact Fresnel near its critical angle)
+        Value* cosD;               // wo.h = wi.h in [0, 1], precise type (exact Fresnel near its critical angle)
         Value* oneMinusCos;        // 1 - wo.h = |wo - h|^2 / 2, float, without cancellation at wi = wo
         Value* oh;
         Value* hNonZero;
@@ -354,7 +380,7 @@ private:
     // table entries fetched with gathers.
     Value* gaussianNormLookup(Value* alpha) {
         const GaussianNormTable& t = GaussianNormTable::get();
-        MathEmitter& d = d_;
+        MathEmitter& d = wide_;
         llvm::LLVMContext& ctx = module_.getContext();
         auto* arrTy = llvm::ArrayType::get(b_.getDoubleTy(), t.q.size());
         llvm::GlobalVariable* gv = module_.getNamedGlobal("facet_gaussian_norm_table");
@@ -363,7 +389,7 @@ private:
                                           llvm::ConstantDataArray::get(ctx, t.q), "facet_gaussian_norm_table");
         }
         double h = (GaussianNormTable::kX1 - GaussianNormTable::kX0) / (GaussianNormTable::kSize - 1);
-        Value* x = d.log(alpha);
+        Value* x = d.log(d.convert(alpha, d.type()));
         Value* u = d.div(d.sub(x, d.c(GaussianNormTable::kX0)), d.c(h));
         // Alphas beyond the table use its ends (N is flat in log alpha
         // there); the 4-point stencil stays inside: i in [1, size - 3], and
@@ -396,12 +422,13 @@ private:
 
     Value* intrinsic(llvm::Intrinsic::ID id, Value* a) { return b_.CreateIntrinsic(id, {a->getType()}, {a}); }
 
-    // expm1(y)/y in double, continuous at 0.
+    // expm1(y)/y, continuous at 0: the series where exp(y) - 1 would cancel
+    // (|y| < 1e-5 in double, < 1e-2 in float), the quotient elsewhere.
     Value* expm1OverX(Value* y) {
         MathEmitter& d = d_;
-        Value* series = d.poly(y, {1.0, 0.5, 1.0 / 6.0, 1.0 / 24.0});
+        Value* series = d.poly(y, {1.0, 0.5, 1.0 / 6.0, 1.0 / 24.0, 1.0 / 120.0});
         Value* direct = d.div(d.sub(d.exp(y), d.c(1.0)), y);
-        return d.select(d.lt(d.abs(y), d.c(1e-5)), series, direct);
+        return d.select(d.lt(d.abs(y), d.c(d.isDouble() ? 1e-5 : 1e-2)), series, direct);
     }
 
     // mx^2/ax^2 + my^2/ay^2 (one division when isotropic).
@@ -439,17 +466,21 @@ private:
                 Value* z2d = d.mul(hD[2], hD[2]);
                 Value* axy = d.mul(n.axD, n.ayD);
                 Value* D = d.div(d.exp(d.neg(e)), d.mul(d.mul(d.c(kPi), axy), d.mul(z2d, z2d)));
-                D = d.select(d.gt(e, d.c(700.0)), d.c(0.0), D);  // exp underflowed; avoid 0/0
+                // exp underflowed: 0, not 0/0 when mz^4 underflows too.
+                D = d.select(d.gt(e, d.c(d.isDouble() ? 700.0 : 85.0)), d.c(0.0), D);
                 return m.convert(D, m.type());
             }
             case NdfModel::BlinnPhong: {
                 // mz^e = exp(e/2 log1p(-(mx^2 + my^2))) in double: mz itself
                 // is too coarse in float once e is large (1e6).
                 MathEmitter& d = d_;
-                // sin^2 from the double half vector, kept <= 1 against rounding.
+                // ln mz: near the pole from sin^2 (log1p(-s2)/2 keeps the
+                // small angle exact), near the horizon from mz itself (where
+                // 1 - s2 would cancel).
                 Value* s2 = d.minnum(d.fma(hD[0], hD[0], d.mul(hD[1], hD[1])), d.c(1.0));
+                Value* lnz = d.select(d.lt(s2, d.c(0.5)), d.mul(d.c(0.5), d.log1p(d.neg(s2))), d.log(hD[2]));
                 Value* E = d.convert(n.exponent, d.type());
-                Value* p = d.exp(d.mul(d.mul(E, d.c(0.5)), d.log1p(d.neg(s2))));
+                Value* p = d.exp(d.mul(E, lnz));
                 p = d.select(d.eq(E, d.c(0.0)), d.c(1.0), p);
                 Value* norm = d.mul(d.add(E, d.c(2.0)), d.c(1.0 / (2 * kPi)));
                 return f_.convert(d.mul(norm, p), f_.type());
@@ -496,8 +527,16 @@ private:
             Value* small = m.div(t2, m.mul(m.c(2.0), m.add(m.c(1.0), m.sqrt(m.add(m.c(1.0), t2)))));
             return m.select(m.gt(t, m.c(1e7)), m.mul(m.sub(t, m.c(1.0)), m.c(0.5)), small);
         }
-        // Beckmann: a = cot / alpha; Lambda = (exp(-a^2)/(a sqrt(pi)) - erfc(a)) / 2.
         Value* a = m.div(v[2], m.sqrt(proj));
+        if (opt_.variant.walterLambda) {
+            // Walter et al. 2007, eq. 27 (as Lambda = 1/G1 - 1): rational in a,
+            // 0 for a >= 1.6. Relative error in G1 below about 0.4%.
+            Value* num = m.poly(a, {1.0, -1.259, 0.396});
+            Value* den = m.mul(a, m.poly(a, {3.535, 2.181}));
+            Value* l = m.select(m.lt(a, m.c(1.6)), m.div(num, den), m.c(0.0));
+            return m.select(m.eq(proj, m.c(0.0)), m.c(0.0), l);
+        }
+        // Beckmann: a = cot / alpha; Lambda = (exp(-a^2)/(a sqrt(pi)) - erfc(a)) / 2.
         Value* l = m.mul(m.c(0.5), m.sub(m.div(m.exp(m.neg(m.mul(a, a))), m.mul(a, m.c(std::sqrt(kPi)))), m.erfc(a)));
         l = m.maxnum(l, m.c(0.0));
         return m.select(m.eq(proj, m.c(0.0)), m.c(0.0), l);
@@ -573,6 +612,19 @@ private:
                 return map({f0}, true, [&](auto& x) { return m.fma(m.sub(one, x[0]), q5, x[0]); });
             }
             case FresnelModel::Dielectric: {
+                if (opt_.variant.schlickDielectric) {
+                    // Schlick with f0 = ((eta - 1)/(eta + 1))^2: only chosen by a
+                    // tolerance that its measured error meets.
+                    LVal eta = rgbParam(use, param::DielectricEta, kMinEta, INFINITY);
+                    Value* q = geo.oneMinusCos;
+                    Value* q2 = m.mul(q, q);
+                    Value* q5 = m.mul(m.mul(q2, q2), q);
+                    return map({eta}, true, [&](auto& x) {
+                        Value* r = m.div(m.sub(x[0], one), m.add(x[0], one));
+                        Value* f0 = m.mul(r, r);
+                        return m.fma(m.sub(one, f0), q5, f0);
+                    });
+                }
                 // In double: near the critical angle F depends on sqrt(g^2)
                 // with g^2 -> 0, which turns float rounding of cos into
                 // visible error.
@@ -620,6 +672,173 @@ private:
         internal_error << "unknown fresnel";
     }
 
+    // ---- Kulla-Conty energy compensation (KullaConty.h gives the recipe) ----
+
+    llvm::GlobalVariable* floatTable(const std::vector<float>& data, const std::string& name) {
+        if (llvm::GlobalVariable* gv = module_.getNamedGlobal(name)) return gv;
+        auto* arr = llvm::ConstantDataArray::get(module_.getContext(), data);
+        return new llvm::GlobalVariable(module_, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
+    }
+    // table[index] for an integer-valued index in the precise type (a
+    // gather across lanes), returned in the precise type.
+    Value* fetch(llvm::GlobalVariable* table, Value* index) {
+        MathEmitter& d = d_;
+        llvm::Type* i32 = b_.getInt32Ty();
+        llvm::Type* idxTy = d.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, d.width()) : i32;
+        Value* ptr = b_.CreateGEP(b_.getFloatTy(), table, b_.CreateFPToSI(index, idxTy));
+        llvm::Type* fty = f_.type();
+        Value* v = d.width() == 1 ? (Value*)b_.CreateLoad(b_.getFloatTy(), ptr)
+                                  : (Value*)b_.CreateMaskedGather(fty, ptr, llvm::Align(4));
+        return d.convert(v, d.type());
+    }
+    // The roughness the E table is looked up with (KullaConty.h, energyAlpha).
+    Value* energyAlpha(const Ndf& n) {
+        MathEmitter& d = d_;
+        switch (mat_.ndfModel()) {
+            case NdfModel::BlinnPhong: return d.sqrt(d.div(d.c(2.0), d.add(d.convert(n.exponent, d.type()), d.c(2.0))));
+            case NdfModel::Ggx:
+            case NdfModel::Beckmann: return n.isotropic ? n.axD : d.sqrt(d.mul(n.axD, n.ayD));
+            default: return n.axD;
+        }
+    }
+    // F_avg of one channel: closed form for Schlick, folded quadrature for
+    // constant dielectric/conductor parameters, the tables otherwise.
+    Value* fresnelAverage(const std::array<Value*, 3>& f0, const std::array<Value*, 3>& eta,
+                          const std::array<Value*, 3>& k, const std::array<const Expr*, 2>& constArgs, int ch) {
+        MathEmitter& d = d_;
+        switch (mat_.fresnelModel()) {
+            case FresnelModel::None: return d.c(1.0);
+            case FresnelModel::Schlick: return d.mul(d.fma(d.c(20.0), d.convert(f0[ch], d.type()), d.c(1.0)), d.c(1.0 / 21));
+            case FresnelModel::Dielectric: {
+                if (constArgs[0]) {
+                    double e = std::max(constantValue(*constArgs[0])[ch], kMinEta);
+                    return d.c(fresnelAverageDielectric(e));
+                }
+                // Table over s = (eta - 1)/(eta + 1) for eta >= 1; eta < 1 by
+                // the reciprocity F_avg(eta) = 1 - eta^2 (1 - F_avg(1/eta)).
+                const FresnelAverageTables& t = fresnelAverageTables();
+                auto* gv = floatTable(t.dielectric, "facet_favg_dielectric");
+                Value* n = d.convert(eta[ch], d.type());
+                Value* below = d.lt(n, d.c(1.0));
+                Value* m = d.select(below, d.div(d.c(1.0), n), n);
+                Value* sPos = d.div(d.sub(m, d.c(1.0)), d.add(m, d.c(1.0)));
+                const double last = FresnelAverageTables::kDielectricCount - 1;
+                Value* u = d.minnum(d.maxnum(d.mul(sPos, d.c(last)), d.c(0.0)), d.c(last));
+                Value* j = d.minnum(intrinsic(llvm::Intrinsic::floor, u), d.c(last - 1));
+                Value* tu = d.sub(u, j);
+                Value* a = fetch(gv, j);
+                Value* fa = d.fma(tu, d.sub(fetch(gv, d.add(j, d.c(1.0))), a), a);
+                return d.select(below, d.sub(d.c(1.0), d.mul(d.mul(n, n), d.sub(d.c(1.0), fa))), fa);
+            }
+            case FresnelModel::Conductor: {
+                if (constArgs[0] && constArgs[1]) {
+                    double e = std::max(constantValue(*constArgs[0])[ch], kMinEta);
+                    double kk = std::max(constantValue(*constArgs[1])[ch], 0.0);
+                    return d.c(fresnelAverageConductor(e, kk));
+                }
+                // Schlick's average at the conductor's F0 plus a tabulated
+                // residual over (eta/(eta+1), sqrt(k)/(sqrt(k)+1)), bilinear.
+                const FresnelAverageTables& t = fresnelAverageTables();
+                auto* gv = floatTable(t.conductor, "facet_favg_conductor");
+                Value* n = d.convert(eta[ch], d.type());
+                Value* kk = d.convert(k[ch], d.type());
+                Value* nm = d.sub(n, d.c(1.0)), *np = d.add(n, d.c(1.0)), *k2 = d.mul(kk, kk);
+                Value* F0 = d.div(d.fma(nm, nm, k2), d.fma(np, np, k2));
+                Value* base = d.mul(d.fma(d.c(20.0), F0, d.c(1.0)), d.c(1.0 / 21));
+                const int N = FresnelAverageTables::kConductorCount;
+                const double last = N - 1;
+                Value* sk = d.sqrt(kk);
+                Value* ua = d.minnum(d.mul(d.div(n, np), d.c(last)), d.c(last));
+                Value* ub = d.minnum(d.mul(d.div(sk, d.add(sk, d.c(1.0))), d.c(last)), d.c(last));
+                Value* ia = d.minnum(intrinsic(llvm::Intrinsic::floor, ua), d.c(last - 1));
+                Value* ib = d.minnum(intrinsic(llvm::Intrinsic::floor, ub), d.c(last - 1));
+                Value *ta = d.sub(ua, ia), *tb = d.sub(ub, ib);
+                Value* row0 = d.fma(ib, d.c(double(N)), ia);
+                Value* row1 = d.add(row0, d.c(double(N)));
+                Value *a00 = fetch(gv, row0), *a01 = fetch(gv, d.add(row0, d.c(1.0)));
+                Value *a10 = fetch(gv, row1), *a11 = fetch(gv, d.add(row1, d.c(1.0)));
+                Value* r0 = d.fma(ta, d.sub(a01, a00), a00);
+                Value* r1 = d.fma(ta, d.sub(a11, a10), a10);
+                return d.add(base, d.fma(tb, d.sub(r1, r0), r0));
+            }
+        }
+        internal_error << "unknown fresnel";
+    }
+
+    // f_ms per channel (KullaConty.h): bilinear Ec(mu_i), Ec(mu_o), linear
+    // EcAvg in the sqrt-spaced table, then the lobe and the Fresnel term.
+    std::array<Value*, 3> energyCompensation(const Ndf& n, Value* ci, Value* co) {
+        MathEmitter& d = d_;
+        const EnergyTable* table = opt_.energyTable;
+        internal_assert(table) << "energy = kulla_conty lowered without its E table";
+        auto* ecGv = floatTable(table->ec, "facet_energy_ec");
+        auto* avgGv = floatTable(table->ecAvg, "facet_energy_ecavg");
+        const int M = table->muCount;
+        Value* alpha = d.minnum(d.maxnum(energyAlpha(n), d.c(table->alphaMin)), d.c(table->alphaMax));
+        Value* v = d.fma(d.sqrt(alpha), d.c(table->alphaScale()), d.c(table->alphaOffset()));
+        v = d.minnum(d.maxnum(v, d.c(0.0)), d.c(table->alphaCount - 1.0));
+        Value* i = d.minnum(intrinsic(llvm::Intrinsic::floor, v), d.c(table->alphaCount - 2.0));
+        Value* tv = d.sub(v, i);
+        auto ec = [&](Value* c) {
+            Value* cc = d.minnum(d.maxnum(d.convert(c, d.type()), d.c(0.0)), d.c(1.0));
+            Value* u = d.mul(d.sqrt(cc), d.c(M - 1.0));
+            Value* j = d.minnum(intrinsic(llvm::Intrinsic::floor, u), d.c(M - 2.0));
+            Value* tu = d.sub(u, j);
+            Value* r0 = d.fma(i, d.c(double(M)), j);
+            Value* r1 = d.add(r0, d.c(double(M)));
+            Value *a00 = fetch(ecGv, r0), *a01 = fetch(ecGv, d.add(r0, d.c(1.0)));
+            Value *a10 = fetch(ecGv, r1), *a11 = fetch(ecGv, d.add(r1, d.c(1.0)));
+            Value* lo = d.fma(tu, d.sub(a01, a00), a00);
+            Value* hi = d.fma(tu, d.sub(a11, a10), a10);
+            return d.fma(tv, d.sub(hi, lo), lo);
+        };
+        Value* avg0 = fetch(avgGv, i);
+        Value* ecAvg = d.fma(tv, d.sub(fetch(avgGv, d.add(i, d.c(1.0))), avg0), avg0);
+        Value* lobe = d.div(d.mul(ec(ci), ec(co)), d.mul(d.c(kPi), ecAvg));
+        lobe = d.select(d.gt(ecAvg, d.c(0.0)), lobe, d.c(0.0));
+
+        // Fresnel parameters (again: the lowering's CSE merges them with fresnel()).
+        const ModelUse& use = mat_.fresnel;
+        std::array<Value*, 3> f0{}, eta{}, k{};
+        std::array<const Expr*, 2> constArgs{};
+        switch (mat_.fresnelModel()) {
+            case FresnelModel::Schlick: {
+                if (use.has(param::F0)) {
+                    f0 = rgbParam(use, param::F0, 0, 1, false).c;
+                } else {
+                    LVal e = rgbParam(use, param::SchlickEta, kMinEta, INFINITY, false);
+                    f0 = map({e}, true, [&](auto& x) {
+                             Value* r = d.div(d.sub(x[0], d.c(1.0)), d.add(x[0], d.c(1.0)));
+                             return d.mul(r, r);
+                         }).c;
+                }
+                break;
+            }
+            case FresnelModel::Dielectric:
+                if (isConstantExpr(*use.args[param::DielectricEta])) constArgs[0] = use.args[param::DielectricEta].get();
+                else eta = rgbParam(use, param::DielectricEta, kMinEta, INFINITY, false).c;
+                break;
+            case FresnelModel::Conductor:
+                if (isConstantExpr(*use.args[param::ConductorEta]) && isConstantExpr(*use.args[param::ConductorK])) {
+                    constArgs = {use.args[param::ConductorEta].get(), use.args[param::ConductorK].get()};
+                } else {
+                    eta = rgbParam(use, param::ConductorEta, kMinEta, INFINITY, false).c;
+                    k = rgbParam(use, param::ConductorK, 0, INFINITY, false).c;
+                }
+                break;
+            case FresnelModel::None: break;
+        }
+        std::array<Value*, 3> out;
+        for (int ch = 0; ch < 3; ++ch) {
+            Value* favg = fresnelAverage(f0, eta, k, constArgs, ch);
+            Value* den = d.sub(d.c(1.0), d.mul(favg, ecAvg));
+            Value* term = d.div(d.mul(d.mul(favg, favg), d.sub(d.c(1.0), ecAvg)), den);
+            term = d.select(d.gt(den, d.c(0.0)), term, d.c(0.0));
+            out[ch] = f_.convert(d.mul(lobe, term), f_.type());
+        }
+        return out;
+    }
+
     std::array<Value*, 3> brdf(const Geometry& geo) {
         MathEmitter& m = f_;
         const std::array<Value*, 3>&wi = geo.wi, &wo = geo.wo, &h = geo.h;
@@ -651,6 +870,10 @@ private:
             Value* s = m.mul(x[0], x[1]);
             return hasDiffuse ? m.add(s, x[2]) : s;
         });
+        if (mat_.energyModel() == EnergyModel::KullaConty) {
+            std::array<Value*, 3> ms = energyCompensation(n, ci, co);
+            for (int ch = 0; ch < 3; ++ch) total.c[ch] = m.add(total.c[ch], ms[ch]);
+        }
         // Below the horizon (or wi + wo = 0): f = 0, a valid lane.
         Value* valid = b_.CreateAnd(above, geo.hNonZero);
         return map({total}, true, [&](auto& x) { return m.select(valid, x[0], m.c(0.0)); }).c;
@@ -659,8 +882,9 @@ private:
     const CheckedMaterial& mat_;
     const LoweringOptions& opt_;
     llvm::IRBuilder<>& b_;
-    MathEmitter f_;  // float lanes
-    MathEmitter d_;  // double lanes of the same width
+    MathEmitter f_;     // float lanes
+    MathEmitter d_;     // "precise" lanes: double in exact mode, float in fast mode
+    MathEmitter wide_;  // always double (the Gaussian normalization table is double)
     llvm::Module& module_;
     Value* invalid_;
     std::vector<LVal> inputs_, lets_;
@@ -674,7 +898,8 @@ llvm::GlobalVariable* defaultsArray(llvm::Module& module, const std::vector<floa
     return new llvm::GlobalVariable(module, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
 }
 
-void addKernelAttributes(llvm::Function* fn, int width) {
+void addKernelAttributes(llvm::Function* fn, int width, const MathVariant& variant) {
+    if (variant.estimates) fn->addFnAttr("reciprocal-estimates", "div:1,vec-div:1,sqrt:1,vec-sqrt:1");
     fn->addFnAttr(llvm::Attribute::NoUnwind);
     fn->addFnAttr(llvm::Attribute::NoFree);
     fn->addFnAttr(llvm::Attribute::WillReturn);
@@ -694,7 +919,7 @@ void emitScalarEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llv
     llvm::Type* ptr = b.getPtrTy();
     auto* statusTy = llvm::FunctionType::get(b.getInt32Ty(), {ptr, ptr, ptr, ptr}, false);
     auto* fn = llvm::Function::Create(statusTy, llvm::Function::ExternalLinkage, name + "_status", module);
-    addKernelAttributes(fn, 1);
+    addKernelAttributes(fn, 1, opt.variant);
     b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", fn));
     llvm::Value *wiP = fn->getArg(0), *woP = fn->getArg(1), *inP = fn->getArg(2), *outP = fn->getArg(3);
     llvm::Type* f32 = b.getFloatTy();
@@ -718,7 +943,7 @@ void emitScalarEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llv
 
     auto* voidTy = llvm::FunctionType::get(b.getVoidTy(), {ptr, ptr, ptr, ptr}, false);
     auto* entry = llvm::Function::Create(voidTy, llvm::Function::ExternalLinkage, name, module);
-    addKernelAttributes(entry, 1);
+    addKernelAttributes(entry, 1, opt.variant);
     b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", entry));
     b.CreateCall(fn, {entry->getArg(0), entry->getArg(1), entry->getArg(2), entry->getArg(3)});
     b.CreateRetVoid();
@@ -735,7 +960,7 @@ void emitBatchEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llvm
     auto* vecTy = llvm::FixedVectorType::get(f32, W);
     auto* fnTy = llvm::FunctionType::get(i64, {i64, ptr, ptr, ptr, ptr}, false);
     auto* fn = llvm::Function::Create(fnTy, llvm::Function::ExternalLinkage, name, module);
-    addKernelAttributes(fn, W);
+    addKernelAttributes(fn, W, opt.variant);
     llvm::Value *n = fn->getArg(0), *wiA = fn->getArg(1), *woA = fn->getArg(2), *inA = fn->getArg(3),
                 *outA = fn->getArg(4);
     auto* entry = llvm::BasicBlock::Create(ctx, "entry", fn);

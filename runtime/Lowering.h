@@ -22,14 +22,39 @@
 
 #include <memory>
 #include <string>
+#include <string>
 
 namespace facet {
 
 enum class MathMode { Exact, Fast };
 const char* mathModeName(MathMode m);
 
+// Which approximations a kernel uses. `exact` keeps every term at full float
+// accuracy (double where float rounding would be amplified); `fast` computes
+// everything in float with shorter polynomials and reciprocal/rsqrt
+// estimates refined by one Newton step. The two model substitutions change
+// the model the user named, so only a tolerance may enable them.
+struct MathVariant {
+    bool precise = true;            // geometry, exponents, exact Fresnel, parameters in double
+    bool estimates = false;         // division and sqrt by rcp/rsqrt estimate + 1 Newton step
+    bool shortPolynomials = false;  // exp/log/atan2 polynomials for ~1e-6 instead of 1 ulp
+    bool walterLambda = false;      // Beckmann / Blinn-Phong Smith Lambda: Walter et al. 2007 rational fit
+    bool schlickDielectric = false; // dielectric(eta) evaluated as Schlick with f0 from eta
+
+    static MathVariant exact() { return {}; }
+    static MathVariant fast() { return {false, true, true, false, false}; }
+    std::string name() const;  // e.g. "exact", "fast", "fast+walter"
+    bool operator==(const MathVariant&) const = default;
+};
+
+class EnergyTable;
+
 struct LoweringOptions {
+    // energy = kulla_conty: the E table of the material's NDF x masking,
+    // embedded in the module as constant arrays (required for such materials).
+    const EnergyTable* energyTable = nullptr;
     MathMode math = MathMode::Exact;
+    MathVariant variant = MathVariant::exact();
     int width = 16;  // lanes of the batch kernel: 4, 8 or 16
     bool emitScalar = true;
     bool emitBatch = true;

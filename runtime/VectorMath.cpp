@@ -11,7 +11,8 @@ namespace facet {
 
 using llvm::Value;
 
-MathEmitter::MathEmitter(llvm::IRBuilder<>& builder, llvm::Type* type) : b(builder), type_(type) {
+MathEmitter::MathEmitter(llvm::IRBuilder<>& builder, llvm::Type* type, bool fast)
+    : b(builder), type_(type), fast_(fast) {
     llvm::Type* elem = type->getScalarType();
     isDouble_ = elem->isDoubleTy();
     llvm::Type* intElem = isDouble_ ? b.getInt64Ty() : b.getInt32Ty();
@@ -99,6 +100,8 @@ Value* MathEmitter::exp(Value* x) {
     if (isDouble_)
         p = poly(r, {1, 1, 1 / 2.0, 1 / 6.0, 1 / 24.0, 1 / 120.0, 1 / 720.0, 1 / 5040.0, 1 / 40320.0,
                      1 / 362880.0, 1 / 3628800.0, 1 / 39916800.0, 1 / 479001600.0, 1 / 6227020800.0});
+    else if (fast_)  // degree 6: r^7/7! < 1.2e-7 relative
+        p = poly(r, {1, 1, 1 / 2.0, 1 / 6.0, 1 / 24.0, 1 / 120.0, 1 / 720.0});
     else
         p = poly(r, {1, 1, 1 / 2.0, 1 / 6.0, 1 / 24.0, 1 / 120.0, 1 / 720.0, 1 / 5040.0, 1 / 40320.0});
     // Scale in two steps so that results in the subnormal range and up to
@@ -135,6 +138,7 @@ Value* MathEmitter::log(Value* x) {
     Value* z = mul(s, s);
     Value* R = isDouble_ ? mul(z, poly(z, {2 / 3.0, 2 / 5.0, 2 / 7.0, 2 / 9.0, 2 / 11.0, 2 / 13.0, 2 / 15.0,
                                          2 / 17.0, 2 / 19.0}))
+               : fast_   ? mul(z, poly(z, {2 / 3.0, 2 / 5.0, 2 / 7.0}))  // z^4 term: < 2e-8
                          : mul(z, poly(z, {2 / 3.0, 2 / 5.0, 2 / 7.0, 2 / 9.0, 2 / 11.0}));
     Value* hfsq = mul(c(0.5), mul(f, f));
     Value* lf = sub(f, sub(hfsq, mul(s, add(hfsq, R))));
@@ -160,12 +164,12 @@ Value* MathEmitter::log1p(Value* x) {
 
 Value* MathEmitter::pow(Value* x, Value* y) {
     // exp(y log|x|) evaluated in double so that the product's rounding
-    // (|y log x| up to ~100) does not cost float accuracy.
-    llvm::Type* dty = type_->getScalarType()->isDoubleTy()
+    // (|y log x| up to ~100) does not cost float accuracy (fast: in float).
+    llvm::Type* dty = type_->getScalarType()->isDoubleTy() || fast_
                           ? type_
                           : (width() > 1 ? (llvm::Type*)llvm::VectorType::get(b.getDoubleTy(), width(), false)
                                          : (llvm::Type*)b.getDoubleTy());
-    MathEmitter d(b, dty);
+    MathEmitter d(b, dty, fast_);
     Value* X = d.convert(x, dty);
     Value* Y = d.convert(y, dty);
     Value* r = d.exp(d.mul(Y, d.log(d.abs(X))));
@@ -216,8 +220,9 @@ Value* MathEmitter::atan2(Value* y, Value* x) {
     Value* big = gt(a, c(0.41421356237309503));
     Value* t = select(big, div(sub(a, c(1.0)), add(a, c(1.0))), a);
     Value* z = mul(t, t);
-    Value* series = poly(z, {-1 / 3.0, 1 / 5.0, -1 / 7.0, 1 / 9.0, -1 / 11.0, 1 / 13.0, -1 / 15.0, 1 / 17.0,
-                             -1 / 19.0, 1 / 21.0});
+    Value* series = fast_ ? poly(z, {-1 / 3.0, 1 / 5.0, -1 / 7.0, 1 / 9.0, -1 / 11.0, 1 / 13.0})  // t^15: < 2e-7
+                          : poly(z, {-1 / 3.0, 1 / 5.0, -1 / 7.0, 1 / 9.0, -1 / 11.0, 1 / 13.0, -1 / 15.0, 1 / 17.0,
+                                     -1 / 19.0, 1 / 21.0});
     Value* at = fma(mul(t, z), series, t);
     at = select(big, add(at, c(M_PI / 4)), at);
     Value* r = select(gt(y, ax), sub(c(M_PI / 2), at), at);

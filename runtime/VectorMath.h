@@ -20,7 +20,10 @@ namespace facet {
 class MathEmitter {
 public:
     // `type` is the floating type to compute in: float, double, or a vector of either.
-    MathEmitter(llvm::IRBuilder<>& builder, llvm::Type* type);
+    // `fast`: shorter polynomials (about 1e-6 relative instead of 1 ulp) and
+    // pow in the emitter's own type instead of through double.
+    MathEmitter(llvm::IRBuilder<>& builder, llvm::Type* type, bool fast = false);
+    bool fast() const { return fast_; }
 
     llvm::Type* type() const { return type_; }
     llvm::Type* intType() const { return intType_; }
@@ -82,6 +85,7 @@ private:
     llvm::Type* type_;
     llvm::Type* intType_;
     bool isDouble_;
+    bool fast_;
 };
 
 }  // namespace facet

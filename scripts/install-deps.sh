@@ -6,7 +6,7 @@ packages=(
   build-essential cmake ninja-build python3
   llvm-19-dev clang-19 libclang-rt-19-dev   # JIT, bitcode math library, sanitizers
   libzstd-dev zlib1g-dev libedit-dev libxml2-dev libffi-dev libcurl4-openssl-dev  # llvm-19-dev's link deps
-  libopenimageio-dev libfmt-dev doctest-dev
+  libopenimageio-dev openimageio-tools libfmt-dev doctest-dev  # OIIO's CMake config lists the tools
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -8,6 +8,7 @@
 // Exit codes: 0 ok, 1 a check failed (e.g. invalid rows), 2 usage,
 // 65 a material file error.
 #include "Checker.h"
+#include "Commands.h"
 #include "CsvTable.h"
 #include "Interpreter.h"
 #include "Kernel.h"
@@ -32,6 +33,9 @@ const char* kUsage =
     "                                      evaluate the BRDF for each CSV row\n"
     "  ir FILE [--material NAME] [--simd] [--stages] [--math exact|fast] [--width N] [--set NAME=VALUE]...\n"
     "                                      print the optimized LLVM IR (--stages: every stage)\n"
+    "  lut FILE [--material NAME] -o TABLES.exr   write the Kulla-Conty E/E_avg tables (EXR)\n"
+    "  bench FILE... [--out DIR] [--json] [--quick]   speed against error (bench.md/.json/.png)\n"
+    "  verify FILE... [--material NAME] [--verbose]   hard cases, backends and physics (SPEC 7)\n"
     "exit codes: 0 ok, 1 a check failed, 2 usage, 65 a material file error\n";
 
 struct UsageError {
@@ -353,6 +357,9 @@ int main(int argc, char** argv) {
         if (command == "check") return cmdCheck(args);
         if (command == "eval") return cmdEval(args);
         if (command == "ir") return cmdIr(args);
+        if (command == "verify") return cmdVerify(args);
+        if (command == "lut") return cmdLut(args);
+        if (command == "bench") return cmdBench(args);
         throw UsageError{fmt::format("unknown command '{}'", command)};
     } catch (const UsageError& e) {
         std::fprintf(stderr, "facet: %s\n%s", e.message.c_str(), kUsage);

@@ -127,7 +127,7 @@ void compare(const Kernel& kernel, const CheckedMaterial& reference, const Sampl
     // Bound inputs: the kernel's material has them folded; the reference gets
     // the defaults of the specialized material for its remaining slots and the
     // bound values via the kernel's material (evaluate the specialized one).
-    Interpreter<double> interp(kernel.material());
+    Interpreter<double> interp(kernel.material(), kernel.energyTable());
     std::vector<double> slots(std::max(1, kernel.inputCount()));
     for (size_t i = 0; i < n; ++i) {
         double a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]};

@@ -1,0 +1,313 @@
+// BenchFormat: terminal table, Markdown and JSON of a bench report (see BenchFormat.h).
+#include "BenchFormat.h"
+
+#include <cmath>
+#include <fmt/format.h>
+
+namespace facet::bench {
+
+namespace {
+
+std::string num(double v, const char* spec) {
+    if (std::isnan(v)) return "nan";
+    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+    return fmt::format(fmt::runtime(spec), v);
+}
+std::string opt(const std::optional<double>& v, const char* spec) { return v ? num(*v, spec) : "-"; }
+std::string rel(double v) { return v == 0 ? "0" : num(v, "{:.2e}"); }
+std::string ulp(double v) { return num(v, "{:.4g}"); }
+
+struct Column {
+    const char* title;
+    int width;
+    bool left;
+};
+
+std::vector<std::string> cells(const BenchRow& r) {
+    return {r.backend,
+            r.mode,
+            r.variant,
+            num(r.nsPerEval, "{:.2f}"),
+            num(r.evalsPerSecond / 1e6, "{:.1f}"),
+            opt(r.coldMs, "{:.2f}"),
+            opt(r.memoryHitMs, "{:.3f}"),
+            opt(r.diskHitMs, "{:.3f}"),
+            opt(r.aotRatio, "{:.2f}"),
+            rel(r.regular.maxRel),
+            rel(r.regular.p999Rel),
+            ulp(r.regular.maxUlp),
+            rel(r.hard.maxRel),
+            rel(r.hard.p999Rel),
+            ulp(r.hard.maxUlp)};
+}
+
+const std::vector<Column>& columns() {
+    static const std::vector<Column> c = {
+        {"backend", 7, true},       {"mode", 12, true},         {"variant", 12, true},      {"ns/eval", 9, false},
+        {"Meval/s", 8, false},      {"cold ms", 8, false},      {"mem-hit ms", 10, false},  {"disk-hit ms", 11, false},
+        {"JIT/AOT", 7, false},      {"max rel", 9, false},      {"p99.9 rel", 9, false},    {"max ulp", 9, false},
+        {"hard max", 9, false},     {"hard p99.9", 10, false},  {"hard ulp", 9, false},
+    };
+    return c;
+}
+
+std::string header(const BenchReport& report, const MaterialBench& m) {
+    const BenchSettings& s = report.settings;
+    std::string aot = m.aotModel.empty() ? (m.aotNote.empty() ? "none" : m.aotNote) : m.aotModel;
+    return fmt::format("{} ({})  aot: {}\n"
+                       "  timing (thread CPU time): median of {} warm runs on {} lanes (interp: {} lanes); SIMD width {}; "
+                       "error vs the double interpreter on {} regular and {} hard-case lanes; parse+check {:.2f} ms",
+                       m.material, m.file, aot, s.runs, m.regularLanes, std::min(s.interpLanes, m.regularLanes),
+                       report.hostWidth, m.regularLanes, m.hardLanes, m.parseCheckMs);
+}
+
+}  // namespace
+
+std::string summaryLine(const MaterialBench& m) {
+    const BenchRow* simd = m.find("simd", "exact");
+    const BenchRow* scalar = m.find("scalar", "exact");
+    const BenchRow* aot = m.find("aot", "hand-written");
+    if (!simd) return "";
+    std::string s = fmt::format("simd exact {:.2f} ns/eval ({:.0f} M/s)", simd->nsPerEval, simd->evalsPerSecond / 1e6);
+    if (scalar) s += fmt::format("; simd/scalar speed-up {:.1f}x", scalar->nsPerEval / simd->nsPerEval);
+    if (aot) s += fmt::format("; aot {:.2f} ns/eval, JIT/AOT {:.2f}", aot->nsPerEval, simd->nsPerEval / aot->nsPerEval);
+    s += fmt::format("; compile cold {} ms, memory hit {} ms, disk hit {} ms", opt(simd->coldMs, "{:.2f}"),
+                     opt(simd->memoryHitMs, "{:.3f}"), opt(simd->diskHitMs, "{:.3f}"));
+    if (m.kullaContyMs) s += fmt::format("; Kulla-Conty table {} {:.0f} ms", m.kullaContyPair, *m.kullaContyMs);
+    return s;
+}
+
+void printTable(const BenchReport& report, std::FILE* out) {
+    for (const MaterialBench& m : report.materials) {
+        std::fprintf(out, "\n%s\n", header(report, m).c_str());
+        std::string line;
+        for (const Column& c : columns())
+            line += fmt::format(fmt::runtime(c.left ? "{:<{}} " : "{:>{}} "), c.title, c.width);
+        std::fprintf(out, "%s\n", line.c_str());
+        for (const BenchRow& r : m.rows) {
+            std::vector<std::string> v = cells(r);
+            line.clear();
+            for (size_t i = 0; i < v.size(); ++i)
+                line += fmt::format(fmt::runtime(columns()[i].left ? "{:<{}} " : "{:>{}} "), v[i], columns()[i].width);
+            std::fprintf(out, "%s\n", line.c_str());
+        }
+        std::fprintf(out, "worst inputs (regular | hard):\n");
+        for (const BenchRow& r : m.rows) {
+            std::fprintf(out, "  %-19s %s\n", r.label().c_str(), r.regular.worst.str().c_str());
+            std::fprintf(out, "  %-19s %s\n", "", r.hard.worst.str().c_str());
+        }
+        std::fprintf(out, "summary: %s\n", summaryLine(m).c_str());
+    }
+}
+
+std::string markdown(const BenchReport& report) {
+    std::string md = "# facet bench\n\n";
+    const BenchSettings& s = report.settings;
+    md += fmt::format("Host: {} (SIMD width {}). Median of {} warm runs ({} warm-up) of one batch of {} lanes "
+                      "(scalar entry and interpreter: median over chunks of 4096 / 256 lanes); the interpreter is "
+                      "timed on {} lanes. Compile times are medians of {} cold compiles (cache=off), {} memory-cache "
+                      "hits and {} disk-cache hits (fresh compiler). All times are CPU time of the benchmarking "
+                      "thread.{}\n\n",
+                      report.cpu, report.hostWidth, s.runs, s.warmup, s.lanes, s.interpLanes, s.compileRuns,
+                      s.compileRuns, s.diskRuns, s.quick ? " **Quick mode**: small batches, few runs." : "");
+    md += fmt::format("Error is relative to the double-precision interpreter on the same float inputs "
+                      "(differences below {:g} count as 0). Hard-case sample: {}.\n",
+                      ErrorStats::kAbsFloor, report.hardSample);
+    for (const MaterialBench& m : report.materials) {
+        md += fmt::format("\n## {}\n\n`{}`, AOT twin: {}", m.material, m.file,
+                          m.aotModel.empty() ? (m.aotNote.empty() ? "none" : m.aotNote) : "`" + m.aotModel + "`");
+        md += fmt::format(". Regular sample {} lanes, hard-case sample {} lanes.\n\n", m.regularLanes, m.hardLanes);
+        md += "|";
+        for (const Column& c : columns()) md += fmt::format(" {} |", c.title);
+        md += "\n|";
+        for (const Column& c : columns()) md += c.left ? "---|" : "--:|";
+        md += "\n";
+        for (const BenchRow& r : m.rows) {
+            md += "|";
+            for (const std::string& v : cells(r)) md += fmt::format(" {} |", v);
+            md += "\n";
+        }
+        md += fmt::format("\n**Summary:** {}\n\nWorst inputs:\n\n", summaryLine(m));
+        for (const BenchRow& r : m.rows)
+            md += fmt::format("- {}: regular `{}`; hard `{}`\n", r.label(), r.regular.worst.str(), r.hard.worst.str());
+    }
+    return md;
+}
+
+namespace {
+
+// A minimal JSON writer: objects and arrays with comma bookkeeping.
+class Json {
+public:
+    std::string out;
+    void open(char c) {
+        sep();
+        out += c;
+        first_ = true;
+    }
+    void close(char c) {
+        out += c;
+        first_ = false;
+    }
+    void key(const std::string& k) {
+        sep();
+        str(k);
+        out += ':';
+        first_ = true;  // the value follows without a comma
+    }
+    void value(double v) {
+        sep();
+        out += std::isfinite(v) ? fmt::format("{:.9g}", v) : "null";
+    }
+    void value(const std::optional<double>& v) {
+        if (v) value(*v);
+        else raw("null");
+    }
+    void value(const std::string& s) {
+        sep();
+        str(s);
+    }
+    void value(int64_t v) { raw(std::to_string(v)); }
+    void value(bool v) { raw(v ? "true" : "false"); }
+    void raw(const std::string& s) {
+        sep();
+        out += s;
+    }
+    template <typename T>
+    void field(const std::string& k, const T& v) {
+        key(k);
+        value(v);
+    }
+
+private:
+    void sep() {
+        if (!first_) out += ',';
+        first_ = false;
+    }
+    void str(const std::string& s) {
+        out += '"';
+        for (unsigned char c : s) {
+            if (c == '"' || c == '\\') out += '\\', out += char(c);
+            else if (c < 0x20) out += fmt::format("\\u{:04x}", c);
+            else out += char(c);
+        }
+        out += '"';
+    }
+    bool first_ = true;
+};
+
+void writeError(Json& j, const ErrorStats& e) {
+    j.open('{');
+    j.field("values", int64_t(e.values));
+    j.field("skipped", int64_t(e.skipped));
+    j.field("nonfinite", int64_t(e.nonFinite));
+    j.field("negative", int64_t(e.negative));
+    j.field("invalid_lanes", e.invalidLanes);
+    j.field("reference_invalid_lanes", e.referenceInvalid);
+    j.field("max_rel", e.maxRel);
+    j.field("p999_rel", e.p999Rel);
+    j.field("max_ulp", e.maxUlp);
+    j.key("worst");
+    if (!e.worst.present) {
+        j.raw("null");
+    } else {
+        const auto& w = e.worst;
+        j.open('{');
+        j.field("lane", int64_t(w.lane));
+        j.field("channel", std::string(1, "rgb"[w.channel]));
+        j.key("wi");
+        j.open('[');
+        for (float x : w.wi) j.value(double(x));
+        j.close(']');
+        j.key("wo");
+        j.open('[');
+        for (float x : w.wo) j.value(double(x));
+        j.close(']');
+        j.key("inputs");
+        j.open('{');
+        for (const auto& [name, v] : w.inputs) j.field(name, double(v));
+        j.close('}');
+        j.field("got", w.got);
+        j.field("want", w.want);
+        j.field("rel", w.rel);
+        j.close('}');
+    }
+    j.close('}');
+}
+
+}  // namespace
+
+std::string json(const BenchReport& report) {
+    Json j;
+    const BenchSettings& s = report.settings;
+    j.open('{');
+    j.field("facet_bench_format", int64_t(1));
+    j.key("host");
+    j.open('{');
+    j.field("cpu", report.cpu);
+    j.field("features", report.cpuFeatures);
+    j.field("vector_width", int64_t(report.hostWidth));
+    j.close('}');
+    j.key("settings");
+    j.open('{');
+    j.field("lanes", int64_t(s.lanes));
+    j.field("interp_lanes", int64_t(s.interpLanes));
+    j.field("runs", int64_t(s.runs));
+    j.field("warmup", int64_t(s.warmup));
+    j.field("compile_runs", int64_t(s.compileRuns));
+    j.field("disk_runs", int64_t(s.diskRuns));
+    j.field("quick", s.quick);
+    j.field("seed", int64_t(s.seed));
+    j.field("abs_floor", ErrorStats::kAbsFloor);
+    j.field("hard_sample", report.hardSample);
+    j.close('}');
+    j.key("materials");
+    j.open('[');
+    for (const MaterialBench& m : report.materials) {
+        j.open('{');
+        j.field("file", m.file);
+        j.field("material", m.material);
+        j.key("aot");
+        if (m.aotModel.empty()) j.raw("null");
+        else j.value(m.aotModel);
+        j.field("aot_note", m.aotNote);
+        j.field("parse_check_ms", m.parseCheckMs);
+        j.field("kulla_conty_ms", m.kullaContyMs);
+        j.field("kulla_conty_pair", m.kullaContyPair);
+        j.field("regular_lanes", int64_t(m.regularLanes));
+        j.field("hard_lanes", int64_t(m.hardLanes));
+        j.field("summary", summaryLine(m));
+        j.key("rows");
+        j.open('[');
+        for (const BenchRow& r : m.rows) {
+            j.open('{');
+            j.field("backend", r.backend);
+            j.field("mode", r.mode);
+            j.field("options", r.options);
+            j.field("variant", r.variant);
+            j.field("measured_error", r.measuredError >= 0 ? std::optional<double>(r.measuredError) : std::nullopt);
+            j.field("width", int64_t(r.width));
+            j.field("lanes", int64_t(r.lanes));
+            j.field("runs", int64_t(r.runs));
+            j.field("ns_per_eval", r.nsPerEval);
+            j.field("ns_per_eval_min", r.nsPerEvalMin);
+            j.field("evals_per_second", r.evalsPerSecond);
+            j.field("compile_cold_ms", r.coldMs);
+            j.field("compile_memory_hit_ms", r.memoryHitMs);
+            j.field("compile_disk_hit_ms", r.diskHitMs);
+            j.field("jit_over_aot", r.aotRatio);
+            j.key("error_regular");
+            writeError(j, r.regular);
+            j.key("error_hard");
+            writeError(j, r.hard);
+            j.close('}');
+        }
+        j.close(']');
+        j.close('}');
+    }
+    j.close(']');
+    j.close('}');
+    return j.out + "\n";
+}
+
+}  // namespace facet::bench

@@ -1,0 +1,539 @@
+// BenchRunner: timing, compile timing and error measurement (see BenchRunner.h).
+#include "BenchRunner.h"
+
+#include "Checker.h"
+#include "Interpreter.h"
+#include "Jit.h"
+#include "Kernel.h"
+#include "ReferenceModels.h"
+
+#if __has_include("KullaConty.h")
+#include "KullaConty.h"
+#define FACET_BENCH_HAS_KULLA_CONTY 1
+#endif
+
+#include <algorithm>
+#include <cfloat>
+#include <ctime>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+
+namespace facet::bench {
+
+BenchSettings BenchSettings::quickSettings() {
+    BenchSettings s;
+    s.lanes = 8192;
+    s.interpLanes = 256;
+    s.runs = 5;
+    s.warmup = 1;
+    s.compileRuns = 2;
+    s.diskRuns = 1;
+    s.quick = true;
+    return s;
+}
+
+const BenchRow* MaterialBench::find(const std::string& backend, const std::string& mode) const {
+    for (const BenchRow& r : rows)
+        if (r.backend == backend && r.mode == mode) return &r;
+    return nullptr;
+}
+
+std::string ErrorStats::Worst::str() const {
+    if (!present) return "-";
+    static const char* channels = "rgb";
+    std::string in;
+    for (const auto& [name, value] : inputs) in += fmt::format(" {}={:.9g}", name, value);
+    return fmt::format("rel {:.3g} ch {} wi=({:.9g},{:.9g},{:.9g}) wo=({:.9g},{:.9g},{:.9g}){} got {:.9g} want {:.17g}",
+                       rel, channels[channel], wi[0], wi[1], wi[2], wo[0], wo[1], wo[2], in, got, want);
+}
+
+namespace {
+
+// Every time here is the CPU time of this thread (CLOCK_THREAD_CPUTIME_ID):
+// on a shared machine a wall clock also counts the time slices other
+// processes take, which turns long runs into noise. On an idle machine the
+// two agree (the compile and the kernels run on this thread only).
+struct Clock {
+    using time_point = double;  // ns
+    static double now() {
+        timespec ts;
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+        return double(ts.tv_sec) * 1e9 + double(ts.tv_nsec);
+    }
+};
+
+double millisSince(Clock::time_point start) { return (Clock::now() - start) * 1e-6; }
+double nanosSince(Clock::time_point start) { return Clock::now() - start; }
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// The reference: the double interpreter on the very same float inputs.
+struct Reference {
+    std::vector<double> rgb[3];
+    std::vector<char> valid;
+};
+
+Reference computeReference(const CheckedMaterial& m, const Sample& s) {
+    Interpreter<double> interp(m);
+    Reference ref;
+    size_t n = s.size();
+    for (auto& c : ref.rgb) c.resize(n);
+    ref.valid.resize(n);
+    std::vector<double> slots(std::max(1, m.slotCount));
+    for (size_t i = 0; i < n; ++i) {
+        double a[3] = {s.dir[0][i], s.dir[1][i], s.dir[2][i]}, b[3] = {s.dir[3][i], s.dir[4][i], s.dir[5][i]};
+        for (int k = 0; k < m.slotCount; ++k) slots[k] = s.slots[k][i];
+        EvalResult<double> r = interp.eval(a, b, slots.data());
+        ref.valid[i] = r.valid;
+        for (int c = 0; c < 3; ++c) ref.rgb[c][i] = r.valid ? r.rgb[c] : 0.0;
+    }
+    return ref;
+}
+
+// Output columns of one evaluation.
+struct Output {
+    std::vector<float> c[3];
+    float* ptr[3] = {};
+    int64_t invalid = 0;
+    explicit Output(size_t n) {
+        for (int k = 0; k < 3; ++k) {
+            c[k].assign(n, -1.0f);  // -1: a lane the evaluator did not write shows up as an error
+            ptr[k] = c[k].data();
+        }
+    }
+};
+
+// Float bits mapped to a monotonic integer line (for ULP distances).
+int64_t orderedBits(float f) {
+    int32_t i;
+    std::memcpy(&i, &f, 4);
+    return i < 0 ? int64_t(INT32_MIN) - i : i;
+}
+
+ErrorStats compare(const CheckedMaterial& m, const Sample& s, const Reference& ref, const Output& out) {
+    ErrorStats st;
+    size_t n = s.size();
+    std::vector<double> rels;
+    rels.reserve(3 * n);
+    st.invalidLanes = out.invalid;
+    for (size_t i = 0; i < n; ++i) {
+        st.referenceInvalid += !ref.valid[i];
+        for (int c = 0; c < 3; ++c) {
+            double got = out.c[c][i], want = ref.rgb[c][i];
+            ++st.values;
+            if (std::fabs(want) > FLT_MAX) {
+                ++st.skipped;
+                continue;
+            }
+            double rel;
+            if (!std::isfinite(got)) {
+                ++st.nonFinite;
+                rel = INFINITY;
+            } else {
+                if (got < 0) ++st.negative;
+                double err = std::fabs(got - want);
+                rel = err <= ErrorStats::kAbsFloor ? 0.0 : err / std::max(std::fabs(want), double(FLT_MIN));
+                double ulp = std::fabs(double(orderedBits(float(got)) - orderedBits(float(want))));
+                st.maxUlp = std::max(st.maxUlp, ulp);
+            }
+            rels.push_back(rel);
+            if (rel > st.maxRel || (!st.worst.present && rel >= st.maxRel)) {
+                st.maxRel = rel;
+                ErrorStats::Worst& w = st.worst;
+                w.present = true;
+                w.lane = i;
+                w.channel = c;
+                for (int d = 0; d < 3; ++d) w.wi[d] = s.dir[d][i], w.wo[d] = s.dir[3 + d][i];
+                w.inputs.clear();
+                for (int k = 0; k < m.slotCount; ++k) w.inputs.push_back({m.slotName(k), s.slots[k][i]});
+                w.got = got, w.want = want, w.rel = rel;
+            }
+        }
+    }
+    if (!rels.empty()) {
+        // p99.9: the smallest value that at least 99.9% of the values do not exceed.
+        size_t rank = size_t(std::ceil(0.999 * double(rels.size())));
+        rank = std::clamp<size_t>(rank, 1, rels.size()) - 1;
+        std::nth_element(rels.begin(), rels.begin() + rank, rels.end());
+        st.p999Rel = rels[rank];
+    }
+    return st;
+}
+
+// Median and minimum ns per lane of `runs` calls of f (one whole batch of
+// n lanes each) after `warmup` calls.
+template <typename F>
+std::pair<double, double> timeBatches(int warmup, int runs, size_t n, F&& f) {
+    for (int i = 0; i < warmup; ++i) f();
+    std::vector<double> t;
+    for (int i = 0; i < runs; ++i) {
+        auto start = Clock::now();
+        f();
+        t.push_back(nanosSince(start) / double(n));
+    }
+    return {median(t), *std::min_element(t.begin(), t.end())};
+}
+
+// The same for evaluators called lane by lane (scalar entry, interpreter):
+// nothing is amortized over a batch, so each run is timed in chunks of
+// `chunk` lanes (well under a scheduler time slice) and the median is over
+// all chunks of all runs: a time slice lost to another process then spoils
+// one chunk, not a whole run. f(begin, end) evaluates lanes [begin, end).
+template <typename F>
+std::pair<double, double> timeChunks(int warmup, int runs, size_t n, size_t chunk, F&& f) {
+    for (int i = 0; i < warmup; ++i) f(size_t(0), n);
+    std::vector<double> t;
+    for (int i = 0; i < runs; ++i)
+        for (size_t begin = 0; begin < n; begin += chunk) {
+            size_t end = std::min(n, begin + chunk);
+            auto start = Clock::now();
+            f(begin, end);
+            t.push_back(nanosSince(start) / double(end - begin));
+        }
+    return {median(t), *std::min_element(t.begin(), t.end())};
+}
+
+// The scalar entry point of the SPEC, called once per lane as a renderer
+// would call it (inputs gathered per lane from the SoA columns).
+void evalScalarLanes(const Kernel& k, const Sample& s, size_t begin, size_t end, Output& out) {
+    int slots = k.inputCount();
+    float in[64];  // more slots than this take the vector below
+    std::vector<float> many(slots > 64 ? slots : 0);
+    float* inputs = slots > 64 ? many.data() : in;
+    const float* const* wi = s.wi();
+    const float* const* wo = s.wo();
+    const float* const* columns = s.inputs();
+    for (size_t i = begin; i < end; ++i) {
+        float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, o[3];
+        for (int j = 0; j < slots; ++j) inputs[j] = columns[j][i];
+        k.eval(a, b, inputs, o);
+        out.ptr[0][i] = o[0], out.ptr[1][i] = o[1], out.ptr[2][i] = o[2];
+    }
+}
+
+// Kernel::evalBatch on lanes [begin, end) of a sample.
+int64_t evalBatchRange(const Kernel& k, const Sample& s, size_t begin, size_t end, Output& out) {
+    const float* wi[3] = {s.wi()[0] + begin, s.wi()[1] + begin, s.wi()[2] + begin};
+    const float* wo[3] = {s.wo()[0] + begin, s.wo()[1] + begin, s.wo()[2] + begin};
+    std::vector<const float*> in;
+    for (size_t j = 0; j < s.slots.size(); ++j) in.push_back(s.inputs()[j] + begin);
+    float* rgb[3] = {out.ptr[0] + begin, out.ptr[1] + begin, out.ptr[2] + begin};
+    return k.evalBatch(int64_t(end - begin), wi, wo, in.empty() ? nullptr : in.data(), rgb);
+}
+
+struct Mode {
+    const char* name;     // row label
+    const char* options;  // CompileOptions fragment
+};
+const Mode kModes[] = {{"exact", "math=exact"}, {"fast", "math=fast"}, {"tol 1e-3", "tolerance=1e-3"},
+                       {"tol 1e-5", "tolerance=1e-5"}};
+const char* const kBackends[] = {"interp", "scalar", "simd"};
+// Chunk sizes of the lane-by-lane timings (about 0.2-0.5 ms each).
+constexpr size_t kScalarChunk = 4096, kInterpChunk = 256;
+
+// A private, empty cache directory for the disk-hit measurement; removed
+// when the bench of a material ends.
+struct TempDir {
+    std::string path;
+    TempDir() {
+        std::random_device rd;
+        for (int attempt = 0; attempt < 100 && path.empty(); ++attempt) {
+            auto p = std::filesystem::temp_directory_path() / fmt::format("facet-bench-{:016x}", uint64_t(rd()) << 32 | rd());
+            std::error_code ec;
+            if (std::filesystem::create_directory(p, ec)) path = p.string();
+        }
+    }
+    ~TempDir() {
+        std::error_code ec;
+        if (!path.empty()) std::filesystem::remove_all(path, ec);
+    }
+};
+
+class MaterialRunner {
+public:
+    MaterialRunner(const CheckedMaterial& m, const BenchSettings& settings, Compiler& compiler, std::FILE* progress)
+        : m_(m), settings_(settings), compiler_(compiler), progress_(progress) {}
+
+    void run(MaterialBench& mb) {
+        regular_ = regularSample(m_, settings_.lanes, settings_.seed);
+        hard_ = hardCaseSample(m_);
+        mb.regularLanes = regular_.size();
+        mb.hardLanes = hard_.size();
+        refRegular_ = computeReference(m_, regular_);
+        refHard_ = computeReference(m_, hard_);
+
+        std::optional<ErrorStats> interpRegular, interpHard;
+        for (const char* backend : kBackends)
+            for (const Mode& mode : kModes) {
+                BenchRow row;
+                row.backend = backend;
+                row.mode = mode.name;
+                row.options = fmt::format("backend={};{}", backend, mode.options);
+                if (!jitRow(row, interpRegular, interpHard)) continue;
+                report(row);
+                mb.rows.push_back(std::move(row));
+            }
+        if (const aot::ReferenceModel* model = aot::findReferenceModel(mb.aotModel)) {
+            BenchRow row = aotRow(*model);
+            report(row);
+            mb.rows.push_back(std::move(row));
+            for (BenchRow& r : mb.rows)
+                if (r.backend != "aot" && r.backend != "interp" && row.nsPerEval > 0)
+                    r.aotRatio = r.nsPerEval / row.nsPerEval;
+        }
+    }
+
+private:
+    void report(const BenchRow& row) {
+        if (!progress_) return;
+        std::fprintf(progress_, "  %-7s %-9s %10.2f ns/eval  max rel %.2g (hard %.2g)\n", row.backend.c_str(),
+                     row.mode.c_str(), row.nsPerEval, row.regular.maxRel, row.hard.maxRel);
+        std::fflush(progress_);
+    }
+
+    std::unique_ptr<Kernel> compile(Compiler& compiler, const CompileOptions& options) {
+        DiagnosticEngine diags;
+        std::unique_ptr<Kernel> k = compiler.compileMaterial(m_, options, diags);
+        if (!k) throw std::runtime_error(fmt::format("bench: cannot compile {}: {}", m_.name, diags.str()));
+        return k;
+    }
+
+    // Wall-clock milliseconds of one compile; the kernel is kept (its
+    // destruction, which unlinks it, is not part of the compile).
+    double timedCompile(Compiler& compiler, const CompileOptions& options, std::vector<std::unique_ptr<Kernel>>& keep,
+                        const char* expectOrigin) {
+        auto start = Clock::now();
+        std::unique_ptr<Kernel> k = compile(compiler, options);
+        double ms = millisSince(start);
+        if (expectOrigin && k->origin() != expectOrigin)
+            throw std::runtime_error(fmt::format("bench: expected a {} hit for {} ({}), got '{}'", expectOrigin,
+                                                 m_.name, options.canonical(), k->origin()));
+        keep.push_back(std::move(k));
+        return ms;
+    }
+
+    bool jitRow(BenchRow& row, std::optional<ErrorStats>& interpRegular, std::optional<ErrorStats>& interpHard) {
+        CompileOptions options;
+        std::string error = CompileOptions::parse(row.options, options);
+        if (!error.empty()) throw std::runtime_error("bench: " + error);
+        bool interp = options.backend == Backend::Interp;
+
+        // Cold compiles: cache=off, after one untimed compile (one-time LLVM
+        // set-up is not the material's compile time).
+        options.cache = CompileOptions::Cache::Off;
+        std::vector<std::unique_ptr<Kernel>> keep;
+        keep.push_back(compile(compiler_, options));
+        std::vector<double> cold;
+        for (int i = 0; i < settings_.compileRuns; ++i) cold.push_back(timedCompile(compiler_, options, keep, nullptr));
+        row.coldMs = median(cold);
+        std::unique_ptr<Kernel> kernel = std::move(keep.back());
+        keep.clear();
+        row.variant = kernel->variant();
+        row.measuredError = kernel->measuredError();
+        row.width = kernel->width();
+
+        if (!interp) {
+            // Memory-cache hits: the first compile fills the cache.
+            CompileOptions mem = options;
+            mem.cache = CompileOptions::Cache::Memory;
+            keep.push_back(compile(compiler_, mem));
+            std::vector<double> hits;
+            for (int i = 0; i < settings_.compileRuns; ++i)
+                hits.push_back(timedCompile(compiler_, mem, keep, "memory cache"));
+            row.memoryHitMs = median(hits);
+            keep.clear();
+            // Disk-cache hits: a fresh Compiler (empty memory cache) on a
+            // directory that one earlier compile filled.
+            TempDir dir;
+            if (!dir.path.empty()) {
+                CompileOptions disk = options;
+                disk.cache = CompileOptions::Cache::On;
+                {
+                    Compiler writer;
+                    writer.setCacheDir(dir.path);
+                    compile(writer, disk);
+                }
+                std::vector<double> diskHits;
+                for (int i = 0; i < settings_.diskRuns; ++i) {
+                    Compiler reader;
+                    reader.setCacheDir(dir.path);
+                    std::vector<std::unique_ptr<Kernel>> k;
+                    diskHits.push_back(timedCompile(reader, disk, k, "disk cache"));
+                }
+                row.diskHitMs = median(diskHits);
+            }
+        }
+
+        // Speed.
+        size_t n = interp ? std::min(settings_.interpLanes, regular_.size()) : regular_.size();
+        Output out(regular_.size());
+        std::pair<double, double> t;
+        int runs = interp ? std::max(3, settings_.runs / 3) : settings_.runs;
+        int warmup = interp ? 1 : settings_.warmup;
+        if (options.backend == Backend::Scalar) {
+            t = timeChunks(warmup, runs, n, kScalarChunk,
+                           [&](size_t b, size_t e) { evalScalarLanes(*kernel, regular_, b, e, out); });
+        } else if (interp) {
+            t = timeChunks(warmup, runs, n, kInterpChunk,
+                           [&](size_t b, size_t e) { evalBatchRange(*kernel, regular_, b, e, out); });
+        } else {
+            t = timeBatches(warmup, runs, n, [&] {
+                kernel->evalBatch(int64_t(n), regular_.wi(), regular_.wo(), regular_.inputs(), out.ptr);
+            });
+        }
+        row.lanes = n;
+        row.runs = runs;
+        row.nsPerEval = t.first;
+        row.nsPerEvalMin = t.second;
+        row.evalsPerSecond = 1e9 / row.nsPerEval;
+
+        // Error. Kernel::evalBatch of a scalar kernel calls its status entry
+        // per lane, so invalid lanes are counted for every backend. The
+        // interpreter has no math modes: its rows share one measurement.
+        if (interp && interpRegular) {
+            row.regular = *interpRegular;
+            row.hard = *interpHard;
+            return true;
+        }
+        row.regular = errorOn(*kernel, regular_, refRegular_);
+        row.hard = errorOn(*kernel, hard_, refHard_);
+        if (interp) interpRegular = row.regular, interpHard = row.hard;
+        return true;
+    }
+
+    ErrorStats errorOn(const Kernel& kernel, const Sample& s, const Reference& ref) {
+        Output out(s.size());
+        out.invalid = kernel.evalBatch(int64_t(s.size()), s.wi(), s.wo(), s.inputs(), out.ptr);
+        return compare(m_, s, ref, out);
+    }
+
+    BenchRow aotRow(const aot::ReferenceModel& model) {
+        BenchRow row;
+        row.backend = "aot";
+        row.mode = "hand-written";
+        row.variant = "-";
+        row.width = 1;
+        size_t n = regular_.size();
+        Output out(n);
+        auto t = timeBatches(settings_.warmup, settings_.runs, n, [&] {
+            model.batch(int64_t(n), regular_.wi(), regular_.wo(), regular_.inputs(), out.ptr);
+        });
+        row.lanes = n;
+        row.runs = settings_.runs;
+        row.nsPerEval = t.first;
+        row.nsPerEvalMin = t.second;
+        row.evalsPerSecond = 1e9 / row.nsPerEval;
+        for (const auto* s : {&regular_, &hard_}) {
+            Output o(s->size());
+            o.invalid = model.batch(int64_t(s->size()), s->wi(), s->wo(), s->inputs(), o.ptr);
+            (s == &regular_ ? row.regular : row.hard) = compare(m_, *s, s == &regular_ ? refRegular_ : refHard_, o);
+        }
+        return row;
+    }
+
+    const CheckedMaterial& m_;
+    const BenchSettings& settings_;
+    Compiler& compiler_;
+    std::FILE* progress_;
+    Sample regular_, hard_;
+    Reference refRegular_, refHard_;
+};
+
+std::string readText(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+}  // namespace
+
+std::string aotTagFor(const std::string& source, const std::string& path, const CheckedMaterial& material,
+                      const std::vector<CheckedMaterial>& all) {
+    // Tags by line; a tag belongs to the first material declared below it.
+    std::map<int, std::string> tags;
+    std::istringstream lines(source);
+    std::string line;
+    for (int number = 1; std::getline(lines, line); ++number) {
+        size_t p = line.find("//");
+        if (p == std::string::npos) continue;
+        std::string rest = line.substr(p + 2);
+        rest.erase(0, rest.find_first_not_of(" \t"));
+        if (rest.rfind("aot:", 0) != 0) continue;
+        rest = rest.substr(4);
+        rest.erase(0, rest.find_first_not_of(" \t"));
+        rest.erase(rest.find_last_not_of(" \t\r") + 1);
+        tags[number] = rest;
+    }
+    for (const auto& [tagLine, name] : tags) {
+        const CheckedMaterial* owner = nullptr;
+        for (const CheckedMaterial& m : all)
+            if (m.loc.line > tagLine && (!owner || m.loc.line < owner->loc.line)) owner = &m;
+        if (owner && owner->name == material.name) return name;
+    }
+    // Fallback: bench/models/<model>.mat holds its model as first material.
+    std::string stem = std::filesystem::path(path).stem().string();
+    if (!all.empty() && &all.front() == &material && aot::findReferenceModel(stem)) return stem;
+    return "";
+}
+
+void describeHost(BenchReport& report) {
+    Compiler compiler;
+    report.cpu = compiler.jit().cpuName();
+    report.cpuFeatures = compiler.jit().cpuFeatures();
+    report.hostWidth = compiler.jit().hostVectorWidth();
+    report.hardSample = hardCaseSampleDescription();
+}
+
+bool benchFile(const std::string& path, const BenchSettings& settings, BenchReport& report, DiagnosticEngine& diags,
+               std::FILE* progress) {
+    auto start = Clock::now();
+    CheckedProgram program = loadProgramFile(path, diags);
+    if (diags.hasErrors()) return false;
+    double parseCheckMs = millisSince(start);
+    std::string source = readText(path);
+    Compiler compiler;
+    for (const CheckedMaterial& m : program.materials) {
+        MaterialBench mb;
+        mb.file = path;
+        mb.material = m.name;
+        mb.parseCheckMs = parseCheckMs;
+        std::string tag = aotTagFor(source, path, m, program.materials);
+        if (!tag.empty()) {
+            const aot::ReferenceModel* model = aot::findReferenceModel(tag);
+            std::vector<std::string> slots;
+            for (int s = 0; s < m.slotCount; ++s) slots.push_back(m.slotName(s));
+            std::vector<std::string> expected;
+            if (model)
+                for (const char* in : model->inputs) expected.push_back(in);
+            if (!model) mb.aotNote = fmt::format("unknown aot model '{}'", tag);
+            else if (slots != expected) mb.aotNote = fmt::format("aot model '{}' has other inputs than '{}'", tag, m.name);
+            else mb.aotModel = tag;
+        }
+#ifdef FACET_BENCH_HAS_KULLA_CONTY
+        if (m.energyModel() == EnergyModel::KullaConty && !kullaContyUnsupported(m)) {
+            EnergyTableKey key = energyTableKey(m);
+            auto table = buildEnergyTable(key);
+            mb.kullaContyMs = table->buildMillis;
+            mb.kullaContyPair = key.name();
+        }
+#endif
+        if (progress) std::fprintf(progress, "bench %s (%s)\n", m.name.c_str(), path.c_str());
+        MaterialRunner(m, settings, compiler, progress).run(mb);
+        report.materials.push_back(std::move(mb));
+    }
+    return true;
+}
+
+}  // namespace facet::bench

@@ -1,0 +1,122 @@
+// BenchRunner: the measurements of `facet bench` (SPEC section 6).
+//
+// For every material: one row per backend (interp, scalar, simd) x math
+// mode (exact, fast, tolerance 1e-3, tolerance 1e-5), plus the hand-written
+// ahead-of-time model (bench/aot) when the material file is tagged
+// `// aot: NAME`. Each row has
+// - speed: median ns/eval over repeated warm runs: the SIMD batch entry and
+//   the AOT batch function on the whole batch per run; the scalar entry
+//   (called lane by lane) and the interpreter (Kernel::evalBatch, on fewer
+//   lanes) timed in chunks of a few thousand / hundred lanes;
+// - compile time: cold (cache=off), memory-cache hit, disk-cache hit (a
+//   fresh Compiler on a private cache directory), medians.
+// All times are CPU time of the benchmarking thread, so that other
+// processes on a shared machine do not inflate them (on an idle machine
+// CPU and wall time agree: compiles and kernels run on this thread);
+// - error against the double interpreter on the regular and on the
+//   hard-case sample: max and p99.9 relative error, max ULP, and the input
+//   with the largest error.
+// The report (BenchReport.h) and plot (BenchPlot.h) only format these.
+#pragma once
+
+#include "BenchSamples.h"
+#include "Diagnostics.h"
+#include "Material.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace facet::bench {
+
+struct BenchSettings {
+    size_t lanes = 65536;       // timed batch (scalar, simd, aot) and regular-sample size
+    size_t interpLanes = 2048;  // the interpreter is timed on fewer lanes
+    int runs = 15;              // timed runs per row (median)
+    int warmup = 3;             // untimed runs first
+    int compileRuns = 7;        // cold compiles and memory-cache hits (median)
+    int diskRuns = 3;           // disk-cache hits (a fresh Compiler each)
+    bool quick = false;
+    uint64_t seed = 20240607;
+
+    static BenchSettings quickSettings();
+};
+
+// Error of one row against the reference on one sample. Relative error is
+// |got - want| / |want| per channel; differences up to kAbsFloor count as 0
+// (values that small are float denormals or below), and a reference of 0
+// with a larger difference divides by FLT_MIN instead (finite, huge).
+struct ErrorStats {
+    static constexpr double kAbsFloor = 1e-30;
+    size_t values = 0;      // channel values compared
+    size_t skipped = 0;     // reference beyond float range (not representable)
+    size_t nonFinite = 0;   // outputs NaN or Inf (SPEC 2 forbids them)
+    size_t negative = 0;    // outputs < 0
+    int64_t invalidLanes = 0;      // lanes the evaluator reported invalid
+    int64_t referenceInvalid = 0;  // lanes the reference found invalid
+    double maxRel = 0, p999Rel = 0, maxUlp = 0;
+    struct Worst {
+        bool present = false;
+        size_t lane = 0;
+        int channel = 0;
+        float wi[3] = {}, wo[3] = {};
+        std::vector<std::pair<std::string, float>> inputs;
+        double got = 0, want = 0, rel = 0;
+        std::string str() const;  // printable
+    } worst;
+};
+
+struct BenchRow {
+    std::string backend;  // interp | scalar | simd | aot
+    std::string mode;     // exact | fast | tol 1e-3 | tol 1e-5 | hand-written
+    std::string options;  // the CompileOptions string ("" for aot)
+    std::string variant;  // the math variant the compiler picked (Kernel::variant), or "-"
+    double measuredError = -1;  // the compiler's own measurement for tolerance builds (< 0: none)
+    int width = 1;
+    size_t lanes = 0;
+    int runs = 0;
+    double nsPerEval = 0, nsPerEvalMin = 0, evalsPerSecond = 0;
+    std::optional<double> coldMs, memoryHitMs, diskHitMs;
+    std::optional<double> aotRatio;  // this row's ns/eval over the AOT row's
+    ErrorStats regular, hard;
+    std::string label() const { return backend + " " + mode; }
+};
+
+struct MaterialBench {
+    std::string file, material;
+    std::string aotModel;  // "" when the file has no AOT twin
+    std::string aotNote;   // why the AOT row is missing, if the tag did not fit
+    double parseCheckMs = 0;
+    std::optional<double> kullaContyMs;  // table build of the material's pair (energy = kulla_conty)
+    std::string kullaContyPair;
+    size_t regularLanes = 0, hardLanes = 0;
+    std::vector<BenchRow> rows;
+    const BenchRow* find(const std::string& backend, const std::string& mode) const;
+};
+
+struct BenchReport {
+    BenchSettings settings;
+    std::string cpu, cpuFeatures;
+    int hostWidth = 0;
+    std::string hardSample;  // description
+    std::vector<MaterialBench> materials;
+};
+
+// Benchmarks every material of `path`. On a material file error returns
+// false with diagnostics in `diags`. `progress` (may be null) gets one line
+// per row as it is measured.
+bool benchFile(const std::string& path, const BenchSettings& settings, BenchReport& report,
+               DiagnosticEngine& diags, std::FILE* progress);
+
+// Fills the host fields of a report (CPU, features, vector width).
+void describeHost(BenchReport& report);
+
+// The `// aot: NAME` tag that applies to material `name` in `source` (the
+// nearest tag above the material), else "" — and the bench/models file
+// name as a fallback (ggx_schlick.mat -> "ggx_schlick").
+std::string aotTagFor(const std::string& source, const std::string& path, const CheckedMaterial& material,
+                      const std::vector<CheckedMaterial>& all);
+
+}  // namespace facet::bench

@@ -1,0 +1,98 @@
+// BenchSamples: regular and hard-case samples (see BenchSamples.h).
+#include "BenchSamples.h"
+
+#include "HardCases.h"
+
+#include <cmath>
+#include <random>
+
+namespace facet::bench {
+
+void Sample::push(const double wi[3], const double wo[3], const std::vector<double>& inputs) {
+    for (int d = 0; d < 3; ++d) {
+        dir[d].push_back(float(wi[d]));
+        dir[3 + d].push_back(float(wo[d]));
+    }
+    for (size_t s = 0; s < slots.size(); ++s) slots[s].push_back(float(inputs[s]));
+}
+
+void Sample::finish() {
+    for (int d = 0; d < 3; ++d) {
+        wiPtr_[d] = dir[d].data();
+        woPtr_[d] = dir[3 + d].data();
+    }
+    inPtr_.clear();
+    for (const auto& column : slots) inPtr_.push_back(column.data());
+}
+
+namespace {
+
+constexpr double kPi = 3.141592653589793238462643383279502884;
+
+// The range an input is drawn from: its declared range, else [0, 2 default]
+// (a scale around the author's value), per channel.
+void inputRange(const CheckedInput& in, int channel, double& lo, double& hi) {
+    if (in.hasRange) {
+        lo = in.lo;
+        hi = in.hi;
+    } else {
+        lo = 0;
+        hi = 2 * std::fabs(in.defaultValue[channel]) + 0.1;
+    }
+}
+
+}  // namespace
+
+Sample regularSample(const CheckedMaterial& material, size_t n, uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    Sample s;
+    s.slots.assign(material.slotCount, {});
+    for (auto& d : s.dir) d.reserve(n);
+    for (auto& c : s.slots) c.reserve(n);
+    std::vector<double> inputs(material.slotCount);
+    for (size_t i = 0; i < n; ++i) {
+        double w[2][3];
+        for (auto& v : w) {
+            // Uniform on the hemisphere: z uniform in [0, 1]. 5% are mirrored
+            // below the horizon, which the kernels must return as 0.
+            double z = u(rng), phi = 2 * kPi * u(rng);
+            if (u(rng) < 0.05) z = -z;
+            double r = std::sqrt(std::max(0.0, 1 - z * z));
+            v[0] = r * std::cos(phi), v[1] = r * std::sin(phi), v[2] = z;
+        }
+        for (const CheckedInput& in : material.inputs)
+            for (int c = 0; c < in.slotCount(); ++c) {
+                double lo, hi;
+                inputRange(in, c, lo, hi);
+                inputs[in.firstSlot + c] = lo + (hi - lo) * u(rng);
+            }
+        s.push(w[0], w[1], inputs);
+    }
+    s.finish();
+    return s;
+}
+
+namespace {
+
+// The shared generator of compiler/HardCases.h (issue 5), as a Sample.
+Sample fromHardCases(const CheckedMaterial& m, const std::vector<HardCase>& cases) {
+    Sample s;
+    s.slots.assign(m.slotCount, {});
+    for (const HardCase& c : cases) s.push(c.wi.data(), c.wo.data(), c.slots);
+    s.finish();
+    return s;
+}
+
+}  // namespace
+
+// The one place that chooses the hard-case generator.
+Sample hardCaseSample(const CheckedMaterial& material) { return fromHardCases(material, hardCases(material)); }
+
+std::string hardCaseSampleDescription() {
+    return "compiler/HardCases.h hardCases(): SPEC 7 grazing/mirror/retro/opposite/below-horizon directions, "
+           "input sweeps (range ends, outside the range, denormal, roughness ladder 1e-5..2, anisotropy 1e4, "
+           "NaN/Inf), and invalid lanes";
+}
+
+}  // namespace facet::bench

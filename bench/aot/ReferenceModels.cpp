@@ -1,0 +1,341 @@
+// ReferenceModels: the three hand-written baseline BRDFs (see ReferenceModels.h).
+//
+// How they are written, and why:
+// - float throughout, one branch-free loop per model over SoA arrays with
+//   __restrict pointers, so that GCC/Clang vectorize the whole lane with
+//   -O3 -march=native. Conditions are combined with `&` and resolved with
+//   selects at the end (a `&&` or a conditional division is control flow
+//   that stops GCC's if-conversion).
+// - Loops are instantiated per input layout (caller array or default), so
+//   a NULL input costs no load and no per-lane test.
+// - std::exp / std::erfc are declared with GCC's `simd` attribute: glibc's
+//   libmvec has vector versions (_ZGVeN16v_expf, ...) but math.h declares
+//   them only under -ffast-math. Declaring them lets the vectorizer call
+//   them without fast-math, so the results keep IEEE arithmetic elsewhere.
+// - Algebra a renderer engineer would use: height-correlated Smith GGX as
+//   the fused visibility term V = G / (4 n.wi n.wo) (one division, two
+//   square roots, no cancellation at grazing angles); isotropic GGX D as
+//   alpha^2 / (pi (sin^2 + alpha^2 cos^2)^2) with sin^2 from components.
+//   These are the SPEC formulas rearranged, not approximations.
+#include "ReferenceModels.h"
+
+#include <cmath>
+#include <algorithm>
+
+#if defined(__GNUC__) && !defined(__clang__)
+extern "C" float expf(float) __attribute__((simd("notinbranch")));
+extern "C" float erfcf(float) __attribute__((simd("notinbranch")));
+#endif
+
+namespace facet::aot {
+namespace {
+
+constexpr float kPi = 3.14159265358979323846f;
+constexpr float kInvPi = 0.318309886183790671538f;
+constexpr float kInvSqrtPi = 0.564189583547756286948f;
+constexpr float kUnitTolerance = 1e-3f;  // SPEC 2
+constexpr float kMinAlpha = 1e-4f;       // SPEC 3: alpha is clamped to >= 1e-4
+
+// ---- the constants shared with bench/models/*.mat (keep them identical) ----
+// (a) ggx_schlick.mat
+constexpr float kGgxSchlickRoughness = 0.4f;
+constexpr float kGgxSchlickF0[3] = {0.955f, 0.638f, 0.538f};
+// (b) beckmann_conductor.mat (gold, Johnson & Christy 1972)
+constexpr float kBeckmannRoughness = 0.3f;
+constexpr float kGoldEta[3] = {0.14f, 0.43f, 1.38f};
+constexpr float kGoldK[3] = {3.697f, 2.455f, 1.914f};
+// (c) aniso_ggx_dielectric.mat (N-BK7 glass)
+constexpr float kAnisoRoughnessX = 0.2f;
+constexpr float kAnisoRoughnessY = 0.5f;
+constexpr float kGlassEta[3] = {1.5145f, 1.5185f, 1.5253f};
+
+// An input slot is either a caller array or the default for every lane;
+// the loops are instantiated for both (template flag), so a default costs no
+// load. Arrays arrive as __restrict parameters of non-inlined loop
+// functions: GCC drops restrict when the callee is inlined into a lambda,
+// and then the run-time alias checks (six inputs and an input slot against
+// three outputs) exceed its versioning limit and the loop stays scalar.
+
+// min/max as compare-and-select: std::fmin/fmax are libm calls under GCC
+// (they must handle NaN), which block vectorization. Here NaN never reaches
+// them from a valid lane.
+inline float maxf(float a, float b) { return a > b ? a : b; }
+inline float minf(float a, float b) { return a < b ? a : b; }
+
+bool finite3(float x, float y, float z) { return std::isfinite(x) & std::isfinite(y) & std::isfinite(z); }
+
+// One lane's geometry after the SPEC 2 checks.
+struct Frame {
+    float ix, iy, iz, ox, oy, oz;  // unit wi, wo
+    float hx, hy, hz;              // unit half vector
+    float ih, oh;                  // wi.h, wo.h
+    bool ok;                       // the directions are valid (else: 0, counted)
+    bool lit;                      // both above the horizon and wi + wo != 0
+};
+
+inline Frame frame(float ix, float iy, float iz, float ox, float oy, float oz) {
+    Frame f;
+    float li = std::sqrt(ix * ix + iy * iy + iz * iz), lo = std::sqrt(ox * ox + oy * oy + oz * oz);
+    f.ok = finite3(ix, iy, iz) & finite3(ox, oy, oz) & (std::fabs(li - 1.0f) <= kUnitTolerance) &
+           (std::fabs(lo - 1.0f) <= kUnitTolerance);
+    float ri = 1.0f / li, ro = 1.0f / lo;
+    f.ix = ix * ri, f.iy = iy * ri, f.iz = iz * ri;
+    f.ox = ox * ro, f.oy = oy * ro, f.oz = oz * ro;
+    float hx = f.ix + f.ox, hy = f.iy + f.oy, hz = f.iz + f.oz;
+    float hl2 = hx * hx + hy * hy + hz * hz;
+    f.lit = (f.iz > 0.0f) & (f.oz > 0.0f) & (hl2 > 0.0f);
+    float rh = 1.0f / std::sqrt(hl2);
+    f.hx = hx * rh, f.hy = hy * rh, f.hz = hz * rh;
+    f.ih = f.ix * f.hx + f.iy * f.hy + f.iz * f.hz;
+    f.oh = f.ox * f.hx + f.oy * f.hy + f.oz * f.hz;
+    return f;
+}
+
+// Roughness input -> alpha: clamp to the declared range [0, 1], square,
+// clamp to the smallest evaluable alpha. `ok` drops non-finite inputs.
+inline float alphaOf(float roughness, bool& ok) {
+    ok = ok & std::isfinite(roughness);
+    float r = minf(maxf(roughness, 0.0f), 1.0f);
+    return maxf(r * r, kMinAlpha);
+}
+
+// Writes one lane: zero unless valid and lit; an output that is not finite
+// or negative makes the lane invalid (SPEC 2). Returns 1 for an invalid lane.
+// The validity is one expression of plain booleans (no select between
+// booleans: GCC 12 cannot vectorize a select whose operands are masks).
+inline int32_t store(const Frame& f, bool inputsOk, float r, float g, float b, float* __restrict outR,
+                     float* __restrict outG, float* __restrict outB, int64_t i) {
+    bool sane = std::isfinite(r) & std::isfinite(g) & std::isfinite(b) & (r >= 0.0f) & (g >= 0.0f) & (b >= 0.0f);
+    bool valid = f.ok & inputsOk & (sane | !f.lit);
+    bool show = valid & f.lit;
+    outR[i] = show ? r : 0.0f;
+    outG[i] = show ? g : 0.0f;
+    outB[i] = show ? b : 0.0f;
+    return valid ? 0 : 1;
+}
+
+// V = G2 / (4 n.wi n.wo) for height-correlated Smith GGX, with
+// p(v) = vx^2 ax^2 + vy^2 ay^2:
+//   1 + Li + Lo = (sqrt(ci^2 + p(wi))/ci + sqrt(co^2 + p(wo))/co) / 2
+//   V = 1 / (2 (co sqrt(ci^2 + p(wi)) + ci sqrt(co^2 + p(wo))))
+inline float ggxVisibility(const Frame& f, float ax2, float ay2) {
+    float pi = f.ix * f.ix * ax2 + f.iy * f.iy * ay2;
+    float po = f.ox * f.ox * ax2 + f.oy * f.oy * ay2;
+    float a = f.oz * std::sqrt(f.iz * f.iz + pi);
+    float b = f.iz * std::sqrt(f.oz * f.oz + po);
+    float v = 0.5f / (a + b);
+    return ((f.ih > 0.0f) & (f.oh > 0.0f)) ? v : 0.0f;
+}
+
+// Beckmann Smith G1 = 1 / (1 + Lambda(a)), a = cot(theta) / alpha:
+// Lambda = (exp(-a^2) / (a sqrt(pi)) - erfc(a)) / 2 (SPEC 3, exact form).
+// Beyond a = 4, Lambda < 5e-10 and 1 + Lambda rounds to 1 in float, so a
+// is clamped to 4 (exact in float; also a = inf at v = n). That keeps
+// libmvec's vector erfcf/expf off their slow paths: they call the scalar
+// function for every lane whose result underflows, and most lanes would
+// (a ~ 1/alpha). The clamp is applied to the denominator: GCC turns
+// f(min(a, 4)) into a < 4 ? f(a) : f(4) (folding f(4)) and then calls the
+// vector f on the unclamped a, which is exactly the slow path.
+inline float beckmannG1(float vx, float vy, float vz, float alpha) {
+    float s = std::sqrt(vx * vx + vy * vy);
+    float a = vz / (alpha * maxf(s, vz * (0.25f / alpha)));  // min(cot / alpha, 4)
+    float lambda = 0.5f * (std::exp(-a * a) * kInvSqrtPi / a - std::erfc(a));
+    return 1.0f / (1.0f + maxf(lambda, 0.0f));
+}
+
+// Exact conductor Fresnel (Born & Wolf): with N = eta + ik, c = cos theta,
+// t0 = eta^2 - k^2 - s^2, a2b2 = |N^2 - s^2| = sqrt(t0^2 + 4 eta^2 k^2),
+// a = Re sqrt(N^2 - s^2). Per-channel constants are folded by the compiler.
+inline float conductorF(float c, float s2, float eta, float k) {
+    float n2 = eta * eta, k2 = k * k;
+    float t0 = n2 - k2 - s2;
+    float a2b2 = std::sqrt(t0 * t0 + 4.0f * n2 * k2);
+    float a = std::sqrt(maxf(0.5f * (a2b2 + t0), 0.0f));
+    float c2 = c * c;
+    float t1 = a2b2 + c2, t2 = 2.0f * c * a;
+    float rs = (t1 - t2) / (t1 + t2);
+    float t3 = c2 * a2b2 + s2 * s2, t4 = t2 * s2;
+    float rp = rs * (t3 - t4) / (t3 + t4);
+    return 0.5f * (rs + rp);
+}
+
+// Exact dielectric Fresnel for eta > 1 (no total internal reflection from
+// outside): g = sqrt(eta^2 - 1 + c^2), and g - c = (eta^2 - 1)/(g + c)
+// without cancellation.
+inline float dielectricF(float c, float eta) {
+    float e2m1 = eta * eta - 1.0f;
+    float g = std::sqrt(maxf(e2m1 + c * c, 0.0f));
+    float gp = g + c, gm = e2m1 / gp;
+    float A = gm / gp;
+    float B = (c * gp - 1.0f) / (c * gm + 1.0f);
+    return 0.5f * A * A * (1.0f + B * B);
+}
+
+// ---- (a) GGX + height-correlated Smith + Schlick rgb ----
+
+template <bool HasRough>
+[[gnu::noinline]] int32_t ggxSchlickLoop(int64_t n, const float* __restrict wx, const float* __restrict wy,
+                       const float* __restrict wz, const float* __restrict vx, const float* __restrict vy,
+                       const float* __restrict vz, float* __restrict outR, float* __restrict outG,
+                       float* __restrict outB, const float* __restrict rough) {
+    int32_t invalid = 0;  // int32: GCC cannot vectorize a 64-bit count next to float lanes
+    for (int64_t i = 0; i < n; ++i) {
+        Frame f = frame(wx[i], wy[i], wz[i], vx[i], vy[i], vz[i]);
+        bool inOk = true;
+        float alpha = alphaOf(HasRough ? rough[i] : kGgxSchlickRoughness, inOk);
+        float a2 = alpha * alpha;
+        // D = a^2 / (pi (sin^2 + a^2 cos^2)^2), sin^2 from the components.
+        float den = f.hx * f.hx + f.hy * f.hy + a2 * f.hz * f.hz;
+        float d = a2 * kInvPi / (den * den);
+        float spec = d * ggxVisibility(f, a2, a2);
+        float q = 1.0f - minf(maxf(f.ih, 0.0f), 1.0f);
+        float q2 = q * q, q5 = q2 * q2 * q;
+        float fr = kGgxSchlickF0[0] + (1.0f - kGgxSchlickF0[0]) * q5;
+        float fg = kGgxSchlickF0[1] + (1.0f - kGgxSchlickF0[1]) * q5;
+        float fb = kGgxSchlickF0[2] + (1.0f - kGgxSchlickF0[2]) * q5;
+        invalid += store(f, inOk, fr * spec, fg * spec, fb * spec, outR, outG, outB, i);
+    }
+    return invalid;
+}
+
+// ---- (b) Beckmann + separable Smith + conductor ----
+
+template <bool HasRough>
+[[gnu::noinline]] int32_t beckmannConductorLoop(int64_t n, const float* __restrict wx, const float* __restrict wy,
+                              const float* __restrict wz, const float* __restrict vx, const float* __restrict vy,
+                              const float* __restrict vz, float* __restrict outR, float* __restrict outG,
+                              float* __restrict outB, const float* __restrict rough) {
+    int32_t invalid = 0;  // int32: GCC cannot vectorize a 64-bit count next to float lanes
+    for (int64_t i = 0; i < n; ++i) {
+        Frame f = frame(wx[i], wy[i], wz[i], vx[i], vy[i], vz[i]);
+        bool inOk = true;
+        float alpha = alphaOf(HasRough ? rough[i] : kBeckmannRoughness, inOk);
+        float a2 = alpha * alpha;
+        // D = exp(-e) / (pi a^2 cos^4), e = tan^2 / a^2. Past e = 87 exp(-e) leaves float's normal range
+        // (and libmvec's fast path, see beckmannG1); D is then 0 to float
+        // precision (< 2e-38 / (pi a^2 cos^4)): e is clamped to 87 through
+        // its denominator and the zero goes into the scale factor (exp(x) * 0
+        // cannot be folded, so the clamp stays).
+        float z2 = f.hz * f.hz, sin2h = f.hx * f.hx + f.hy * f.hy, den = a2 * z2;
+        bool tail = sin2h * (1.0f / 87.0f) > den;
+        float e = sin2h / maxf(den, sin2h * (1.0f / 87.0f));
+        float scale = tail ? 0.0f : kInvPi / (den * z2);
+        float d = std::exp(-e) * scale;
+        float g = beckmannG1(f.ix, f.iy, f.iz, alpha) * beckmannG1(f.ox, f.oy, f.oz, alpha);
+        g = ((f.ih > 0.0f) & (f.oh > 0.0f)) ? g : 0.0f;
+        float spec = d * g / (4.0f * f.iz * f.oz);
+        float c = minf(maxf(f.ih, 0.0f), 1.0f);
+        float s2 = (1.0f - c) * (1.0f + c);
+        float fr = conductorF(c, s2, kGoldEta[0], kGoldK[0]);
+        float fg = conductorF(c, s2, kGoldEta[1], kGoldK[1]);
+        float fb = conductorF(c, s2, kGoldEta[2], kGoldK[2]);
+        invalid += store(f, inOk, fr * spec, fg * spec, fb * spec, outR, outG, outB, i);
+    }
+    return invalid;
+}
+
+// ---- (c) anisotropic GGX + height-correlated Smith + dielectric ----
+
+template <bool HasRoughX, bool HasRoughY>
+[[gnu::noinline]] int32_t anisoGgxDielectricLoop(int64_t n, const float* __restrict wx, const float* __restrict wy,
+                               const float* __restrict wz, const float* __restrict vx, const float* __restrict vy,
+                               const float* __restrict vz, float* __restrict outR, float* __restrict outG,
+                               float* __restrict outB, const float* __restrict roughX,
+                               const float* __restrict roughY) {
+    int32_t invalid = 0;  // int32: GCC cannot vectorize a 64-bit count next to float lanes
+    for (int64_t i = 0; i < n; ++i) {
+        Frame f = frame(wx[i], wy[i], wz[i], vx[i], vy[i], vz[i]);
+        bool inOk = true;
+        float ax = alphaOf(HasRoughX ? roughX[i] : kAnisoRoughnessX, inOk);
+        float ay = alphaOf(HasRoughY ? roughY[i] : kAnisoRoughnessY, inOk);
+        // D = 1 / (pi ax ay t^2), t = hx^2/ax^2 + hy^2/ay^2 + hz^2. With
+        // T = t ax^2 ay^2 (no division): D = (ax ay)^3 / (pi T^2), one
+        // division per lane instead of three. T >= 1e-16 hz^2: no underflow.
+        float ax2 = ax * ax, ay2 = ay * ay, axy = ax * ay;
+        float t = f.hx * f.hx * ay2 + f.hy * f.hy * ax2 + f.hz * f.hz * (ax2 * ay2);
+        float d = axy * axy * axy * kInvPi / (t * t);
+        float spec = d * ggxVisibility(f, ax2, ay2);
+        float c = minf(maxf(f.ih, 0.0f), 1.0f);
+        float fr = dielectricF(c, kGlassEta[0]);
+        float fg = dielectricF(c, kGlassEta[1]);
+        float fb = dielectricF(c, kGlassEta[2]);
+        invalid += store(f, inOk, fr * spec, fg * spec, fb * spec, outR, outG, outB, i);
+    }
+    return invalid;
+}
+
+// The loops count invalid lanes in 32 bits; batches are split in chunks
+// small enough for that count.
+constexpr int64_t kChunk = int64_t(1) << 30;
+
+// One chunk: directions, outputs and the input slots (null: default).
+struct Chunk {
+    int64_t n;
+    const float *ix, *iy, *iz, *ox, *oy, *oz;
+    float *r, *g, *b;
+    const float* in[2];
+};
+
+template <typename Loop>
+int64_t chunked(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                float* const rgb[3], int slots, Loop&& loop) {
+    int64_t invalid = 0;
+    for (int64_t start = 0; start < n; start += kChunk) {
+        Chunk c{std::min(kChunk, n - start), wi[0] + start, wi[1] + start, wi[2] + start, wo[0] + start,
+                wo[1] + start, wo[2] + start, rgb[0] + start, rgb[1] + start, rgb[2] + start, {nullptr, nullptr}};
+        for (int s = 0; s < slots; ++s) c.in[s] = inputs && inputs[s] ? inputs[s] + start : nullptr;
+        invalid += loop(c);
+    }
+    return invalid;
+}
+
+}  // namespace
+
+int64_t ggxSchlick(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                   float* const rgb[3]) {
+    return chunked(n, wi, wo, inputs, rgb, 1, [](const Chunk& c) {
+        return c.in[0] ? ggxSchlickLoop<true>(c.n, c.ix, c.iy, c.iz, c.ox, c.oy, c.oz, c.r, c.g, c.b, c.in[0])
+                       : ggxSchlickLoop<false>(c.n, c.ix, c.iy, c.iz, c.ox, c.oy, c.oz, c.r, c.g, c.b, nullptr);
+    });
+}
+
+int64_t beckmannConductor(int64_t n, const float* const wi[3], const float* const wo[3],
+                          const float* const* inputs, float* const rgb[3]) {
+    return chunked(n, wi, wo, inputs, rgb, 1, [](const Chunk& c) {
+        return c.in[0]
+                   ? beckmannConductorLoop<true>(c.n, c.ix, c.iy, c.iz, c.ox, c.oy, c.oz, c.r, c.g, c.b, c.in[0])
+                   : beckmannConductorLoop<false>(c.n, c.ix, c.iy, c.iz, c.ox, c.oy, c.oz, c.r, c.g, c.b, nullptr);
+    });
+}
+
+int64_t anisoGgxDielectric(int64_t n, const float* const wi[3], const float* const wo[3],
+                           const float* const* inputs, float* const rgb[3]) {
+    return chunked(n, wi, wo, inputs, rgb, 2, [](const Chunk& c) {
+        const float *x = c.in[0], *y = c.in[1];
+        if (x && y) return anisoGgxDielectricLoop<true, true>(c.n, c.ix, c.iy, c.iz, c.ox, c.oy, c.oz, c.r, c.g, c.b, x, y);
+        if (x) return anisoGgxDielectricLoop<true, false>(c.n, c.ix, c.iy, c.iz, c.ox, c.oy, c.oz, c.r, c.g, c.b, x, y);
+        if (y) return anisoGgxDielectricLoop<false, true>(c.n, c.ix, c.iy, c.iz, c.ox, c.oy, c.oz, c.r, c.g, c.b, x, y);
+        return anisoGgxDielectricLoop<false, false>(c.n, c.ix, c.iy, c.iz, c.ox, c.oy, c.oz, c.r, c.g, c.b, x, y);
+    });
+}
+
+const std::vector<ReferenceModel>& referenceModels() {
+    static const std::vector<ReferenceModel> models = {
+        {"ggx_schlick", "ggx_schlick.mat", "GGX + Smith height-correlated + Schlick (rgb f0)", {"roughness"},
+         &ggxSchlick},
+        {"beckmann_conductor", "beckmann_conductor.mat", "Beckmann + Smith separable + conductor (gold)",
+         {"roughness"}, &beckmannConductor},
+        {"aniso_ggx_dielectric", "aniso_ggx_dielectric.mat",
+         "anisotropic GGX + Smith height-correlated + dielectric (N-BK7)", {"roughness_x", "roughness_y"},
+         &anisoGgxDielectric},
+    };
+    return models;
+}
+
+const ReferenceModel* findReferenceModel(std::string_view name) {
+    for (const ReferenceModel& m : referenceModels())
+        if (name == m.name) return &m;
+    return nullptr;
+}
+
+}  // namespace facet::aot

@@ -1,0 +1,608 @@
+// KullaConty: the E tables by quadrature, lookups, and the Fresnel averages.
+#include "KullaConty.h"
+
+#include "ExprEval.h"
+#include "Interpreter.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fmt/format.h>
+#include <thread>
+
+namespace facet {
+
+namespace {
+
+constexpr double kPi = 3.141592653589793238462643383279502884;
+
+// ---- quadrature helpers --------------------------------------------------
+
+// n-point Gauss-Legendre rule on [-1, 1] (Newton on P_n), cached per n.
+struct GaussRule {
+    std::vector<double> x, w;
+};
+const GaussRule& gaussRule(int n) {
+    static std::mutex mutex;
+    static std::vector<std::unique_ptr<GaussRule>> rules(65);
+    internal_assert(n >= 1 && n <= 64) << "Gauss-Legendre order " << n;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!rules[n]) {
+        auto r = std::make_unique<GaussRule>();
+        r->x.resize(n);
+        r->w.resize(n);
+        for (int i = 0; i < n; ++i) {
+            double z = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 1;
+            for (int it = 0; it < 100; ++it) {
+                double p0 = 1, p1 = z;
+                for (int k = 2; k <= n; ++k) {
+                    double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
+                    p0 = p1;
+                    p1 = p2;
+                }
+                double pn = n == 1 ? z : p1, pm = n == 1 ? 1 : p0;
+                dp = n * (z * pn - pm) / (z * z - 1);
+                double dz = pn / dp;
+                z -= dz;
+                if (std::abs(dz) < 1e-16) break;
+            }
+            r->x[i] = z;
+            r->w[i] = 2 / ((1 - z * z) * dp * dp);
+        }
+        rules[n] = std::move(r);
+    }
+    return *rules[n];
+}
+
+// Sum over consecutive break points of n-point Gauss-Legendre panels.
+template <typename F>
+double integrateBreaks(const F& f, const std::vector<double>& br, const GaussRule& g) {
+    double sum = 0;
+    for (size_t p = 0; p + 1 < br.size(); ++p) {
+        double a = br[p], b = br[p + 1];
+        if (!(b > a)) continue;
+        double mid = (a + b) / 2, half = (b - a) / 2, s = 0;
+        for (size_t i = 0; i < g.x.size(); ++i) s += g.w[i] * f(mid + half * g.x[i]);
+        sum += s * half;
+    }
+    return sum;
+}
+
+// Break points on [a, b]: panels graded geometrically (factor 2) away from
+// each special point, starting at width h0, none wider than maxWidth.
+struct Special {
+    double at, h0;
+};
+std::vector<double> gradedBreaks(double a, double b, const std::vector<Special>& specials, double maxWidth) {
+    std::vector<double> br = {a, b};
+    for (const Special& s : specials) {
+        if (s.at < a || s.at > b) continue;
+        br.push_back(s.at);
+        for (double d = s.h0; d < b - a; d *= 2) {
+            if (s.at - d > a) br.push_back(s.at - d);
+            if (s.at + d < b) br.push_back(s.at + d);
+        }
+    }
+    std::sort(br.begin(), br.end());
+    std::vector<double> out;
+    for (double x : br)
+        if (out.empty() || x - out.back() > 1e-14) out.push_back(x);
+    std::vector<double> fine;
+    for (size_t i = 0; i + 1 < out.size(); ++i) {
+        int n = std::max(1, int(std::ceil((out[i + 1] - out[i]) / maxWidth)));
+        for (int k = 0; k < n; ++k) fine.push_back(out[i] + (out[i + 1] - out[i]) * k / n);
+    }
+    fine.push_back(out.back());
+    return fine;
+}
+
+// The specular lobe of a table key at one alpha, F = 1, as a reference material.
+ResolvedMaterial<double> lobeMaterial(const EnergyTableKey& key, double alpha) {
+    ResolvedMaterial<double> r;
+    r.ndf = key.ndf;
+    r.masking = key.masking;
+    r.fresnel = FresnelModel::None;
+    r.diffuse = DiffuseModel::None;
+    alpha = std::max(alpha, kMinAlpha);
+    switch (key.ndf) {
+        case NdfModel::BlinnPhong: r.exponent = std::min(2 / (alpha * alpha) - 2, kMaxPhongExponent); break;
+        case NdfModel::Gaussian:
+            r.alphaX = r.alphaY = alpha;
+            r.gaussianNorm = gaussianNdfNorm(alpha);
+            break;
+        default: r.alphaX = r.alphaY = alpha; break;
+    }
+    r.gamma = key.gamma;
+    r.schlickK = key.schlickK;
+    return r;
+}
+
+// E(mu) = Int f(wi, wo) (n.wi) dwi with F = 1, integrated over the half
+// vector h (dwi = 4 (wo.h) dwh), so the lobe is always centred on h = n:
+//   E = Int D(h) G(wi, wo, h) (wo.h) / (n.wo) dwh   over {h : wi.z > 0}.
+// theta_h runs on Gauss-Legendre panels graded toward 0 (the peak, width
+// ~alpha) and toward the two square-root kinks of the azimuthal integral:
+// the full circle of h qualifies up to theta_h = (pi/2 - theta_o)/2 and none
+// beyond (pi/2 + theta_o)/2. At each theta_h the azimuth covers exactly
+// {phi : cos(phi) > -cos(theta_o) cos(2 theta_h) / (sin(theta_o) sin(2 theta_h))}
+// (the lobe is isotropic, so the half range [0, phi_max] is integrated twice),
+// on panels halving toward the cut. Maskings with a min/max (cook_torrance,
+// neumann, the direction-correlated Smith forms) have kinks where wo.h takes
+// known values; they are azimuth break points, and the theta_h where such a
+// kink enters or leaves the azimuth range are graded theta_h break points.
+// The direction-correlated forms also vary quickly where wi passes the
+// normal (theta_h = theta_o / 2, phi = 0): graded there too.
+double albedoOf(const ResolvedMaterial<double>& m, double alpha, double mu, const EnergyQuadrature& q) {
+    mu = std::clamp(mu, q.muZero, 1.0);
+    double so = std::sqrt(std::max(0.0, (1 - mu) * (1 + mu)));
+    double thetaO = std::atan2(so, mu);
+    const double wox = so, woz = mu;
+    double thetaFull = (kPi / 2 - thetaO) / 2, thetaEnd = (kPi / 2 + thetaO) / 2;
+    const bool cookTorrance = m.masking == MaskingModel::CookTorrance;
+    const bool azimuthal = m.masking == MaskingModel::SmithDirectionCorrelated ||
+                           m.masking == MaskingModel::SmithHeightDirectionCorrelated;
+    const bool kinkMasking = cookTorrance || azimuthal || m.masking == MaskingModel::Neumann;
+    // Kelemen's G (n.wi)(n.wo)/(wo.h)^2 makes the integrand D (n.wi)/(wo.h), which rises from 0
+    // at the cut within a layer of width ~mu in wo.h: more azimuth panels toward the cut.
+    const int kelemenExtra =
+        m.masking == MaskingModel::Kelemen && mu < 0.25 ? std::min(24, int(std::ceil(std::log2(0.25 / mu)))) : 0;
+
+    // cos(phi) of the cut at theta_h (phi_max = acos), clamped to [-1, 1].
+    auto cutCos = [&](double th) {
+        double num = -mu * std::cos(2 * th), den = so * std::sin(2 * th);
+        if (den <= 0) return num < 0 ? -1.0 : 1.0;
+        return std::clamp(num / den, -1.0, 1.0);
+    };
+    // The values of wo.h at the masking's kinks, at theta_h (NaN: none).
+    auto kinkValues = [&](double ct, double out[3]) {
+        out[0] = mu / ct;  // n.wi = n.wo: the max / min of the two directions switch
+        out[1] = cookTorrance ? 2 * ct * mu : NAN;  // 2 (n.h)(n.wo)/(wo.h) = 1
+        double d = 2 * ct - 1 / (2 * ct);
+        out[2] = cookTorrance && d > 0 ? mu / d : NAN;  // 2 (n.h)(n.wi)/(wo.h) = 1
+    };
+
+    // The peak's angular width: alpha is the slope scale for ggx, beckmann
+    // and gtr, an angle for gaussian; blinn_phong uses its Beckmann alpha.
+    double scale = std::atan(alpha);
+    std::vector<Special> specials = {{0, scale / 8}, {thetaFull, q.kinkPanel}, {thetaEnd, q.kinkPanel}};
+    if (azimuthal) specials.push_back({thetaO / 2, q.kinkPanel});
+    if (kinkMasking) {
+        // theta_h where a kink's cos(phi) = (oh* - mu ct)/(so st) crosses 1 or the cut.
+        const int n = 256;
+        double prev[6];
+        for (int i = 0; i <= n; ++i) {
+            double th = thetaEnd * (i + 0.5) / (n + 1);
+            double st = std::sin(th), ct = std::cos(th), v[3], g[6];
+            kinkValues(ct, v);
+            for (int k = 0; k < 3; ++k) {
+                double c = (v[k] - mu * ct) / (so * st);
+                g[2 * k] = c - 1;
+                g[2 * k + 1] = c - cutCos(th);
+            }
+            if (so == 0) {
+                // Normal incidence: wo.h = ct on the whole ring, so a kink is a theta_h.
+                for (int k = 0; k < 3; ++k) g[2 * k] = v[k] - ct, g[2 * k + 1] = NAN;
+            }
+            if (i > 0)
+                for (int k = 0; k < 6; ++k) {
+                    if (!(prev[k] * g[k] < 0)) continue;
+                    // bisect g_k between the two samples
+                    double a = thetaEnd * (i - 0.5) / (n + 1), b = th, ga = prev[k];
+                    for (int it = 0; it < 60; ++it) {
+                        double mid = (a + b) / 2;
+                        double sm = std::sin(mid), cm = std::cos(mid), vm[3];
+                        kinkValues(cm, vm);
+                        double c = (vm[k / 2] - mu * cm) / (so * sm);
+                        double gm = so == 0 ? vm[k / 2] - cm : (k % 2 ? c - cutCos(mid) : c - 1);
+                        if ((gm < 0) == (ga < 0)) {
+                            a = mid;
+                            ga = gm;
+                        } else {
+                            b = mid;
+                        }
+                    }
+                    specials.push_back({(a + b) / 2, q.kinkPanel});
+                }
+            std::copy(g, g + 6, prev);
+        }
+    }
+    std::vector<double> br = gradedBreaks(0, thetaEnd, specials, q.thetaMaxPanel);
+    const GaussRule& gt = gaussRule(q.thetaPoints);
+    const GaussRule& gp = gaussRule(q.phiPoints);
+    auto inner = [&](double th) {
+        double st = std::sin(th), ct = std::cos(th);
+        double phiMax = std::acos(cutCos(th));
+        if (phiMax <= 0) return 0.0;
+        // f (n.wi) dwi = D G / (4 (n.wi)(n.wo)) (n.wi) 4 (wo.h) dwh = D G (wo.h) / (n.wo) dwh,
+        // with the reference D and G (F = 1); D(h) is constant along the ring.
+        const Vec3<double> wo{wox, 0, woz};
+        const double d = m.D({st, 0, ct});
+        if (d == 0) return 0.0;
+        auto g = [&](double phi) {
+            Vec3<double> h{st * std::cos(phi), st * std::sin(phi), ct};
+            double oh = wox * h.x + woz * h.z;
+            Vec3<double> wi{2 * oh * h.x - wox, 2 * oh * h.y, 2 * oh * h.z - woz};  // unit
+            if (wi.z <= 0 || oh <= 0) return 0.0;  // round-off at the cut
+            return m.G(wi, wo, h) * oh;
+        };
+        // Panels halving toward the cut phi_max, where the masking of wi
+        // falls to 0 within a boundary layer of width ~alpha.
+        std::vector<double> pb = {0};
+        double rest = phiMax;
+        for (int k = 1; k < q.phiPanels + kelemenExtra; ++k) {
+            rest /= 2;
+            pb.push_back(phiMax - rest);
+        }
+        pb.push_back(phiMax);
+        if (kinkMasking && so * st > 0) {
+            double v[3];
+            kinkValues(ct, v);
+            for (double oh : v) {
+                double c = (oh - mu * ct) / (so * st);
+                if (c > -1 && c < 1) {
+                    double phi = std::acos(c);
+                    if (phi > 0 && phi < phiMax) pb.push_back(phi);
+                }
+            }
+            if (azimuthal)  // toward phi = 0: wi passes near the normal, lambda(phi) is steep
+                for (double f = phiMax / 4; f > phiMax * 1e-2; f /= 4) pb.push_back(f);
+            std::sort(pb.begin(), pb.end());
+        }
+        return 2 * d / mu * integrateBreaks(g, pb, gp) * st;
+    };
+    return integrateBreaks(inner, br, gt);
+}
+
+// Does the expression depend on an input (directly or through lets)? Returns
+// the first input found.
+const CheckedInput* inputUsed(const Expr& e, const CheckedMaterial& m, int depth = 0) {
+    struct Finder : ExprVisitor {
+        const CheckedMaterial& m;
+        int depth;
+        const CheckedInput* found = nullptr;
+        Finder(const CheckedMaterial& mat, int d) : m(mat), depth(d) {}
+        void visitName(const NameExpr& n) override {
+            if (found) return;
+            if (n.binding == BindingKind::Input && n.index >= 0 && n.index < int(m.inputs.size()))
+                found = &m.inputs[n.index];
+            else if (n.binding == BindingKind::Let && n.index >= 0 && n.index < int(m.lets.size()) && depth < 1000)
+                found = inputUsed(*m.lets[n.index].value, m, depth + 1);
+        }
+    } f(m, depth);
+    f.visit(e);
+    return f.found;
+}
+
+// Value of an input-free expression (channel 0).
+double constantOf(const Expr& e, const CheckedMaterial& m) {
+    std::function<Value<double>(const NameExpr&)> lookup = [&](const NameExpr& n) -> Value<double> {
+        internal_assert(n.binding == BindingKind::Let) << "input in a constant expression: " << n.name;
+        return evaluateExpr<double>(*m.lets.at(n.index).value, lookup);
+    };
+    return evaluateExpr<double>(e, lookup).c[0];
+}
+
+std::string shortNumber(double x) { return fmt::format("{}", x); }
+
+}  // namespace
+
+// ---- key ------------------------------------------------------------------
+
+std::string EnergyTableKey::name() const {
+    std::string s = modelInfo(ModelSlot::Ndf, int(ndf)).name;
+    if (ndf == NdfModel::Gtr) s += "_g" + shortNumber(gamma);
+    s += "_";
+    s += modelInfo(ModelSlot::Masking, int(masking)).name;
+    if (masking == MaskingModel::SchlickSmith) s += "_k" + shortNumber(schlickK);
+    return s;
+}
+
+bool EnergyTableKey::operator<(const EnergyTableKey& o) const {
+    if (ndf != o.ndf) return ndf < o.ndf;
+    if (masking != o.masking) return masking < o.masking;
+    if (gamma != o.gamma) return gamma < o.gamma;
+    return schlickK < o.schlickK;
+}
+
+std::optional<EnergyUnsupported> kullaContyUnsupported(const CheckedMaterial& m) {
+    if (!m.ndf.model || !m.masking.model) return std::nullopt;
+    NdfModel ndf = m.ndfModel();
+    if (ndf == NdfModel::Ward)
+        return EnergyUnsupported{m.energy.loc,
+                                 "energy 'kulla_conty' needs a microfacet NDF with a masking term; ndf 'ward' is a "
+                                 "whole BRDF lobe with its own normalization and no roughness-only albedo table; use "
+                                 "'energy = none', or a microfacet NDF such as ggx or beckmann"};
+    auto needConstant = [&](const ModelUse& use, int p, const char* what, const char* model,
+                            const char* why) -> std::optional<EnergyUnsupported> {
+        if (!use.has(p)) return std::nullopt;
+        const Expr& e = *use.args[p];
+        if (const CheckedInput* in = inputUsed(e, m))
+            return EnergyUnsupported{e.loc, fmt::format("energy 'kulla_conty' with {} needs a constant {} ({}); "
+                                                        "this one depends on input '{}'",
+                                                        model, what, why, in->name)};
+        double v = constantOf(e, m);
+        if (!std::isfinite(v))
+            return EnergyUnsupported{e.loc, fmt::format("energy 'kulla_conty' with {} needs a finite {}, got {}",
+                                                        model, what, v)};
+        return std::nullopt;
+    };
+    if (ndf == NdfModel::Gtr)
+        if (auto u = needConstant(m.ndf, param::GtrGamma, "gamma", "ndf 'gtr'",
+                                  "its albedo table is built for one gamma"))
+            return u;
+    if (m.maskingModel() == MaskingModel::SchlickSmith)
+        if (auto u = needConstant(m.masking, param::SchlickK, "k", "masking 'schlick_smith'",
+                                  "its albedo table is built for one k"))
+            return u;
+    return std::nullopt;
+}
+
+EnergyTableKey energyTableKey(const CheckedMaterial& m) {
+    EnergyTableKey key;
+    key.ndf = m.ndfModel();
+    key.masking = m.maskingModel();
+    internal_assert(key.ndf != NdfModel::Ward) << "kulla_conty table requested for ndf ward";
+    if (key.ndf == NdfModel::Gtr) {
+        internal_assert(!inputUsed(*m.ndf.args[param::GtrGamma], m)) << "kulla_conty: gtr gamma is not constant";
+        key.gamma = std::max(0.0, constantOf(*m.ndf.args[param::GtrGamma], m));  // resolve() clamps to >= 0
+    }
+    if (key.masking == MaskingModel::SchlickSmith) {
+        internal_assert(!inputUsed(*m.masking.args[param::SchlickK], m)) << "kulla_conty: schlick_smith k is not constant";
+        key.schlickK = std::clamp(constantOf(*m.masking.args[param::SchlickK], m), 0.0, 1.0);
+    }
+    return key;
+}
+
+std::string EnergyQuadrature::describe() const {
+    return fmt::format("half-vector Gauss-Legendre: theta_h {} points per panel, panels graded from atan(alpha)/8 "
+                       "at 0 and {} at the azimuth-cut kinks, max width {}; azimuth {} panels halving toward the "
+                       "cut x {} points; mu = 0 node at mu = {}",
+                       thetaPoints, kinkPanel, thetaMaxPanel, phiPanels, phiPoints, muZero);
+}
+
+// ---- table ----------------------------------------------------------------
+
+double EnergyTable::muNode(int j) const {
+    double x = double(j) / (muCount - 1);
+    return x * x;
+}
+
+double EnergyTable::alphaScale() const { return (alphaCount - 1) / (std::sqrt(alphaMax) - std::sqrt(alphaMin)); }
+double EnergyTable::alphaOffset() const { return -std::sqrt(alphaMin) * alphaScale(); }
+
+double EnergyTable::alphaNode(int i) const {
+    if (i == 0) return alphaMin;
+    if (i == alphaCount - 1) return alphaMax;
+    double r = std::sqrt(alphaMin) + (std::sqrt(alphaMax) - std::sqrt(alphaMin)) * i / (alphaCount - 1);
+    return r * r;
+}
+
+double EnergyTable::muCoord(double mu) const {
+    if (!(mu > 0)) return 0;
+    if (mu >= 1) return muCount - 1;
+    return std::sqrt(mu) * (muCount - 1);
+}
+
+double EnergyTable::alphaCoord(double alpha) const {
+    if (!(alpha > alphaMin)) return 0;
+    if (alpha >= alphaMax) return alphaCount - 1;
+    return std::clamp(std::sqrt(alpha) * alphaScale() + alphaOffset(), 0.0, double(alphaCount - 1));
+}
+
+double EnergyTable::ecAt(double mu, double alpha) const {
+    double u = muCoord(mu), v = alphaCoord(alpha);
+    int j = std::min(int(u), muCount - 2), i = std::min(int(v), alphaCount - 2);
+    double s = u - j, t = v - i;
+    const float* r0 = &ec[size_t(i) * muCount + j];
+    const float* r1 = r0 + muCount;
+    double a = r0[0] + (double(r0[1]) - r0[0]) * s;
+    double b = r1[0] + (double(r1[1]) - r1[0]) * s;
+    return a + (b - a) * t;
+}
+
+double EnergyTable::ecAvgAt(double alpha) const {
+    double v = alphaCoord(alpha);
+    int i = std::min(int(v), alphaCount - 2);
+    double t = v - i;
+    return ecAvg[i] + (double(ecAvg[i + 1]) - ecAvg[i]) * t;
+}
+
+std::vector<float> EnergyTable::rowAt(double alpha) const {
+    double v = alphaCoord(alpha);
+    int i = std::min(int(v), alphaCount - 2);
+    double t = v - i;
+    std::vector<float> row(muCount);
+    const float* r0 = &ec[size_t(i) * muCount];
+    const float* r1 = r0 + muCount;
+    for (int j = 0; j < muCount; ++j) row[j] = float(r0[j] + (double(r1[j]) - r0[j]) * t);
+    return row;
+}
+
+void EnergyTable::computeAverages() {
+    // Within cell j of a row, u = j + t and mu = (u/M)^2 (M = muCount - 1), so
+    // 2 Int Ec mu dmu = (4/M^4) Sum_j Int_0^1 Ec(t) (j + t)^3 dt, a degree-4
+    // polynomial per cell: the 3-point Gauss-Legendre rule is exact.
+    const GaussRule& g = gaussRule(3);
+    double M = muCount - 1;
+    ecAvg.assign(alphaCount, 0);
+    for (int i = 0; i < alphaCount; ++i) {
+        const float* row = &ec[size_t(i) * muCount];
+        double sum = 0;
+        for (int j = 0; j + 1 < muCount; ++j)
+            for (int p = 0; p < 3; ++p) {
+                double t = (g.x[p] + 1) / 2, w = g.w[p] / 2;
+                double e = row[j] + (double(row[j + 1]) - row[j]) * t;
+                sum += w * e * std::pow(j + t, 3);
+            }
+        ecAvg[i] = float(4 * sum / (M * M * M * M));
+    }
+}
+
+std::string EnergyTable::validate() const {
+    if (muCount < 2 || alphaCount < 2) return fmt::format("bad grid {} x {}", muCount, alphaCount);
+    if (ec.size() != size_t(muCount) * alphaCount) return fmt::format("ec has {} values, expected {}", ec.size(), size_t(muCount) * alphaCount);
+    if (ecAvg.size() != size_t(alphaCount)) return fmt::format("ecAvg has {} values, expected {}", ecAvg.size(), alphaCount);
+    if (!(alphaMin > 0 && alphaMax > alphaMin)) return "bad alpha range";
+    for (float x : ec)
+        if (!(x >= 0 && x <= 1)) return fmt::format("ec value {} is not in [0, 1]", x);
+    for (float x : ecAvg)
+        if (!(x >= 0 && x <= 1)) return fmt::format("ecAvg value {} is not in [0, 1]", x);
+    return "";
+}
+
+double directionalAlbedo(const EnergyTableKey& key, double mu, double alpha, const EnergyQuadrature& q) {
+    ResolvedMaterial<double> m = lobeMaterial(key, alpha);
+    return albedoOf(m, std::max(alpha, kMinAlpha), mu, q);
+}
+
+std::shared_ptr<EnergyTable> buildEnergyTable(const EnergyTableKey& key, const EnergyQuadrature& q, int threads,
+                                              int muCount, int alphaCount, double alphaMax) {
+    auto start = std::chrono::steady_clock::now();
+    auto t = std::make_shared<EnergyTable>();
+    t->key = key;
+    t->muCount = muCount;
+    t->alphaCount = alphaCount;
+    t->alphaMax = alphaMax;
+    t->quadrature = q;
+    t->ec.assign(size_t(t->muCount) * t->alphaCount, 0);
+    int nt = threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency()));
+    nt = std::min(nt, t->alphaCount);
+    auto work = [&](int first) {
+        for (int i = first; i < t->alphaCount; i += nt) {
+            double alpha = t->alphaNode(i);
+            ResolvedMaterial<double> m = lobeMaterial(key, alpha);
+            for (int j = 0; j < t->muCount; ++j) {
+                double e = albedoOf(m, alpha, t->muNode(j), q);
+                // Clamp: where the lobe creates energy (E > 1) nothing is added.
+                double c = std::clamp(1 - e, 0.0, 1.0);
+                if (!std::isfinite(e)) c = 0;
+                t->ec[size_t(i) * t->muCount + j] = float(c);
+            }
+        }
+    };
+    if (nt == 1) {
+        work(0);
+    } else {
+        std::vector<std::thread> pool;
+        for (int k = 0; k < nt; ++k) pool.emplace_back(work, k);
+        for (auto& th : pool) th.join();
+    }
+    t->computeAverages();
+    t->buildMillis = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    t->origin = "built";
+    return t;
+}
+
+// ---- Fresnel averages -------------------------------------------------------
+
+namespace {
+
+// 2 Int_0^1 F(mu) mu dmu for the reference Fresnel of `r` (channel 0), with
+// panels graded toward grazing incidence (features of width ~1/|N|) and
+// toward the critical angle of total internal reflection (a square-root kink).
+double fresnelAverageOf(const ResolvedMaterial<double>& r) {
+    double n = r.eta[0], k = r.k[0];
+    double mag = std::sqrt(n * n + k * k);
+    std::vector<Special> sp = {{0, std::min(1.0, 1 / std::max(mag, 1e-12)) / 64}};
+    if (n < 1) sp.push_back({std::sqrt((1 - n) * (1 + n)), 1e-6});
+    std::vector<double> br = gradedBreaks(0, 1, sp, 1.0 / 16);
+    return 2 * integrateBreaks([&](double mu) { return r.F(mu, 0) * mu; }, br, gaussRule(12));
+}
+
+}  // namespace
+
+double fresnelAverageDielectric(double eta) {
+    ResolvedMaterial<double> r;
+    r.fresnel = FresnelModel::Dielectric;
+    r.eta = {std::max(eta, kMinEta), 0, 0};
+    if (std::isinf(eta)) return 1;
+    return fresnelAverageOf(r);
+}
+
+double fresnelAverageConductor(double eta, double k) {
+    if (std::isinf(eta) || std::isinf(k)) return 1;
+    ResolvedMaterial<double> r;
+    r.fresnel = FresnelModel::Conductor;
+    r.eta = {std::max(eta, kMinEta), 0, 0};
+    r.k = {std::max(k, 0.0), 0, 0};
+    return fresnelAverageOf(r);
+}
+
+double conductorSchlickAverage(double eta, double k) {
+    if (std::isinf(eta) || std::isinf(k)) return 1;
+    double f0 = ((eta - 1) * (eta - 1) + k * k) / ((eta + 1) * (eta + 1) + k * k);
+    return fresnelAverageSchlick(f0);
+}
+
+double FresnelAverageTables::dielectricAt(double eta) const {
+    if (!(eta > 0)) eta = kMinEta;
+    auto lookup = [&](double e) {  // e >= 1
+        double s = std::isinf(e) ? 1 : (e - 1) / (e + 1);
+        double u = std::clamp(s, 0.0, 1.0) * (kDielectricCount - 1);
+        int i = std::min(int(u), kDielectricCount - 2);
+        double t = u - i;
+        return dielectric[i] + (double(dielectric[i + 1]) - dielectric[i]) * t;
+    };
+    if (eta >= 1) return lookup(eta);
+    return 1 - eta * eta * (1 - lookup(1 / eta));
+}
+
+double FresnelAverageTables::conductorAt(double eta, double k) const {
+    eta = std::max(eta, kMinEta);
+    k = std::max(k, 0.0);
+    auto coord = [](double x) {
+        double a = std::isinf(x) ? 1 : x / (x + 1);
+        return std::clamp(a, 0.0, 1.0) * (kConductorCount - 1);
+    };
+    double u = coord(eta), v = coord(std::sqrt(k));
+    int i = std::min(int(u), kConductorCount - 2), j = std::min(int(v), kConductorCount - 2);
+    double s = u - i, t = v - j;
+    const float* r0 = &conductor[size_t(j) * kConductorCount + i];
+    const float* r1 = r0 + kConductorCount;
+    double a = r0[0] + (double(r0[1]) - r0[0]) * s;
+    double b = r1[0] + (double(r1[1]) - r1[0]) * s;
+    return std::min(1.0, conductorSchlickAverage(eta, k) + a + (b - a) * t);
+}
+
+const FresnelAverageTables& fresnelAverageTables() {
+    static const FresnelAverageTables tables = [] {
+        FresnelAverageTables t;
+        t.dielectric.resize(FresnelAverageTables::kDielectricCount);
+        for (int i = 0; i < FresnelAverageTables::kDielectricCount; ++i) {
+            double s = double(i) / (FresnelAverageTables::kDielectricCount - 1);
+            t.dielectric[i] = s >= 1 ? 1.0f : float(fresnelAverageDielectric((1 + s) / (1 - s)));
+        }
+        const int n = FresnelAverageTables::kConductorCount;
+        t.conductor.resize(size_t(n) * n);
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                double a = double(i) / (n - 1), b = double(j) / (n - 1);
+                double eta = a / (1 - a), rk = b / (1 - b);  // eta, sqrt(k)
+                double v = (a >= 1 || b >= 1)
+                               ? 0.0
+                               : fresnelAverageConductor(eta, rk * rk) - conductorSchlickAverage(eta, rk * rk);
+                t.conductor[size_t(j) * n + i] = float(v);
+            }
+        return t;
+    }();
+    return tables;
+}
+
+// ---- the interpreter's table slot -------------------------------------------
+
+EnergyTableSlot::EnergyTableSlot(EnergyTableKey key, std::shared_ptr<const EnergyTable> table)
+    : key_(key), table_(std::move(table)) {
+    if (table_) {
+        internal_assert(table_->key == key_) << "energy table " << table_->key.name()
+                                             << " given for a material that needs " << key_.name();
+    }
+}
+
+const std::shared_ptr<const EnergyTable>& EnergyTableSlot::get() {
+    std::call_once(once_, [&] {
+        if (!table_) table_ = buildEnergyTable(key_);
+    });
+    return table_;
+}
+
+}  // namespace facet

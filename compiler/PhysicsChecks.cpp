@@ -1,0 +1,344 @@
+// PhysicsChecks: graded Gauss-Legendre quadrature of the reference
+// interpreter's terms (see PhysicsChecks.h).
+#include "PhysicsChecks.h"
+
+#include "Interpreter.h"
+#include "KullaConty.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <map>
+#include <numbers>
+#include <random>
+#include <set>
+#include <tuple>
+
+namespace facet {
+
+namespace {
+
+using V = Vec3<double>;
+constexpr double kPi = std::numbers::pi;
+
+double deg(double d) { return d * kPi / 180; }
+V dirOf(double theta, double phi) {
+    return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+}
+double dot(const V& a, const V& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+// 8-point Gauss-Legendre rule on [-1, 1] (nodes +-x[i], weights w[i]).
+constexpr double kGlX[4] = {0.1834346424956498049394761423601839807, 0.5255324099163289858177390491892463490,
+                            0.7966664774136267395915539364758304368, 0.9602898564975362316835608685694729904};
+constexpr double kGlW[4] = {0.3626837833783619829651504492771956121, 0.3137066458778872873379622019866013132,
+                            0.2223810344533744705443559944262408844, 0.1012285362903762591525313543099621901};
+
+template <typename F>
+double integratePanels(const F& f, const std::vector<double>& br) {
+    double sum = 0;
+    for (size_t p = 0; p + 1 < br.size(); ++p) {
+        double a = br[p], b = br[p + 1];
+        if (!(b > a)) continue;
+        double mid = (a + b) / 2, half = (b - a) / 2, s = 0;
+        for (int i = 0; i < 4; ++i) s += kGlW[i] * (f(mid - half * kGlX[i]) + f(mid + half * kGlX[i]));
+        sum += s * half;
+    }
+    return sum;
+}
+
+struct Special {
+    double at, h0;
+};
+
+// Break points of [a, b]: each special point with panels growing by 2 away
+// from it (first width h0), and no panel wider than maxWidth.
+std::vector<double> graded(double a, double b, const std::vector<Special>& specials, double maxWidth) {
+    std::vector<double> br = {a, b};
+    for (const Special& s : specials) {
+        if (s.at < a || s.at > b) continue;
+        br.push_back(s.at);
+        for (double d = s.h0; d < b - a; d *= 2) {
+            if (s.at - d > a) br.push_back(s.at - d);
+            if (s.at + d < b) br.push_back(s.at + d);
+        }
+    }
+    std::sort(br.begin(), br.end());
+    std::vector<double> out;
+    for (double x : br)
+        if (out.empty() || x - out.back() > 1e-14 * std::max(1.0, std::fabs(x))) out.push_back(x);
+    if (out.back() < b) out.back() = b;
+    std::vector<double> fine;
+    for (size_t i = 0; i + 1 < out.size(); ++i) {
+        int n = std::max(1, int(std::ceil((out[i + 1] - out[i]) / maxWidth)));
+        for (int k = 0; k < n; ++k) fine.push_back(out[i] + (out[i + 1] - out[i]) * k / n);
+    }
+    fine.push_back(out.back());
+    return fine;
+}
+
+// Half-width of {phi : cos(phi - center) > num/den} (den >= 0).
+double halfWidth(double num, double den) {
+    if (den <= 0) return num < 0 ? kPi : 0;
+    double k = num / den;
+    if (k <= -1) return kPi;
+    if (k >= 1) return 0;
+    return std::acos(k);
+}
+
+// The lobe geometry of a resolved NDF: its smallest roughness (the peak
+// width) and its anisotropy.
+struct Lobe {
+    double scale = 1;   // smallest roughness, <= 1
+    double ratio = 1;   // min/max roughness
+};
+Lobe lobeOf(const ResolvedMaterial<double>& r) {
+    Lobe l;
+    double ax = r.alphaX, ay = r.alphaY;
+    if (r.ndf == NdfModel::BlinnPhong) ax = ay = std::sqrt(2 / (r.exponent + 2));
+    if (r.ndf == NdfModel::Gtr || r.ndf == NdfModel::Gaussian) ay = ax;
+    l.scale = std::min({ax, ay, 1.0});
+    l.ratio = std::min(ax, ay) / std::max(ax, ay);
+    return l;
+}
+
+// Hemisphere integral of f(m) dw: theta on `thetaBreaks`, at each theta the
+// azimuth over [center - hw, center + hw], graded toward the center (a kink
+// of some integrands) and, for anisotropic lobes, the principal axes.
+struct Grid {
+    std::vector<double> thetaBreaks;
+    double center = 0;
+    int phiPanels = 8;     // per half of the azimuth range
+    double axisH0 = 0;     // > 0: grade toward phi = k pi/2 with this first width
+};
+
+template <typename F, typename HW>
+double hemisphere(const F& f, const HW& hw, const Grid& g) {
+    auto inner = [&](double theta) {
+        double w = hw(theta);
+        if (w <= 0) return 0.0;
+        double st = std::sin(theta), ct = std::cos(theta);
+        auto h = [&](double phi) { return f(V{st * std::cos(phi), st * std::sin(phi), ct}); };
+        std::vector<Special> sp = {{g.center, w / g.phiPanels / 64}};
+        if (g.axisH0 > 0)
+            for (int k = -8; k <= 8; ++k) sp.push_back({k * kPi / 2, g.axisH0});
+        return integratePanels(h, graded(g.center - w, g.center + w, sp, w / g.phiPanels)) * st;
+    };
+    return integratePanels(inner, g.thetaBreaks);
+}
+
+Grid ndfGrid(const Lobe& l, double kinkTheta, double center) {
+    Grid g;
+    std::vector<Special> sp = {{0, l.scale / 8}};
+    if (kinkTheta > 0) sp.push_back({kinkTheta, 1e-5});
+    g.thetaBreaks = graded(0, kPi / 2, sp, 0.1);
+    g.center = center;
+    g.phiPanels = l.ratio < 0.5 ? 16 : 8;
+    g.axisH0 = l.ratio < 0.5 ? l.ratio / 8 : 0;
+    return g;
+}
+
+std::string fmtSlots(const CheckedMaterial& m, const std::vector<double>& slots) {
+    std::string out;
+    for (int s = 0; s < m.slotCount; ++s) out += fmt::format("{}{}={:.6g}", out.empty() ? "" : " ", m.slotName(s), slots[s]);
+    return out.empty() ? "defaults" : out;
+}
+
+bool smithMasking(MaskingModel g) {
+    return g == MaskingModel::SmithSeparable || g == MaskingModel::SmithHeightCorrelated ||
+           g == MaskingModel::SmithDirectionCorrelated || g == MaskingModel::SmithHeightDirectionCorrelated;
+}
+
+// Why the F = 1 albedo of this pair is not bounded by 1 by construction
+// ("" when it is: Smith with an exact Lambda, or the V-cavity).
+std::string energyNote(NdfModel ndf, MaskingModel g) {
+    if (ndf == NdfModel::Ward)
+        return "ward's lobe has its own approximate normalization, not a microfacet energy bound";
+    if (smithMasking(g)) {
+        if (ndf == NdfModel::BlinnPhong)
+            return "blinn_phong uses the Beckmann Lambda (SPEC 3), an approximation: rough exponents exceed 1";
+        return "";
+    }
+    switch (g) {
+        case MaskingModel::CookTorrance: return "";
+        case MaskingModel::None: return "masking none ignores shadowing: the albedo grows like 1/(2 cos theta_o)";
+        case MaskingModel::Implicit:
+        case MaskingModel::Kelemen:
+        case MaskingModel::Neumann:
+            return "an empirical G with no microsurface behind it: not bounded by construction";
+        case MaskingModel::SchlickSmith:
+            return "Schlick's G1 ignores the NDF: exceeds 1 for heavy-tailed (gtr gamma <= 1.5) and anisotropic lobes";
+        default: break;
+    }
+    return "";
+}
+
+struct Worst {
+    PhysicsCheck c;
+    bool set = false;
+    void add(const std::string& name, const std::string& where, double value, double expected, double error,
+             double tol, bool enforced, const std::string& note) {
+        if (set && !(error > c.error)) return;
+        c = {name, where, value, expected, error, tol, enforced, note};
+        set = true;
+    }
+};
+
+}  // namespace
+
+std::vector<PhysicsCheck> physicsChecks(const CheckedMaterial& m, const PhysicsOptions& options) {
+    std::vector<PhysicsCheck> out;
+    std::shared_ptr<const EnergyTable> table;
+    if (m.energy.model && m.energyModel() == EnergyModel::KullaConty) table = buildEnergyTable(energyTableKey(m));
+    Interpreter<double> interp(m, table);
+
+    // Input settings: defaults, then each ranged float input at its ends.
+    std::vector<std::vector<double>> settings = {m.defaultSlots()};
+    for (const CheckedInput& in : m.inputs) {
+        if (in.type != ValueType::Float || !in.hasRange) continue;
+        for (double v : {in.lo, in.hi}) {
+            std::vector<double> s = m.defaultSlots();
+            s[in.firstSlot] = v;
+            settings.push_back(s);
+        }
+    }
+    std::set<std::tuple<double, double, double, double, double>> seenNdf, seenEnergy;
+    std::mt19937_64 rng(12345);
+    std::uniform_real_distribution<double> uni(0, 1);
+
+    for (const std::vector<double>& slots : settings) {
+        ResolvedMaterial<double> r = interp.resolve(slots.data());
+        std::string where0 = fmtSlots(m, slots);
+        if (!r.valid) {
+            out.push_back({"inputs", where0, 0, 0, 1, 0, true, "the material's parameters are not finite here"});
+            continue;
+        }
+        Lobe lobe = lobeOf(r);
+        bool aniso = lobe.ratio < 1;
+        std::vector<double> phis = aniso ? std::vector<double>{0, 45, 120} : std::vector<double>{0};
+        std::string params = r.ndf == NdfModel::BlinnPhong ? fmt::format("exponent={:.6g}", r.exponent)
+                             : r.ndf == NdfModel::Gtr
+                                 ? fmt::format("alpha={:.6g} gamma={:.6g}", r.alphaX, r.gamma)
+                                 : fmt::format("alpha=({:.6g},{:.6g})", r.alphaX, r.alphaY);
+        std::string where = where0 + " (" + params + ")";
+        auto ndfKey = std::make_tuple(double(int(r.ndf)), r.alphaX, r.alphaY, r.exponent, r.gamma);
+
+        // ---- NDF identities (not ward) ----
+        if (r.ndf != NdfModel::Ward && seenNdf.insert(ndfKey).second) {
+            Worst norm, area, furnace;
+            double n = hemisphere([&](const V& mm) { return r.D(mm) * mm.z; }, [](double) { return kPi; },
+                                  ndfGrid(lobe, 0, 0));
+            norm.add("ndf normalization", where, n, 1, std::fabs(n - 1), 1e-3, true, "");
+            bool smith = smithMasking(r.masking);
+            std::string furnaceNote =
+                r.ndf == NdfModel::BlinnPhong
+                    ? "blinn_phong uses the Beckmann Lambda (SPEC 3), exact only for large exponents"
+                    : "";
+            for (double tv : options.thetas)
+                for (double pv : phis) {
+                    if (tv == 0 && pv != 0) continue;
+                    V v = dirOf(deg(tv), deg(pv));
+                    std::string at = fmt::format("{} theta_v={} phi_v={}", where, tv, pv);
+                    if (tv > 0) {
+                        double a = hemisphere([&](const V& mm) { return r.D(mm) * dot(v, mm); },
+                                              [](double) { return kPi; }, ndfGrid(lobe, 0, deg(pv)));
+                        area.add("projected area", at, a, v.z, std::fabs(a - v.z), 1e-3, true, "");
+                    }
+                    if (smith) {
+                        double tvr = deg(tv);
+                        double w = hemisphere(
+                            [&](const V& mm) { return r.smithG1(v, mm) * r.D(mm) * std::max(0.0, dot(v, mm)); },
+                            [&](double th) {
+                                return halfWidth(-std::cos(tvr) * std::cos(th), std::sin(tvr) * std::sin(th));
+                            },
+                            ndfGrid(lobe, tv > 0 ? kPi / 2 - tvr : 0, deg(pv)));
+                        furnace.add("weak white furnace", at, w, v.z, std::fabs(w - v.z), 1e-3, furnaceNote.empty(),
+                                    furnaceNote);
+                    }
+                }
+            for (Worst* w : {&norm, &area, &furnace})
+                if (w->set) out.push_back(w->c);
+        }
+
+        // ---- energy <= 1 with F = 1 (and the Kulla-Conty furnace) ----
+        auto energyKey = std::make_tuple(double(int(r.ndf)) + 100 * int(r.masking), r.alphaX, r.alphaY,
+                                         r.exponent + 1e9 * r.gamma, r.schlickK);
+        if (seenEnergy.insert(energyKey).second) {
+            ResolvedMaterial<double> white = r;
+            white.fresnel = FresnelModel::None;
+            white.diffuse = DiffuseModel::None;
+            white.energy = EnergyModel::None;
+            ResolvedMaterial<double> kc = white;
+            bool hasKc = r.energy == EnergyModel::KullaConty;
+            if (hasKc) {
+                kc.energy = EnergyModel::KullaConty;
+                kc.favg = {1, 1, 1};
+            }
+            std::string note = energyNote(r.ndf, r.masking);
+            Worst energy, furnace;
+            for (double to : options.thetas)
+                for (double po : phis) {
+                    if (to == 0 && po != 0) continue;
+                    double tor = deg(to), por = deg(po);
+                    V wo = dirOf(tor, por);
+                    Grid g;
+                    double thetaFull = (kPi / 2 - tor) / 2, thetaEnd = (kPi / 2 + tor) / 2;
+                    g.thetaBreaks =
+                        graded(0, thetaEnd, {{0, lobe.scale / 8}, {thetaFull, 1e-4}, {thetaEnd, 1e-4}}, 0.08);
+                    g.center = por;
+                    g.phiPanels = aniso ? 16 : 8;
+                    g.axisH0 = lobe.ratio < 0.5 ? lobe.ratio / 8 : 0;
+                    auto hw = [&](double th) {
+                        return halfWidth(-std::cos(tor) * std::cos(2 * th), std::sin(tor) * std::sin(2 * th));
+                    };
+                    auto albedo = [&](const ResolvedMaterial<double>& mat) {
+                        return hemisphere(
+                            [&](const V& h) {
+                                double oh = dot(wo, h);
+                                V wi{2 * oh * h.x - wo.x, 2 * oh * h.y - wo.y, 2 * oh * h.z - wo.z};
+                                if (wi.z <= 0) return 0.0;
+                                return mat.brdf(wi, wo)[0] * wi.z * 4 * oh;
+                            },
+                            hw, g);
+                    };
+                    std::string at = fmt::format("{} theta_o={} phi_o={}", where, to, po);
+                    double a = albedo(white);
+                    energy.add("energy <= 1 (F = 1)", at, a, 1, std::max(0.0, a - 1), 1e-3, note.empty(), note);
+                    if (hasKc) {
+                        double ak = albedo(kc);
+                        std::string kcNote = !note.empty() ? "single scattering not conserving: " + note
+                                             : aniso       ? "anisotropic: looked up at the geometric-mean roughness"
+                                                           : "";
+                        furnace.add("kulla-conty white furnace", at, ak, 1, std::fabs(ak - 1), 0.01, kcNote.empty(),
+                                    kcNote);
+                    }
+                }
+            for (Worst* w : {&energy, &furnace})
+                if (w->set) out.push_back(w->c);
+        }
+
+        // ---- reciprocity ----
+        {
+            Worst rec;
+            auto check = [&](const V& a, const V& b, const std::string& label) {
+                std::array<double, 3> f = r.brdf(a, b), g = r.brdf(b, a);
+                for (int ch = 0; ch < 3; ++ch) {
+                    double den = std::max(std::fabs(f[ch]), 1e-300);
+                    double e = std::fabs(f[ch] - g[ch]) / den;
+                    rec.add("reciprocity", fmt::format("{} {} wi=({:.9g},{:.9g},{:.9g}) wo=({:.9g},{:.9g},{:.9g})",
+                                                       where, label, a.x, a.y, a.z, b.x, b.y, b.z),
+                            g[ch], f[ch], e, 1e-9, true, "");
+                }
+            };
+            for (int i = 0; i < options.reciprocityPairs; ++i) {
+                double zi = uni(rng), zo = uni(rng);
+                if (i % 4 == 0) zi = std::pow(10.0, -7 * uni(rng));  // grazing
+                V a = dirOf(std::acos(zi), 2 * kPi * uni(rng)), b = dirOf(std::acos(zo), 2 * kPi * uni(rng));
+                check(a, b, "random");
+            }
+            out.push_back(rec.c);
+        }
+    }
+    return out;
+}
+
+}  // namespace facet

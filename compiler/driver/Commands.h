@@ -1,0 +1,20 @@
+// Commands: `facet` subcommands implemented in their own files.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace facet {
+
+// facet verify FILE... (VerifyCommand.cpp): hard cases, backend agreement and
+// physics checks. Returns the process exit code (0 ok, 1 a check failed,
+// 2 usage, 65 a material file error).
+int cmdVerify(const std::vector<std::string>& args);
+
+// facet lut FILE [--material NAME] -o TABLES.exr  (LutCommand.cpp)
+int cmdLut(const std::vector<std::string>& args);
+
+// facet bench FILE... [--out DIR] [--json] [--quick]  (BenchCommand.cpp, bench/)
+int cmdBench(const std::vector<std::string>& args);
+
+}  // namespace facet

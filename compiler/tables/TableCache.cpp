@@ -1,0 +1,292 @@
+// TableCache: EXR I/O of the Kulla-Conty tables and the cache object.
+#include "TableCache.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fmt/format.h>
+#include <unistd.h>
+
+namespace facet {
+
+namespace {
+
+constexpr const char* kTableKind = "kulla_conty_E";
+constexpr const char* kMuAxis = "u = sqrt(mu) * (mu_count - 1)";
+constexpr const char* kAlphaAxis =
+    "v = (sqrt(alpha) - sqrt(alpha_min)) / (sqrt(alpha_max) - sqrt(alpha_min)) * (alpha_count - 1)";
+constexpr const char* kInterpolation =
+    "bilinear in (u, v) for Ec, linear in v for EcAvg; EcAvg(row) = 2 Int Ec_interp(mu) mu dmu exactly";
+
+std::string exact(double x) { return fmt::format("{:.17g}", x); }
+
+double millisSince(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+}  // namespace
+
+std::string defaultTableCacheDir() {
+    if (const char* dir = std::getenv("FACET_CACHE_DIR")) return std::string(dir) + "/tables";
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME")) return std::string(xdg) + "/facet/tables";
+    if (const char* home = std::getenv("HOME")) return std::string(home) + "/.cache/facet/tables";
+    return "";
+}
+
+const char* tableFileStatusName(TableFileStatus s) {
+    switch (s) {
+        case TableFileStatus::Ok: return "ok";
+        case TableFileStatus::Missing: return "missing";
+        case TableFileStatus::Unreadable: return "unreadable";
+        case TableFileStatus::Stale: return "stale";
+        case TableFileStatus::Corrupt: return "corrupt";
+    }
+    return "?";
+}
+
+std::string writeEnergyTableExr(const EnergyTable& t, const std::string& path) {
+    std::string bad = t.validate();
+    if (!bad.empty()) return "refusing to write an invalid table: " + bad;
+    OIIO::ImageSpec spec(t.muCount, t.alphaCount, 4, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = {"E", "Ec", "Eavg", "EcAvg"};
+    spec.attribute("compression", "zip");
+    spec.attribute("facet:table", kTableKind);
+    spec.attribute("facet:version", kEnergyTableVersion);
+    spec.attribute("facet:key", t.key.name());
+    spec.attribute("facet:ndf", modelInfo(ModelSlot::Ndf, int(t.key.ndf)).name);
+    spec.attribute("facet:masking", modelInfo(ModelSlot::Masking, int(t.key.masking)).name);
+    spec.attribute("facet:gamma", exact(t.key.gamma));
+    spec.attribute("facet:schlick_k", exact(t.key.schlickK));
+    spec.attribute("facet:mu_count", t.muCount);
+    spec.attribute("facet:alpha_count", t.alphaCount);
+    spec.attribute("facet:alpha_min", exact(t.alphaMin));
+    spec.attribute("facet:alpha_max", exact(t.alphaMax));
+    spec.attribute("facet:mu_axis", kMuAxis);
+    spec.attribute("facet:alpha_axis", kAlphaAxis);
+    spec.attribute("facet:interpolation", kInterpolation);
+    spec.attribute("facet:quadrature", t.quadrature.describe());
+    spec.attribute("facet:build_ms", exact(t.buildMillis));
+    std::vector<float> pixels(size_t(t.muCount) * t.alphaCount * 4);
+    for (int i = 0; i < t.alphaCount; ++i)
+        for (int j = 0; j < t.muCount; ++j) {
+            float* p = &pixels[(size_t(i) * t.muCount + j) * 4];
+            float ec = t.ec[size_t(i) * t.muCount + j], avg = t.ecAvg[i];
+            p[0] = 1 - ec;
+            p[1] = ec;
+            p[2] = 1 - avg;
+            p[3] = avg;
+        }
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) return fmt::format("cannot write {}: {}", path, OIIO::geterror());
+    if (!out->open(path, spec)) return fmt::format("cannot write {}: {}", path, out->geterror());
+    bool ok = out->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
+    std::string err = ok ? "" : out->geterror();
+    if (!out->close() && ok) {
+        ok = false;
+        err = out->geterror();
+    }
+    if (!ok) return fmt::format("cannot write {}: {}", path, err);
+    return "";
+}
+
+TableFileResult readEnergyTableExr(const std::string& path, const EnergyTableKey* expected,
+                                   const EnergyQuadrature& quadrature) {
+    TableFileResult r;
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) {
+        r.status = TableFileStatus::Missing;
+        r.message = "no file " + path;
+        return r;
+    }
+    auto fail = [&](TableFileStatus s, std::string msg) {
+        r.status = s;
+        r.message = std::move(msg);
+        r.table.reset();
+        return r;
+    };
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) return fail(TableFileStatus::Unreadable, fmt::format("cannot open {}: {}", path, OIIO::geterror()));
+    const OIIO::ImageSpec& spec = in->spec();
+    if (std::string(in->format_name()) != "openexr")
+        return fail(TableFileStatus::Unreadable, fmt::format("{} is a {} file, not EXR", path, in->format_name()));
+    if (spec.get_string_attribute("facet:table") != kTableKind)
+        return fail(TableFileStatus::Stale, fmt::format("{} is not a Kulla-Conty table", path));
+    int version = spec.get_int_attribute("facet:version", -1);
+    if (version != kEnergyTableVersion)
+        return fail(TableFileStatus::Stale, fmt::format("{} has table version {}, expected {}", path, version,
+                                                        kEnergyTableVersion));
+    auto t = std::make_shared<EnergyTable>();
+    t->muCount = spec.get_int_attribute("facet:mu_count", -1);
+    t->alphaCount = spec.get_int_attribute("facet:alpha_count", -1);
+    t->alphaMin = std::strtod(std::string(spec.get_string_attribute("facet:alpha_min")).c_str(), nullptr);
+    t->alphaMax = std::strtod(std::string(spec.get_string_attribute("facet:alpha_max")).c_str(), nullptr);
+    std::string ndf(spec.get_string_attribute("facet:ndf")), masking(spec.get_string_attribute("facet:masking"));
+    const ModelInfo* ndfInfo = findModel(ModelSlot::Ndf, ndf);
+    const ModelInfo* maskInfo = findModel(ModelSlot::Masking, masking);
+    if (!ndfInfo || !maskInfo)
+        return fail(TableFileStatus::Stale, fmt::format("{}: unknown ndf '{}' or masking '{}'", path, ndf, masking));
+    t->key.ndf = NdfModel(ndfInfo->id);
+    t->key.masking = MaskingModel(maskInfo->id);
+    t->key.gamma = std::strtod(std::string(spec.get_string_attribute("facet:gamma")).c_str(), nullptr);
+    t->key.schlickK = std::strtod(std::string(spec.get_string_attribute("facet:schlick_k")).c_str(), nullptr);
+    t->quadrature = quadrature;
+    std::string quad(spec.get_string_attribute("facet:quadrature"));
+    if (expected) {
+        if (!(t->key == *expected))
+            return fail(TableFileStatus::Stale, fmt::format("{} holds table {}, expected {}", path, t->key.name(),
+                                                            expected->name()));
+        if (t->muCount != EnergyTable::kMuCount || t->alphaCount != EnergyTable::kAlphaCount ||
+            t->alphaMin != EnergyTable::kAlphaMin || t->alphaMax != EnergyTable::kAlphaMax)
+            return fail(TableFileStatus::Stale,
+                        fmt::format("{} has a {} x {} grid over alpha [{}, {}], expected {} x {} over [{}, {}]", path,
+                                    t->muCount, t->alphaCount, t->alphaMin, t->alphaMax, EnergyTable::kMuCount,
+                                    EnergyTable::kAlphaCount, EnergyTable::kAlphaMin, EnergyTable::kAlphaMax));
+        if (quad != quadrature.describe())
+            return fail(TableFileStatus::Stale, fmt::format("{} was integrated with other quadrature settings ({})",
+                                                            path, quad));
+        if (spec.get_string_attribute("facet:mu_axis") != kMuAxis ||
+            spec.get_string_attribute("facet:alpha_axis") != kAlphaAxis)
+            return fail(TableFileStatus::Stale, fmt::format("{} uses another axis mapping", path));
+    }
+    if (spec.width != t->muCount || spec.height != t->alphaCount || spec.nchannels != 4 || spec.depth != 1 ||
+        spec.x != 0 || spec.y != 0)
+        return fail(TableFileStatus::Corrupt,
+                    fmt::format("{}: image is {} x {} with {} channels, metadata says {} x {} with 4", path,
+                                spec.width, spec.height, spec.nchannels, t->muCount, t->alphaCount));
+    if (t->muCount < 2 || t->alphaCount < 2 || t->muCount > 4096 || t->alphaCount > 4096)
+        return fail(TableFileStatus::Corrupt, fmt::format("{}: bad grid {} x {}", path, t->muCount, t->alphaCount));
+    // EXR stores channels sorted by name; find ours by name.
+    static const char* const kChannels[4] = {"E", "Ec", "Eavg", "EcAvg"};
+    int chIndex[4];
+    for (int c = 0; c < 4; ++c) {
+        auto it = std::find(spec.channelnames.begin(), spec.channelnames.end(), kChannels[c]);
+        if (it == spec.channelnames.end())
+            return fail(TableFileStatus::Corrupt, fmt::format("{}: no channel '{}'", path, kChannels[c]));
+        chIndex[c] = int(it - spec.channelnames.begin());
+    }
+    std::vector<float> raw(size_t(t->muCount) * t->alphaCount * 4);
+    if (!in->read_image(0, 0, 0, 4, OIIO::TypeDesc::FLOAT, raw.data()))
+        return fail(TableFileStatus::Unreadable, fmt::format("{}: cannot read pixels: {}", path, in->geterror()));
+    in->close();
+    std::vector<float> pixels(raw.size());
+    for (size_t p = 0; p < raw.size() / 4; ++p)
+        for (int c = 0; c < 4; ++c) pixels[p * 4 + c] = raw[p * 4 + chIndex[c]];
+    t->ec.resize(size_t(t->muCount) * t->alphaCount);
+    std::vector<float> stored(t->alphaCount);
+    for (int i = 0; i < t->alphaCount; ++i)
+        for (int j = 0; j < t->muCount; ++j) {
+            const float* p = &pixels[(size_t(i) * t->muCount + j) * 4];
+            for (int c = 0; c < 4; ++c)
+                if (!std::isfinite(p[c]) || p[c] < 0 || p[c] > 1)
+                    return fail(TableFileStatus::Corrupt,
+                                fmt::format("{}: pixel ({}, {}) channel {} is {}", path, j, i, c, p[c]));
+            if (std::abs(p[0] + p[1] - 1) > 1e-6 || std::abs(p[2] + p[3] - 1) > 1e-6)
+                return fail(TableFileStatus::Corrupt, fmt::format("{}: pixel ({}, {}) has E + Ec != 1", path, j, i));
+            if (j == 0) stored[i] = p[3];
+            else if (p[3] != stored[i])
+                return fail(TableFileStatus::Corrupt, fmt::format("{}: EcAvg varies along row {}", path, i));
+            t->ec[size_t(i) * t->muCount + j] = p[1];
+        }
+    t->computeAverages();
+    for (int i = 0; i < t->alphaCount; ++i)
+        if (std::abs(double(t->ecAvg[i]) - stored[i]) > 1e-6 * std::max(1.0, double(stored[i])))
+            return fail(TableFileStatus::Corrupt,
+                        fmt::format("{}: EcAvg of row {} is {}, the integral of its Ec is {}", path, i, stored[i],
+                                    t->ecAvg[i]));
+    std::string bad = t->validate();
+    if (!bad.empty()) return fail(TableFileStatus::Corrupt, path + ": " + bad);
+    t->origin = "disk";
+    r.status = TableFileStatus::Ok;
+    r.table = std::move(t);
+    return r;
+}
+
+// ---- cache ----------------------------------------------------------------
+
+TableCache::TableCache(std::string dir, EnergyQuadrature quadrature)
+    : dir_(std::move(dir)), quadrature_(std::move(quadrature)) {}
+
+std::string TableCache::pathFor(const EnergyTableKey& key) const {
+    if (dir_.empty()) return "";
+    return dir_ + "/kc_" + key.name() + ".exr";
+}
+
+std::vector<TableCache::Event> TableCache::events() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return events_;
+}
+
+std::shared_ptr<const EnergyTable> TableCache::get(const EnergyTableKey& key) {
+    std::promise<std::shared_ptr<const EnergyTable>> promise;
+    std::shared_future<std::shared_ptr<const EnergyTable>> future;
+    bool mine = false;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        auto it = tables_.find(key);
+        if (it != tables_.end()) {
+            future = it->second;
+        } else {
+            future = promise.get_future().share();
+            tables_.emplace(key, future);
+            mine = true;
+        }
+    }
+    if (!mine) return future.get();  // another thread loads or builds it
+    try {
+        promise.set_value(produce(key));
+    } catch (...) {
+        promise.set_exception(std::current_exception());
+        std::lock_guard<std::mutex> lock(mutex_);
+        tables_.erase(key);  // a later request tries again
+    }
+    return future.get();
+}
+
+std::shared_ptr<const EnergyTable> TableCache::produce(const EnergyTableKey& key) {
+    auto start = std::chrono::steady_clock::now();
+    Event ev;
+    ev.key = key.name();
+    std::string path = pathFor(key);
+    std::shared_ptr<EnergyTable> table;
+    if (!path.empty()) {
+        TableFileResult r = readEnergyTableExr(path, &key, quadrature_);
+        if (r.status == TableFileStatus::Ok) {
+            table = r.table;
+            ev.action = "disk";
+        } else {
+            ev.action = r.status == TableFileStatus::Missing ? "built" : "rebuilt";
+            ev.reason = std::string(tableFileStatusName(r.status)) + ": " + r.message;
+        }
+    } else {
+        ev.action = "built";
+        ev.reason = "memory-only cache";
+    }
+    if (!table) {
+        table = buildEnergyTable(key, quadrature_);
+        if (!path.empty()) {
+            // Write next to the target and rename over it: readers in other
+            // threads or processes see the old file or the new one, never half.
+            static std::atomic<unsigned> counter{0};
+            std::error_code ec;
+            std::filesystem::create_directories(dir_, ec);
+            std::string tmp = fmt::format("{}/.kc_{}.{}.{}.tmp.exr", dir_, key.name(), ::getpid(), counter++);
+            ev.writeError = writeEnergyTableExr(*table, tmp);
+            if (ev.writeError.empty()) {
+                std::filesystem::rename(tmp, path, ec);
+                if (ec) ev.writeError = fmt::format("cannot rename {} to {}: {}", tmp, path, ec.message());
+            }
+            if (!ev.writeError.empty()) std::filesystem::remove(tmp, ec);
+        }
+    }
+    ev.millis = millisSince(start);
+    std::lock_guard<std::mutex> lock(mutex_);
+    events_.push_back(ev);
+    return table;
+}
+
+}  // namespace facet

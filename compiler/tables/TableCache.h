@@ -1,0 +1,96 @@
+// TableCache: Kulla-Conty E tables (KullaConty.h) on disk as EXR files
+// through OpenImageIO, and an in-memory cache of them owned by the caller.
+//
+// Library facet_tables (links OpenImageIO); the front end stays free of it.
+//
+// File format (one table per file, kc_<key>.exr, e.g. kc_ggx_smith_height_correlated.exr):
+//   width = mu_count, height = alpha_count (row i = alpha node i, column j = mu node j),
+//   4 float32 channels, ZIP compression:
+//     E      = 1 - Ec                 (for viewers)
+//     Ec     = 1 - E(mu, alpha)       (what Facet reads; exact in float near E = 1)
+//     Eavg   = 1 - EcAvg              (constant along each row)
+//     EcAvg  = 1 - E_avg(alpha)
+//   metadata (string/int attributes): facet:table = "kulla_conty_E", facet:version,
+//   facet:key, facet:ndf, facet:masking, facet:gamma, facet:schlick_k, facet:mu_count,
+//   facet:alpha_count, facet:alpha_min, facet:alpha_max, facet:mu_axis, facet:alpha_axis,
+//   facet:interpolation, facet:quadrature, facet:build_ms.
+//
+// Reading checks, in order: the file opens and is a 4-channel float image
+// (else "unreadable"); the metadata names the expected key, version, grid
+// and quadrature (else "stale"); the pixels are finite, within [0, 1],
+// E + Ec = 1, EcAvg constant along rows and equal to the exact integral of
+// the interpolated Ec row (else "corrupt"). A cache miss of any kind rebuilds
+// the table and rewrites the file (atomically: a temporary file renamed over
+// it, so a concurrent reader never sees half a file).
+#pragma once
+
+#include "KullaConty.h"
+
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace facet {
+
+// $FACET_CACHE_DIR/tables, else $XDG_CACHE_HOME/facet/tables, else
+// ~/.cache/facet/tables (the kernel cache's convention, runtime/Kernel.cpp); "" if none.
+std::string defaultTableCacheDir();
+
+// Writes `table` to `path` (any directory must exist). Returns "" or an error message.
+std::string writeEnergyTableExr(const EnergyTable& table, const std::string& path);
+
+enum class TableFileStatus { Ok, Missing, Unreadable, Stale, Corrupt };
+const char* tableFileStatusName(TableFileStatus s);
+
+struct TableFileResult {
+    TableFileStatus status = TableFileStatus::Missing;
+    std::string message;                 // why it is not Ok
+    std::shared_ptr<EnergyTable> table;  // set when Ok
+};
+
+// Reads a table file. With `expected`, a table for another key, version,
+// grid or quadrature is Stale; without, any well-formed table is accepted.
+TableFileResult readEnergyTableExr(const std::string& path, const EnergyTableKey* expected = nullptr,
+                                   const EnergyQuadrature& quadrature = {});
+
+// Tables by key, shared by shared_ptr and immutable once built. Thread-safe:
+// concurrent requests for one key wait for a single load/build (the mutex is
+// not held while building). Owned by the caller (e.g. one per facet::Compiler);
+// two caches on one directory are safe (files are replaced atomically).
+class TableCache {
+public:
+    // dir: where the EXR files live; "" keeps tables in memory only.
+    explicit TableCache(std::string dir = defaultTableCacheDir(), EnergyQuadrature quadrature = {});
+
+    std::shared_ptr<const EnergyTable> get(const EnergyTableKey& key);
+    // The table of a checked material with energy = kulla_conty.
+    std::shared_ptr<const EnergyTable> getFor(const CheckedMaterial& material) { return get(energyTableKey(material)); }
+
+    // kc_<key>.exr in dir (empty when dir is empty).
+    std::string pathFor(const EnergyTableKey& key) const;
+    const std::string& dir() const { return dir_; }
+
+    // What happened per request that reached the disk or built a table:
+    // action is "disk" (loaded), "built" (no file), "rebuilt" (the file was
+    // stale, unreadable or corrupt: reason says which), with the time taken
+    // and any failure to write the file.
+    struct Event {
+        std::string key, action, reason, writeError;
+        double millis = 0;
+    };
+    std::vector<Event> events() const;
+
+private:
+    std::shared_ptr<const EnergyTable> produce(const EnergyTableKey& key);
+
+    std::string dir_;
+    EnergyQuadrature quadrature_;
+    mutable std::mutex mutex_;
+    std::map<EnergyTableKey, std::shared_future<std::shared_ptr<const EnergyTable>>> tables_;
+    std::vector<Event> events_;
+};
+
+}  // namespace facet

@@ -1,0 +1,326 @@
+// BenchOutputTests: the `facet bench` report is complete and well formed.
+//
+// One quick bench of the GGX/Schlick reference model (AOT twin included) is
+// shared by the tests: its JSON must parse (a small strict JSON parser below)
+// and carry every field with the right type for every row, and the scatter
+// plot must be written with the documented size.
+#include "BenchFormat.h"
+#include "BenchPlot.h"
+#include "BenchRunner.h"
+
+#include <OpenImageIO/imageio.h>
+#include <doctest/doctest.h>
+
+#include <cctype>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <set>
+#include <stdexcept>
+#include <variant>
+
+using namespace facet;
+
+namespace {
+
+// ---- a strict JSON parser (RFC 8259 subset: no \u escapes beyond ASCII) ----
+struct JsonValue;
+using JsonObject = std::map<std::string, JsonValue>;
+using JsonArray = std::vector<JsonValue>;
+struct JsonValue {
+    std::variant<std::nullptr_t, bool, double, std::string, std::shared_ptr<JsonArray>, std::shared_ptr<JsonObject>> v;
+    bool isNull() const { return std::holds_alternative<std::nullptr_t>(v); }
+    bool isNumber() const { return std::holds_alternative<double>(v); }
+    bool isString() const { return std::holds_alternative<std::string>(v); }
+    bool isBool() const { return std::holds_alternative<bool>(v); }
+    bool isArray() const { return std::holds_alternative<std::shared_ptr<JsonArray>>(v); }
+    bool isObject() const { return std::holds_alternative<std::shared_ptr<JsonObject>>(v); }
+    double num() const { return std::get<double>(v); }
+    const std::string& str() const { return std::get<std::string>(v); }
+    const JsonArray& arr() const { return *std::get<std::shared_ptr<JsonArray>>(v); }
+    const JsonObject& obj() const { return *std::get<std::shared_ptr<JsonObject>>(v); }
+};
+
+class JsonParser {
+public:
+    explicit JsonParser(const std::string& s) : s_(s) {}
+    JsonValue parseDocument() {
+        JsonValue v = value();
+        ws();
+        if (p_ != s_.size()) fail("trailing characters");
+        return v;
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& why) {
+        throw std::runtime_error("JSON: " + why + " at offset " + std::to_string(p_));
+    }
+    void ws() {
+        while (p_ < s_.size() && (s_[p_] == ' ' || s_[p_] == '\n' || s_[p_] == '\t' || s_[p_] == '\r')) ++p_;
+    }
+    bool eat(char c) {
+        ws();
+        if (p_ < s_.size() && s_[p_] == c) return ++p_, true;
+        return false;
+    }
+    void expect(char c) {
+        if (!eat(c)) fail(std::string("expected '") + c + "'");
+    }
+    bool literal(const char* word) {
+        size_t n = std::strlen(word);
+        if (s_.compare(p_, n, word) == 0) return p_ += n, true;
+        return false;
+    }
+    std::string string() {
+        expect('"');
+        std::string out;
+        while (p_ < s_.size() && s_[p_] != '"') {
+            char c = s_[p_++];
+            if (static_cast<unsigned char>(c) < 0x20) fail("control character in string");
+            if (c == '\\') {
+                if (p_ >= s_.size()) fail("bad escape");
+                char e = s_[p_++];
+                switch (e) {
+                    case '"': case '\\': case '/': out += e; break;
+                    case 'n': out += '\n'; break;
+                    case 't': out += '\t'; break;
+                    case 'r': out += '\r'; break;
+                    case 'b': out += '\b'; break;
+                    case 'f': out += '\f'; break;
+                    case 'u': {
+                        if (p_ + 4 > s_.size()) fail("bad \\u escape");
+                        out += char(std::stoi(s_.substr(p_, 4), nullptr, 16));
+                        p_ += 4;
+                        break;
+                    }
+                    default: fail("bad escape");
+                }
+            } else {
+                out += c;
+            }
+        }
+        expect('"');
+        return out;
+    }
+    double number() {
+        size_t start = p_;
+        if (s_[p_] == '-') ++p_;
+        if (p_ >= s_.size() || !std::isdigit(static_cast<unsigned char>(s_[p_]))) fail("bad number");
+        while (p_ < s_.size() && (std::isdigit(static_cast<unsigned char>(s_[p_])) || std::strchr(".eE+-", s_[p_]))) ++p_;
+        size_t used = 0;
+        double v = std::stod(s_.substr(start, p_ - start), &used);
+        if (used != p_ - start) fail("bad number");
+        return v;
+    }
+    JsonValue value() {
+        ws();
+        if (p_ >= s_.size()) fail("unexpected end");
+        char c = s_[p_];
+        if (c == '{') {
+            ++p_;
+            auto o = std::make_shared<JsonObject>();
+            if (!eat('}')) {
+                do {
+                    ws();
+                    std::string k = string();
+                    expect(':');
+                    if (o->count(k)) fail("duplicate key " + k);
+                    (*o)[k] = value();
+                } while (eat(','));
+                expect('}');
+            }
+            return {o};
+        }
+        if (c == '[') {
+            ++p_;
+            auto a = std::make_shared<JsonArray>();
+            if (!eat(']')) {
+                do a->push_back(value());
+                while (eat(','));
+                expect(']');
+            }
+            return {a};
+        }
+        if (c == '"') return {string()};
+        if (literal("true")) return {true};
+        if (literal("false")) return {false};
+        if (literal("null")) return {nullptr};
+        return {number()};
+    }
+    const std::string& s_;
+    size_t p_ = 0;
+};
+
+// The report of one quick bench, computed once for all tests here.
+const bench::BenchReport& quickReport() {
+    static const bench::BenchReport report = [] {
+        bench::BenchReport r;
+        r.settings = bench::BenchSettings::quickSettings();
+        r.settings.lanes = 2048;
+        r.settings.runs = 3;
+        r.settings.compileRuns = 1;
+        bench::describeHost(r);
+        DiagnosticEngine diags;
+        bool ok = bench::benchFile(std::string(FACET_SOURCE_DIR) + "/bench/models/ggx_schlick.mat", r.settings, r,
+                                   diags, nullptr);
+        if (!ok) throw std::runtime_error(diags.str());
+        return r;
+    }();
+    return report;
+}
+
+enum class Kind { Number, String, Bool, Object, Array, NumberOrNull, StringOrNull, ObjectOrNull };
+
+void checkField(const JsonObject& o, const std::string& key, Kind kind) {
+    CAPTURE(key);
+    auto it = o.find(key);
+    REQUIRE_MESSAGE(it != o.end(), "missing field " << key);
+    const JsonValue& v = it->second;
+    switch (kind) {
+        case Kind::Number: CHECK(v.isNumber()); break;
+        case Kind::String: CHECK(v.isString()); break;
+        case Kind::Bool: CHECK(v.isBool()); break;
+        case Kind::Object: CHECK(v.isObject()); break;
+        case Kind::Array: CHECK(v.isArray()); break;
+        case Kind::NumberOrNull: CHECK((v.isNumber() || v.isNull())); break;
+        case Kind::StringOrNull: CHECK((v.isString() || v.isNull())); break;
+        case Kind::ObjectOrNull: CHECK((v.isObject() || v.isNull())); break;
+    }
+}
+
+void checkErrorBlock(const JsonObject& e) {
+    for (const char* k : {"values", "skipped", "nonfinite", "negative", "invalid_lanes", "reference_invalid_lanes",
+                          "max_rel", "p999_rel", "max_ulp"})
+        checkField(e, k, Kind::Number);
+    checkField(e, "worst", Kind::ObjectOrNull);
+    if (e.at("worst").isObject()) {
+        const JsonObject& w = e.at("worst").obj();
+        for (const char* k : {"lane", "got", "want", "rel"}) checkField(w, k, Kind::Number);
+        checkField(w, "channel", Kind::String);
+        checkField(w, "wi", Kind::Array);
+        checkField(w, "wo", Kind::Array);
+        checkField(w, "inputs", Kind::Object);
+        CHECK(w.at("wi").arr().size() == 3);
+        CHECK(w.at("wo").arr().size() == 3);
+    }
+    CHECK(e.at("p999_rel").num() <= e.at("max_rel").num());
+}
+
+}  // namespace
+
+TEST_SUITE("output") {
+
+TEST_CASE("the JSON parser of this test rejects malformed documents") {
+    for (const char* bad : {"{", "{\"a\":}", "[1,]", "{\"a\":1,\"a\":2}", "nan", "{\"a\":1} x", "\"\x01\""})
+        CHECK_THROWS(JsonParser(bad).parseDocument());
+    CHECK(JsonParser("{\"a\":[1,-2.5e3,null,true,\"x\\n\"]}").parseDocument().isObject());
+}
+
+TEST_CASE("bench --json output parses and has every field") {
+    const bench::BenchReport& report = quickReport();
+    std::string text = bench::json(report);
+    JsonValue doc;
+    REQUIRE_NOTHROW(doc = JsonParser(text).parseDocument());
+    REQUIRE(doc.isObject());
+    const JsonObject& top = doc.obj();
+    checkField(top, "facet_bench_format", Kind::Number);
+    checkField(top, "host", Kind::Object);
+    checkField(top, "settings", Kind::Object);
+    checkField(top, "materials", Kind::Array);
+    const JsonObject& host = top.at("host").obj();
+    checkField(host, "cpu", Kind::String);
+    checkField(host, "features", Kind::String);
+    checkField(host, "vector_width", Kind::Number);
+    const JsonObject& settings = top.at("settings").obj();
+    for (const char* k : {"lanes", "interp_lanes", "runs", "warmup", "compile_runs", "disk_runs", "seed", "abs_floor"})
+        checkField(settings, k, Kind::Number);
+    checkField(settings, "quick", Kind::Bool);
+    checkField(settings, "hard_sample", Kind::String);
+
+    const JsonArray& materials = top.at("materials").arr();
+    REQUIRE(materials.size() == 1);
+    const JsonObject& m = materials[0].obj();
+    for (const char* k : {"file", "material", "aot_note", "kulla_conty_pair", "summary"}) checkField(m, k, Kind::String);
+    checkField(m, "aot", Kind::StringOrNull);
+    for (const char* k : {"parse_check_ms", "regular_lanes", "hard_lanes"}) checkField(m, k, Kind::Number);
+    checkField(m, "kulla_conty_ms", Kind::NumberOrNull);
+    checkField(m, "rows", Kind::Array);
+    CHECK(m.at("material").str() == "ggx_schlick");
+    CHECK(m.at("aot").str() == "ggx_schlick");
+
+    // Every backend x mode, and the AOT row.
+    std::set<std::pair<std::string, std::string>> seen;
+    for (const JsonValue& rv : m.at("rows").arr()) {
+        const JsonObject& r = rv.obj();
+        for (const char* k : {"backend", "mode", "options", "variant"}) checkField(r, k, Kind::String);
+        for (const char* k : {"width", "lanes", "runs", "ns_per_eval", "ns_per_eval_min", "evals_per_second"})
+            checkField(r, k, Kind::Number);
+        for (const char* k : {"measured_error", "compile_cold_ms", "compile_memory_hit_ms", "compile_disk_hit_ms",
+                              "jit_over_aot"})
+            checkField(r, k, Kind::NumberOrNull);
+        checkField(r, "error_regular", Kind::Object);
+        checkField(r, "error_hard", Kind::Object);
+        checkErrorBlock(r.at("error_regular").obj());
+        checkErrorBlock(r.at("error_hard").obj());
+        std::string backend = r.at("backend").str(), mode = r.at("mode").str();
+        CAPTURE(backend);
+        CAPTURE(mode);
+        seen.insert({backend, mode});
+        CHECK(r.at("ns_per_eval").num() > 0);
+        CHECK(r.at("evals_per_second").num() > 0);
+        if (backend == "scalar" || backend == "simd") {
+            CHECK(r.at("compile_cold_ms").isNumber());
+            CHECK(r.at("compile_memory_hit_ms").isNumber());
+            CHECK(r.at("compile_disk_hit_ms").isNumber());
+            CHECK(r.at("jit_over_aot").isNumber());
+        }
+        // The reference is compared with itself to float rounding.
+        if (backend == "interp") CHECK(r.at("error_regular").obj().at("max_rel").num() < 1e-6);
+    }
+    for (const char* b : {"interp", "scalar", "simd"})
+        for (const char* mode : {"exact", "fast", "tol 1e-3", "tol 1e-5"}) CHECK(seen.count({b, mode}));
+    CHECK(seen.count({"aot", "hand-written"}));
+    CHECK(seen.size() == 13);
+}
+
+TEST_CASE("the Markdown and terminal reports name every row") {
+    const bench::BenchReport& report = quickReport();
+    std::string md = bench::markdown(report);
+    CHECK(md.find("## ggx_schlick") != std::string::npos);
+    CHECK(md.find("| simd | tol 1e-3 |") != std::string::npos);
+    CHECK(md.find("| aot | hand-written |") != std::string::npos);
+    CHECK(md.find("JIT/AOT") != std::string::npos);
+    CHECK(!bench::summaryLine(report.materials.at(0)).empty());
+}
+
+TEST_CASE("the scatter plot is written as a PNG of the expected size") {
+    const bench::BenchReport& report = quickReport();
+    std::filesystem::path dir = std::filesystem::temp_directory_path() / "facet-bench-plot-test";
+    std::filesystem::create_directories(dir);
+    std::string path = (dir / "bench.png").string();
+    std::filesystem::remove(path);
+    REQUIRE(bench::writeScatterPlot(report, path) == "");
+    auto in = OIIO::ImageInput::open(path);
+    REQUIRE(in);
+    const OIIO::ImageSpec& spec = in->spec();
+    CHECK(std::string(in->format_name()) == "png");
+    CHECK(spec.width == bench::kPlotWidth);
+    CHECK(spec.height == bench::kPlotHeight);
+    CHECK(spec.nchannels == 3);
+    // Not blank: the plot has dark (axis, text) and coloured (marker) pixels.
+    std::vector<uint8_t> px(size_t(spec.width) * spec.height * 3);
+    REQUIRE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, px.data()));
+    size_t dark = 0, coloured = 0;
+    for (size_t i = 0; i < px.size(); i += 3) {
+        int r = px[i], g = px[i + 1], b = px[i + 2];
+        dark += r < 60 && g < 60 && b < 60;
+        coloured += std::max({r, g, b}) - std::min({r, g, b}) > 80;
+    }
+    CHECK(dark > 1000);
+    CHECK(coloured > 100);
+    in->close();
+    std::filesystem::remove_all(dir);
+}
+
+}  // TEST_SUITE

@@ -1,0 +1,217 @@
+// The E tables (compiler/KullaConty.h): closed-form values, interpolation
+// error, the exact consistency of EcAvg with the interpolated rows, the
+// quadrature's convergence for every pair the checker accepts, and the table
+// build time per pair.
+#include "EnergyTestUtil.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <thread>
+#include <vector>
+
+using namespace energy;
+using facet::EnergyTable;
+using facet::EnergyTableKey;
+using facet::MaskingModel;
+using facet::NdfModel;
+
+namespace {
+
+template <typename F>
+void parallelFor(size_t n, const F& fn) {
+    unsigned nt = std::clamp(std::thread::hardware_concurrency(), 1u, 8u);
+    std::vector<std::thread> pool;
+    for (unsigned t = 0; t < nt; ++t)
+        pool.emplace_back([&, t] {
+            for (size_t i = t; i < n; i += nt) fn(i);
+        });
+    for (auto& th : pool) th.join();
+}
+
+EnergyTableKey key(NdfModel n, MaskingModel m, double gamma = 0, double k = 0) {
+    EnergyTableKey key;
+    key.ndf = n;
+    key.masking = m;
+    key.gamma = gamma;
+    key.schlickK = k;
+    return key;
+}
+
+}  // namespace
+
+TEST_SUITE("tables") {
+
+TEST_CASE("closed forms: GGX alpha = 1 at normal incidence, E = 1 - ln 2") {
+    // D = 1/pi for GGX alpha = 1; at mu_o = 1, Lambda_o = 0 and G = 2 mu_i / (1 + mu_i):
+    // E = 1/(4 pi) Int G dwi = Int_0^1 2 mu/(1 + mu) dmu = 2 (1 - ln 2) / 2 ... = 1 - ln 2.
+    for (MaskingModel m : {MaskingModel::SmithHeightCorrelated, MaskingModel::SmithSeparable}) {
+        auto t = memoryTables().get(key(NdfModel::Ggx, m));
+        CHECK(t->ecAt(1, 1) == doctest::Approx(std::log(2.0)).epsilon(1e-6));
+        CHECK(facet::directionalAlbedo(t->key, 1, 1) == doctest::Approx(1 - std::log(2.0)).epsilon(1e-9));
+    }
+    // Lookups clamp: alpha beyond the grid uses the end rows, mu outside [0, 1] the end columns.
+    auto t = memoryTables().get(key(NdfModel::Ggx, MaskingModel::SmithHeightCorrelated));
+    CHECK(t->ecAt(0.5, 3.0) == t->ecAt(0.5, 1.0));
+    CHECK(t->ecAt(0.5, 1e-7) == t->ecAt(0.5, 1e-4));
+    CHECK(t->ecAt(1.5, 0.3) == t->ecAt(1.0, 0.3));
+    CHECK(t->ecAt(-1, 0.3) == t->ecAt(0.0, 0.3));
+    CHECK(t->validate() == "");
+    // A row pre-blended at a constant alpha interpolates like the full table.
+    for (double alpha : {1e-4, 0.0123, 0.3, 1.0}) {
+        std::vector<float> row = t->rowAt(alpha);
+        for (double mu : {0.0, 0.003, 0.2, 0.77, 1.0}) {
+            double u = t->muCoord(mu);
+            int j = std::min(int(u), t->muCount - 2);
+            double lin = row[j] + (double(row[j + 1]) - row[j]) * (u - j);
+            CHECK(lin == doctest::Approx(t->ecAt(mu, alpha)).epsilon(1e-6));
+        }
+    }
+}
+
+TEST_CASE("EcAvg equals the integral of the interpolated Ec at every alpha (exact consistency)") {
+    auto t = memoryTables().get(key(NdfModel::Beckmann, MaskingModel::SmithSeparable));
+    const physics::GaussLegendre g(4);
+    double worst = 0;
+    for (double alpha : {1e-4, 3e-4, 0.0123, 0.05, 0.0777, 0.31, 0.5, 0.999, 1.0}) {
+        // 2 Int Ec(mu) mu dmu with mu = s^2, one panel per table cell in s (exact for the interpolant).
+        double sum = 0;
+        int cells = t->muCount - 1;
+        for (int c = 0; c < cells; ++c) {
+            double s0 = double(c) / cells, s1 = double(c + 1) / cells;
+            for (size_t k = 0; k < g.x.size(); ++k) {
+                double s = (s0 + s1) / 2 + (s1 - s0) / 2 * g.x[k];
+                sum += g.w[k] * (s1 - s0) / 2 * t->ecAt(s * s, alpha) * 4 * s * s * s;
+            }
+        }
+        worst = std::max(worst, std::abs(sum - t->ecAvgAt(alpha)));
+        CHECK(sum == doctest::Approx(t->ecAvgAt(alpha)).epsilon(1e-6));
+    }
+    MESSAGE("max |2 Int Ec_interp mu dmu - EcAvg| = ", worst);
+}
+
+// Bilinear interpolation error of E at the cell centres (the worst place for
+// bilinear interpolation), against the quadrature at the same point.
+TEST_CASE("interpolation error at cell centres") {
+    struct Pair {
+        NdfModel ndf;
+        MaskingModel masking;
+    };
+    const Pair pairs[] = {{NdfModel::Ggx, MaskingModel::SmithHeightCorrelated},
+                          {NdfModel::Ggx, MaskingModel::SmithSeparable},
+                          {NdfModel::Beckmann, MaskingModel::SmithHeightCorrelated},
+                          {NdfModel::Beckmann, MaskingModel::SmithSeparable}};
+    for (const Pair& p : pairs) {
+        auto t = memoryTables().get(key(p.ndf, p.masking));
+        struct Pt {
+            double mu, alpha, err;
+            bool inside;
+        };
+        std::vector<Pt> pts;
+        for (int i = 0; i + 1 < t->alphaCount; ++i)
+            for (int j = 0; j + 1 < t->muCount; ++j) {
+                double ra = (std::sqrt(t->alphaNode(i)) + std::sqrt(t->alphaNode(i + 1))) / 2;
+                double rm = (std::sqrt(t->muNode(j)) + std::sqrt(t->muNode(j + 1))) / 2;
+                Pt pt{rm * rm, ra * ra, 0, false};
+                pt.inside = pt.alpha >= 0.05 && pt.mu >= 0.05;
+                if (pt.inside || (i % 3 == 0 && j % 3 == 0)) pts.push_back(pt);
+            }
+        parallelFor(pts.size(), [&](size_t k) {
+            double e = facet::directionalAlbedo(t->key, pts[k].mu, pts[k].alpha);
+            pts[k].err = std::abs((1 - e) - t->ecAt(pts[k].mu, pts[k].alpha));
+        });
+        double in = 0, all = 0, in2 = 0;
+        const Pt* worst = nullptr;
+        for (const Pt& pt : pts) {
+            all = std::max(all, pt.err);
+            if (pt.inside && pt.err > in) {
+                in = pt.err;
+                worst = &pt;
+            }
+            if (pt.alpha >= 0.2 && pt.mu >= 0.2) in2 = std::max(in2, pt.err);
+        }
+        REQUIRE(worst);
+        char buf[300];
+        std::snprintf(buf, sizeof buf,
+                      "%s: %d x %d table; max |E - E_table| at cell centres: %.2e in [0.05, 1]^2 (at mu %.3f "
+                      "alpha %.3f), %.2e in [0.2, 1]^2, %.2e over the whole grid (sampled)",
+                      t->key.name().c_str(), t->muCount, t->alphaCount, in, worst->mu, worst->alpha, in2, all);
+        MESSAGE(buf);
+        CHECK(in < 1e-3);
+        CHECK(in2 < 3e-4);
+    }
+}
+
+// Every NDF x masking pair the checker accepts with energy = kulla_conty:
+// the table's default quadrature against a much finer one.
+TEST_CASE("quadrature convergence for every accepted pair") {
+    facet::EnergyQuadrature fine;
+    fine.thetaPoints = 12;
+    fine.thetaMaxPanel = 0.05;
+    fine.kinkPanel = 1e-4;
+    fine.phiPoints = 12;
+    fine.phiPanels = 8;
+    const char* ndfs[] = {"ggx(0.3)", "beckmann(0.3)", "blinn_phong(20)", "gtr(0.3, 2)", "gtr(0.3, 1)", "gaussian(0.3)"};
+    const char* maskings[] = {"none", "implicit", "cook_torrance", "kelemen", "neumann", "schlick_smith(0.125)",
+                              "smith_separable", "smith_height_correlated", "smith_direction_correlated",
+                              "smith_height_direction_correlated"};
+    std::vector<EnergyTableKey> keys;
+    for (const char* n : ndfs)
+        for (const char* m : maskings) {
+            std::string body = std::string("ndf = ") + n + "; masking = " + m + "; energy = kulla_conty;";
+            if (!physics::checkerAccepts(body)) continue;
+            facet::DiagnosticEngine diags;
+            auto prog = facet::loadProgramText("material t {" + body + "}", "t.mat", diags);
+            keys.push_back(facet::energyTableKey(prog.materials[0]));
+        }
+    CHECK(keys.size() == 3 * 10 + 3 * 6);  // Smith needs ggx/beckmann/blinn_phong
+    struct Job {
+        EnergyTableKey key;
+        double mu, alpha, diff = 0;
+    };
+    std::vector<Job> jobs;
+    for (const EnergyTableKey& k : keys)
+        for (double alpha : {1e-3, 0.05, 0.3, 1.0})
+            for (double mu : {0.0, 0.01, 0.1, 0.5, 1.0}) jobs.push_back({k, mu, alpha});
+    parallelFor(jobs.size(), [&](size_t i) {
+        Job& j = jobs[i];
+        double a = facet::directionalAlbedo(j.key, j.mu, j.alpha), b = facet::directionalAlbedo(j.key, j.mu, j.alpha, fine);
+        // Compare 1 - E clamped like the table (E > 1 pairs store 0); relative to E for the unbounded `none`.
+        j.diff = std::abs(a - b) / std::max(1.0, std::abs(b));
+    });
+    double worst = 0;
+    std::string at;
+    for (const Job& j : jobs) {
+        INFO(j.key.name(), " mu=", j.mu, " alpha=", j.alpha);
+        CHECK(j.diff < 1e-4);
+        if (j.diff > worst) {
+            worst = j.diff;
+            at = j.key.name() + " mu=" + physics::num(j.mu) + " alpha=" + physics::num(j.alpha);
+        }
+    }
+    MESSAGE(keys.size(), " pairs: max |E_default - E_fine| = ", worst, " (at ", at, ")");
+}
+
+TEST_CASE("table build time per pair") {
+    const EnergyTableKey keys[] = {
+        key(NdfModel::Ggx, MaskingModel::SmithHeightCorrelated),
+        key(NdfModel::Ggx, MaskingModel::SmithSeparable),
+        key(NdfModel::Beckmann, MaskingModel::SmithHeightCorrelated),
+        key(NdfModel::Beckmann, MaskingModel::SmithSeparable),
+        key(NdfModel::Ggx, MaskingModel::SmithHeightDirectionCorrelated),
+        key(NdfModel::BlinnPhong, MaskingModel::SmithHeightCorrelated),
+        key(NdfModel::Gaussian, MaskingModel::Neumann),
+        key(NdfModel::Gtr, MaskingModel::SchlickSmith, 1.0, 0.125),
+    };
+    unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+    for (const EnergyTableKey& k : keys) {
+        auto t = facet::buildEnergyTable(k);
+        CHECK(t->validate() == "");
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "build %-45s %d x %d: %7.1f ms (%u threads)", k.name().c_str(), t->muCount,
+                      t->alphaCount, t->buildMillis, threads);
+        MESSAGE(buf);
+    }
+}
+
+}  // TEST_SUITE

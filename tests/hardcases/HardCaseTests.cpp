@@ -1,0 +1,388 @@
+// Hard-case tests (SPEC section 7, issue 5).
+//
+// Over the hard-case sample (compiler/HardCases.h) of every generated
+// material -- every NDF form x masking x Fresnel the checker accepts, with
+// the model parameters as unranged inputs, plus constant extreme parameters
+// -- on every backend (interp, scalar, SIMD 4/8/16) and math mode (exact,
+// fast):
+//   - no NaN, no Inf, no negative output; invalid inputs give 0 and are
+//     counted by the batch call;
+//   - the double interpreter against the __float128 one: within 1e-12
+//     relative, except at ill-conditioned inputs (error within 16 kappa u,
+//     kappa estimated in __float128), which are listed with kappa;
+//   - the JIT against the double interpreter within the bound of
+//     compiler/Verify.h at well-conditioned inputs, and no valid lane
+//     reported invalid.
+// Everything is computed once (two worker threads) and asserted by the test
+// cases below; the numbers quoted in docs/numerics.md are printed here.
+//
+//   FACET_HARDCASE_FILTER=substring   only materials whose name contains it
+//   FACET_HARDCASE_NO_JIT=1           skip the kernels (reference checks only)
+#include "QuadMath.h"
+
+#include "Checker.h"
+#include "HardCases.h"
+#include "Interpreter.h"
+#include "Kernel.h"
+#include "Verify.h"
+
+#include <doctest/doctest.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <mutex>
+#include <regex>
+#include <set>
+#include <thread>
+
+using namespace facet;
+
+namespace {
+
+constexpr double kQuadTolerance = 1e-12;
+constexpr double kUnit = 0x1p-53;
+
+struct Variant {
+    const char* name;
+    const char* options;
+};
+const Variant kVariants[] = {
+    {"scalar exact", "backend=scalar;math=exact"},      {"simd4 exact", "backend=simd;width=4;math=exact"},
+    {"simd8 exact", "backend=simd;width=8;math=exact"},  {"simd16 exact", "backend=simd;width=16;math=exact"},
+    {"scalar fast", "backend=scalar;math=fast"},        {"simd4 fast", "backend=simd;width=4;math=fast"},
+    {"simd8 fast", "backend=simd;width=8;math=fast"},    {"simd16 fast", "backend=simd;width=16;math=fast"},
+};
+
+struct IllCase {
+    double kappa, err;
+    std::string material, text;
+};
+
+struct QuadStats {
+    size_t cases = 0, illConditioned = 0, unexplained = 0, mismatches = 0;
+    size_t subnormal = 0;  // cases with a double-subnormal direction component (validity only)
+    double worstWell = 0;
+    std::string worstWellCase;
+    std::vector<IllCase> ill;             // the most ill-conditioned (by kappa)
+    std::vector<std::string> failures;    // unexplained errors and validity mismatches
+};
+
+struct KernelResult {
+    std::string variant;
+    SampleStats stats;
+    std::vector<std::string> failureText;  // described failing cases
+    std::string compileError;
+};
+
+struct MaterialResult {
+    HardCaseMaterial hm;
+    size_t cases = 0;
+    SampleStats interp, interpRaw;
+    std::vector<std::string> interpFailures;
+    QuadStats quad, quadRaw;
+    std::vector<KernelResult> kernels;
+};
+
+void quadCheck(const CheckedMaterial& m, const std::string& name, const std::vector<HardCase>& cases,
+               const QuadReference& quad, const std::function<double(size_t)>& condition, QuadStats& q) {
+    q.cases = cases.size();
+    for (size_t i = 0; i < cases.size(); ++i) {
+        QuadComparison c = quad.compare(cases[i]);
+        if (c.validMismatch) {
+            ++q.mismatches;
+            if (q.failures.size() < 8)
+                q.failures.push_back(fmt::format("{}: validity double {} quad {} at {}", name, c.doubleValid,
+                                                 c.quadValid, describeCase(m, cases[i])));
+            continue;
+        }
+        if (QuadReference::subnormalDirection(cases[i])) {
+            ++q.subnormal;  // validity checked above; precision out of double's reach
+            continue;
+        }
+        if (c.relError <= kQuadTolerance) {
+            if (c.relError >= q.worstWell) {
+                q.worstWell = c.relError;
+                q.worstWellCase = describeCase(m, cases[i]);
+            }
+            continue;
+        }
+        double kappa = condition(i);
+        if (c.relError <= kConditionAllowance * kappa * kUnit) {
+            ++q.illConditioned;
+            q.ill.push_back({kappa, c.relError, name, describeCase(m, cases[i])});
+        } else {
+            ++q.unexplained;
+            if (q.failures.size() < 8)
+                q.failures.push_back(fmt::format("{}: rel err {:.3g} kappa {:.3g} (ch {} double {:.17g} quad {:.17g}) at {}",
+                                                 name, c.relError, kappa, c.channel, c.d[c.channel], c.q[c.channel],
+                                                 describeCase(m, cases[i])));
+        }
+    }
+    std::sort(q.ill.begin(), q.ill.end(), [](const IllCase& a, const IllCase& b) { return a.kappa > b.kappa; });
+    if (q.ill.size() > 4) q.ill.resize(4);
+}
+
+MaterialResult runMaterial(const HardCaseMaterial& hm, Compiler& compiler) {
+    MaterialResult r;
+    r.hm = hm;
+    DiagnosticEngine diags;
+    CheckedProgram program = loadProgramText(hm.text, hm.name + ".mat", diags);
+    if (diags.hasErrors() || program.materials.empty()) {  // (hardCaseMaterials returns checked texts only)
+        r.interpFailures.push_back(hm.name + ": " + diags.str());
+        r.interp.nan = 1;
+        return r;
+    }
+    const CheckedMaterial& m = program.materials.front();
+    std::vector<HardCase> cases = hardCases(m);
+    HardCaseOptions rawOptions;
+    rawOptions.roundToFloat = false;
+    std::vector<HardCase> raw = hardCases(m, rawOptions);
+    r.cases = cases.size();
+
+    QuadReference quad(m);
+    std::map<size_t, double> kappas, kappasRaw;
+    auto condition = [&](size_t i) {
+        auto it = kappas.find(i);
+        return it != kappas.end() ? it->second : kappas[i] = quad.condition(cases[i]);
+    };
+    auto conditionRaw = [&](size_t i) {
+        auto it = kappasRaw.find(i);
+        return it != kappasRaw.end() ? it->second : kappasRaw[i] = quad.condition(raw[i]);
+    };
+
+    // The reference on both samples (float-rounded and with double-only values).
+    std::shared_ptr<const EnergyTable> table;
+    if (m.energyModel() == EnergyModel::KullaConty) table = buildEnergyTable(energyTableKey(m));
+    Interpreter<double> interp(m, table);
+    Reference ref = evaluateReference(interp, cases), refRaw = evaluateReference(interp, raw);
+    r.interp = checkReference(cases, ref);
+    r.interpRaw = checkReference(raw, refRaw);
+    for (const SampleStats* s : {&r.interp, &r.interpRaw})
+        for (const auto& [i, why] : s->failures)
+            r.interpFailures.push_back(fmt::format("{}: {} at {}", hm.name, why,
+                                                   describeCase(m, (s == &r.interp ? cases : raw)[i])));
+
+    quadCheck(m, hm.name, cases, quad, condition, r.quad);
+    quadCheck(m, hm.name, raw, quad, conditionRaw, r.quadRaw);
+
+    if (std::getenv("FACET_HARDCASE_NO_JIT")) return r;
+    for (const Variant& v : kVariants) {
+        KernelResult k;
+        k.variant = v.name;
+        CompileOptions o;
+        std::string error = CompileOptions::parse(v.options, o);
+        DiagnosticEngine kd;
+        std::unique_ptr<Kernel> kernel = error.empty() ? compiler.compileMaterial(m, o, kd) : nullptr;
+        if (!kernel) {
+            k.compileError = error.empty() ? kd.str() : error;
+            r.kernels.push_back(std::move(k));
+            continue;
+        }
+        KernelRun run = runKernel(*kernel, cases);
+        k.stats = checkKernel(v.name, run, cases, ref, hardCaseBound(o.math), condition, hardCaseRoundoff(o.math));
+        for (const auto& [i, why] : k.stats.failures)
+            k.failureText.push_back(fmt::format("{} [{}] {}: {}", hm.name, v.name, why, describeCase(m, cases[i])));
+        r.kernels.push_back(std::move(k));
+    }
+    return r;
+}
+
+struct Suite {
+    std::vector<HardCaseMaterial> materials;
+    std::vector<std::string> rejected;
+    std::vector<MaterialResult> results;
+    double seconds = 0;
+};
+
+const Suite& suite() {
+    static const Suite s = [] {
+        Suite out;
+        auto start = std::chrono::steady_clock::now();
+        out.materials = hardCaseMaterials(&out.rejected);
+        if (const char* f = std::getenv("FACET_HARDCASE_FILTER")) {
+            std::vector<HardCaseMaterial> kept;
+            for (const HardCaseMaterial& m : out.materials)
+                if (m.name.find(f) != std::string::npos) kept.push_back(m);
+            out.materials = kept;
+        }
+        out.results.resize(out.materials.size());
+        std::atomic<size_t> next{0};
+        auto worker = [&] {
+            Compiler compiler;  // one JIT per thread
+            for (size_t i; (i = next++) < out.materials.size();) out.results[i] = runMaterial(out.materials[i], compiler);
+        };
+        unsigned threads = std::max(1u, std::min(2u, std::thread::hardware_concurrency()));
+        std::vector<std::thread> pool;
+        for (unsigned t = 0; t < threads; ++t) pool.emplace_back(worker);
+        for (std::thread& t : pool) t.join();
+        out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        size_t cases = 0;
+        for (const MaterialResult& r : out.results) cases += r.cases;
+        std::printf("hard cases: %zu materials, %zu cases each sample on average, %.1f s\n", out.results.size(),
+                    out.results.empty() ? 0 : cases / out.results.size(), out.seconds);
+        return out;
+    }();
+    return s;
+}
+
+// Every NDF x masking x Fresnel model the checker accepts (enumerated from
+// the builtin tables, independently of the generator).
+std::set<std::string> acceptedCombinations() {
+    std::set<std::string> out;
+    std::vector<const ModelInfo*> ndfs, maskings, fresnels;
+    for (const ModelInfo& m : builtinModels()) {
+        if (m.slot == ModelSlot::Ndf) ndfs.push_back(&m);
+        if (m.slot == ModelSlot::Masking) maskings.push_back(&m);
+        if (m.slot == ModelSlot::Fresnel) fresnels.push_back(&m);
+    }
+    auto args = [](const ModelInfo& m) {
+        std::string a;
+        for (const ModelForm::Param& p : m.forms.front().params)
+            a += (a.empty() ? "" : ", ") + std::string(p.type == ValueType::Rgb ? "rgb(0.5, 0.5, 0.5)" : "0.5");
+        return a.empty() ? std::string(m.name) : std::string(m.name) + "(" + a + ")";
+    };
+    for (const ModelInfo* n : ndfs)
+        for (const ModelInfo* g : maskings)
+            for (const ModelInfo* f : fresnels) {
+                std::string text = "material t { ndf = " + args(*n) + "; masking = " + args(*g) +
+                                   "; fresnel = " + args(*f) + "; }";
+                DiagnosticEngine diags;
+                loadProgramText(text, "t.mat", diags);
+                if (!diags.hasErrors()) out.insert(std::string(n->name) + "/" + g->name + "/" + f->name);
+            }
+    return out;
+}
+
+std::string familyOf(const MaterialResult& r) { return r.hm.ndf; }
+
+}  // namespace
+
+TEST_CASE("hard-case materials cover every NDF x masking x Fresnel the checker accepts") {
+    const Suite& s = suite();
+    for (const std::string& t : s.rejected) FAIL_CHECK("the checker rejected a generated material:\n" << t);
+    if (std::getenv("FACET_HARDCASE_FILTER")) return;
+    std::set<std::string> covered;
+    for (const HardCaseMaterial& m : s.materials) covered.insert(m.ndf + "/" + m.masking + "/" + m.fresnel);
+    std::set<std::string> accepted = acceptedCombinations();
+    CHECK(accepted.size() == 43 * 4);  // 43 NDF x masking pairs x 4 Fresnel models
+    for (const std::string& c : accepted) CHECK_MESSAGE(covered.count(c), "not covered: " << c);
+    MESSAGE(s.materials.size() << " materials cover " << accepted.size() << " accepted combinations");
+}
+
+TEST_CASE("hard cases: the reference interpreter is finite, non-negative, and counts invalid inputs") {
+    const Suite& s = suite();
+    size_t invalid = 0, byInput = 0;
+    for (const MaterialResult& r : s.results) {
+        CHECK_MESSAGE(r.interp.ok(), r.hm.name << ": " << r.interp.summary());
+        CHECK_MESSAGE(r.interpRaw.ok(), r.hm.name << " (double-only values): " << r.interpRaw.summary());
+        for (const std::string& f : r.interpFailures) MESSAGE(f);
+        invalid += r.interp.invalid;
+        byInput += r.interp.expectedInvalid;
+    }
+    MESSAGE("reference: " << invalid << " invalid lanes, " << byInput << " of them by a non-finite or non-unit input");
+}
+
+TEST_CASE("hard cases: double reference against __float128 within 1e-12 except ill-conditioned inputs") {
+    const Suite& s = suite();
+    std::map<std::string, std::pair<double, std::string>> worst;  // per NDF family
+    std::map<std::string, size_t> illCount;
+    std::vector<IllCase> ill;
+    size_t total = 0, illTotal = 0;
+    for (const MaterialResult& r : s.results) {
+        for (const QuadStats* q : {&r.quad, &r.quadRaw}) {
+            CHECK_MESSAGE(q->unexplained == 0, r.hm.name << ": " << q->unexplained << " errors beyond 1e-12 and 16 kappa u");
+            CHECK_MESSAGE(q->mismatches == 0, r.hm.name << ": " << q->mismatches << " validity mismatches");
+            for (const std::string& f : q->failures) MESSAGE(f);
+            auto& w = worst[familyOf(r)];
+            if (q->worstWell >= w.first) w = {q->worstWell, r.hm.name + " " + q->worstWellCase};
+            illCount[familyOf(r)] += q->illConditioned;
+            illTotal += q->illConditioned;
+            total += q->cases;
+            ill.insert(ill.end(), q->ill.begin(), q->ill.end());
+        }
+    }
+    std::printf("\ndouble vs __float128 on %zu cases (float-rounded and double-only samples):\n", total);
+    std::printf("  %-12s %-12s %-8s %s\n", "ndf", "worst rel", "ill", "worst well-conditioned case");
+    for (const auto& [family, w] : worst)
+        std::printf("  %-12s %-12.3g %-8zu %s\n", family.c_str(), w.first, illCount[family], w.second.c_str());
+    std::sort(ill.begin(), ill.end(), [](const IllCase& a, const IllCase& b) { return a.kappa > b.kappa; });
+    // One line per distinct label, the highest kappa first.
+    std::printf("ill-conditioned: %zu cases (error > 1e-12, within 16 kappa u); by label, highest kappa:\n", illTotal);
+    std::set<std::string> seen;
+    size_t shown = 0;
+    for (const IllCase& c : ill) {
+        std::string label = c.text.substr(c.text.rfind('['));
+        if (!seen.insert(label).second) continue;
+        std::printf("  kappa %-9.3g err %-9.3g %s %s\n", c.kappa, c.err, c.material.c_str(), c.text.c_str());
+        if (++shown >= 40) break;
+    }
+}
+
+TEST_CASE("hard cases: JIT kernels never output NaN, Inf or negative values, and count invalid inputs") {
+    const Suite& s = suite();
+    std::map<std::string, size_t> lanes;
+    for (const MaterialResult& r : s.results)
+        for (const KernelResult& k : r.kernels) {
+            CHECK_MESSAGE(k.compileError.empty(), r.hm.name << " [" << k.variant << "]: " << k.compileError);
+            const SampleStats& st = k.stats;
+            INFO(r.hm.name, " [", k.variant, "]: ", st.summary());
+            CHECK(st.nan == 0);
+            CHECK(st.inf == 0);
+            CHECK(st.negative == 0);
+            CHECK(st.missedInvalid == 0);
+            CHECK(st.invalidNonZero == 0);
+            CHECK_FALSE(st.countMismatch);
+            lanes[k.variant] += st.cases;
+        }
+    for (const auto& [v, n] : lanes) MESSAGE(v << ": " << n << " lanes");
+}
+
+// The JIT's accuracy on the hard cases. At the time of writing the lowering
+// fails this in known ways (reported to its owner; see docs/numerics.md,
+// "Open JIT issues"): float-denormal cosines make D G / (4 ci co) 0/0,
+// conductor Fresnel loses its relative accuracy (and can turn negative) as
+// eta -> 1, k -> 0, GTR with gamma >~ 300 overflows its normalization, and
+// energy = kulla_conty is not lowered yet. may_fail keeps the suite green
+// while those are open: remove it once they are fixed.
+TEST_CASE("hard cases: JIT kernels keep valid lanes valid and agree with the reference" * doctest::may_fail()) {
+    const Suite& s = suite();
+    struct Worst {
+        double err = 0;
+        std::string where;
+    };
+    std::map<std::string, Worst> worst;  // per math mode x NDF family
+    std::map<std::string, std::pair<size_t, std::vector<std::string>>> failures;  // per kind
+    for (const MaterialResult& r : s.results)
+        for (const KernelResult& k : r.kernels) {
+            const SampleStats& st = k.stats;
+            CHECK_MESSAGE(st.unexpectedInvalid == 0, r.hm.name << " [" << k.variant << "]: " << st.summary());
+            CHECK_MESSAGE(st.validityMismatch == 0, r.hm.name << " [" << k.variant << "]: " << st.summary());
+            CHECK_MESSAGE(st.beyondBound == 0, r.hm.name << " [" << k.variant << "]: " << st.summary());
+            std::string mode = k.variant.substr(k.variant.find(' ') + 1);
+            Worst& w = worst[mode + " " + familyOf(r)];
+            if (st.maxRel > w.err) w = {st.maxRel, r.hm.name + " [" + k.variant + "]"};
+            for (const std::string& f : k.failureText) {
+                std::string why = f.substr(f.find("] ") + 2);
+                // Kind: the reason and the case label with its numbers masked.
+                std::string label = f.substr(f.rfind('['));
+                label = std::regex_replace(label, std::regex("^\\[inputs? [^/]*/ "), "[");
+                label = std::regex_replace(label, std::regex("=-?[0-9][^ \\]]*"), "=#");
+                std::string kind = mode + ": " + why.substr(0, why.find_first_of(":0123456789(")) + " " + label;
+                auto& entry = failures[kind];
+                ++entry.first;
+                if (entry.second.size() < 3) entry.second.push_back(f);
+            }
+        }
+    std::printf("\nJIT against the double interpreter on the hard-case sample (well-conditioned inputs):\n");
+    for (const auto& [key, w] : worst) std::printf("  %-24s max rel err %-10.3g %s\n", key.c_str(), w.err, w.where.c_str());
+    if (!failures.empty()) std::printf("JIT failures by kind (counted up to 16 per kernel and kind):\n");
+    for (const auto& [kind, entry] : failures) {
+        std::printf("  %zu x %s\n", entry.first, kind.c_str());
+        for (const std::string& e : entry.second) std::printf("      %s\n", e.c_str());
+    }
+}

@@ -1,0 +1,328 @@
+#!/usr/bin/env bash
+# cli_test.sh: end-to-end tests of the `facet` command line (SPEC section 5).
+#
+#   usage: cli_test.sh PATH/TO/facet
+#
+# Why a separate test: the exit codes (0 ok, 1 a check failed, 2 usage,
+# 65 a material file error), the exact diagnostic text and the CSV contract
+# (one output row per input row, bad rows reported by number and zeroed,
+# good rows still evaluated) are what scripts and build systems depend on,
+# and none of it is visible from the C++ API.
+#
+# Expected BRDF values are worked out by hand for one material:
+#   ndf = ggx(alpha), masking none, fresnel = schlick(f0 = 0.04), lambert(albedo)
+#   wi = wo = n:            D = 1/(pi a^2), F = f0, G = 1, f = F D / 4 + albedo/pi
+#                           a = 0.5: (0.04 + albedo)/pi;  a = 1: (0.01 + albedo)/pi
+#   mirror pair at 60 deg:  h = n, F = f0 + (1 - f0)/2^5 = 0.07, 4 cos^2 = 1,
+#                           a = 0.5: f = 0.07 * 4/pi + albedo/pi = (0.28 + albedo)/pi
+# and computed again here in awk, independently of Facet.
+set -u
+
+FACET=${1:?usage: cli_test.sh PATH/TO/facet}
+case "$FACET" in /*) ;; *) FACET="$PWD/$FACET" ;; esac
+
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+cd "$tmp" || exit 1
+
+failures=0
+checks=0
+fail() {
+    echo "FAIL: $*" >&2
+    failures=$((failures + 1))
+}
+
+# run CMD...: runs it, keeping exit code, stdout and stderr.
+run() {
+    "$@" >stdout.txt 2>stderr.txt
+    rc=$?
+    out=$(cat stdout.txt)
+    err=$(cat stderr.txt)
+}
+expect_rc() {  # CODE WHAT
+    checks=$((checks + 1))
+    [ "$rc" -eq "$1" ] || fail "$2: exit code $rc, expected $1; stderr was: $err"
+}
+expect_eq() {  # ACTUAL EXPECTED WHAT
+    checks=$((checks + 1))
+    [ "$1" == "$2" ] || fail "$3:"$'\n'"--- got:"$'\n'"$1"$'\n'"--- expected:"$'\n'"$2"
+}
+expect_first_line() {  # TEXT EXPECTED-FIRST-LINE WHAT
+    expect_eq "$(printf '%s\n' "$1" | head -n 1)" "$2" "$3"
+}
+# near_row FILE ROW EXPR_R EXPR_G EXPR_B: data row ROW (1-based, after the
+# header) of a CSV holds the three awk expressions (pi is defined) to 1e-14.
+near_row() {
+    checks=$((checks + 1))
+    local verdict
+    verdict=$(awk -F, -v row="$2" "
+        BEGIN { pi = atan2(0, -1) }
+        NR == row + 1 {
+            e[1] = ($3); e[2] = ($4); e[3] = ($5)
+            for (i = 1; i <= 3; ++i) {
+                d = \$i - e[i]; if (d < 0) d = -d
+                s = e[i] < 0 ? -e[i] : e[i]
+                if (d > 1e-14 * s + 1e-300) { printf \"channel %d: got %s, expected %.17g\", i, \$i, e[i]; exit }
+            }
+            print \"ok\"; exit
+        }
+        END { }" "$1")
+    [ "$verdict" == "ok" ] || fail "$1 row $2: ${verdict:-no such row}"
+}
+expect_zero_row() {  # FILE ROW
+    checks=$((checks + 1))
+    local line
+    line=$(sed -n "$(($2 + 1))p" "$1")
+    [ "$line" == "0,0,0" ] || fail "$1 row $2: expected 0,0,0, got '$line'"
+}
+
+# ---- inputs ------------------------------------------------------------------
+cat >test.mat <<'EOF'
+// Two materials: the CLI picks the first unless --material says otherwise.
+material test {
+    input alpha = 0.5 in 0.01 .. 1;
+    input albedo = rgb(0.2, 0.4, 0.6);
+    ndf = ggx(alpha);
+    fresnel = schlick(f0 = 0.04);
+    diffuse = lambert(albedo);
+}
+material other {
+    ndf = beckmann(0.25);
+}
+EOF
+
+cat >bad.mat <<'EOF'
+material bad {
+    input roughness = 0.5 in 0 .. 1;
+    ndf = ggx(rougness);
+    masking = smith_height_correlated;
+    fresnel = schlik(0.04);
+}
+EOF
+bad_diags="bad.mat:3:15: error: undefined name 'rougness' (did you mean 'roughness'?)
+bad.mat:5:15: error: unknown fresnel model 'schlik' (did you mean 'schlick'?)"
+
+S60=0.8660254037844386  # sin 60 deg, to 16 digits: a unit vector to 1e-16
+
+# Rows 1, 5, 9, 10, 11 are good; 2, 3, 4, 6, 7, 8 are bad in six different ways.
+cat >mixed.csv <<EOF
+wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,alpha
+0,0,1,0,0,1,0.5
+0,0,1,0,0,1
+0,0,1,0,0,abc,0.5
+nan,0,1,0,0,1,0.5
+$S60,0,0.5,-$S60,0,0.5,0.5
+inf,0,1,0,0,1,0.5
+0,0,2,0,0,1,0.5
+0,0,1,0,0,1,nan
+0,0,1,0,0,1,1
+0.6,0,-0.8,0,0,1,0.5
+0,0,1,0,0,1,5
+EOF
+
+cat >dirs.csv <<EOF
+wi_x,wi_y,wi_z,wo_x,wo_y,wo_z
+0,0,1,0,0,1
+$S60,0,0.5,-$S60,0,0.5
+EOF
+
+# ---- facet check ---------------------------------------------------------------
+run "$FACET" check test.mat
+expect_rc 0 "check on a good file"
+expect_eq "$out$err" "" "check on a good file prints nothing"
+
+run "$FACET" check bad.mat
+expect_rc 65 "check on a bad file"
+expect_eq "$err" "$bad_diags" "check on a bad file: exact diagnostics"
+expect_eq "$out" "" "check prints diagnostics on stderr only"
+
+run "$FACET" check test.mat bad.mat
+expect_rc 65 "check with one bad file of two"
+expect_eq "$err" "$bad_diags" "check with one bad file of two: only its diagnostics"
+
+run "$FACET" check missing.mat
+expect_rc 65 "check on a missing file"
+expect_eq "$err" "missing.mat: error: cannot open file" "check on a missing file: message"
+
+run "$FACET" check
+expect_rc 2 "check without files"
+expect_first_line "$err" "facet: check: no files given" "check without files: message"
+
+# ---- facet eval: good and bad rows -----------------------------------------------
+run "$FACET" eval test.mat --in mixed.csv
+cp stdout.txt mixed.out
+expect_rc 1 "eval with bad rows"
+expect_eq "$(wc -l <mixed.out | tr -d ' ')" "12" "eval: header plus one line per input row"
+expect_first_line "$out" "r,g,b" "eval: output header"
+expect_eq "$err" "mixed.csv:3: error: row 2: expected 7 columns, found 6; its output is 0,0,0
+mixed.csv:4: error: row 3: column 'wo_z' is not a number: 'abc'; its output is 0,0,0
+mixed.csv:5: error: row 4: column 'wi_x' is NaN; its output is 0,0,0
+mixed.csv:7: error: row 6: column 'wi_x' is infinite; its output is 0,0,0
+mixed.csv:8: error: row 7: wi is not a unit vector (length 2); its output is 0,0,0
+mixed.csv:9: error: row 8: column 'alpha' is NaN; its output is 0,0,0
+6 of 11 rows invalid" "eval: every bad row reported by number"
+near_row mixed.out 1 "0.24/pi" "0.44/pi" "0.64/pi"        # normal incidence, a = 0.5
+for r in 2 3 4 6 7 8; do expect_zero_row mixed.out $r; done
+near_row mixed.out 5 "0.48/pi" "0.68/pi" "0.88/pi"        # mirror 60 deg, a = 0.5
+near_row mixed.out 9 "0.21/pi" "0.41/pi" "0.61/pi"        # normal incidence, a = 1 (column)
+expect_zero_row mixed.out 10                              # wi below the horizon: f = 0, a valid row
+near_row mixed.out 11 "0.21/pi" "0.41/pi" "0.61/pi"       # a = 5 is clamped to the range top, 1
+
+# Output precision: %.17g round-trips the double.
+expect_eq "$(sed -n 2p mixed.out | cut -d, -f1)" "0.076394372684109757" "eval: full precision output"
+
+# All rows good: exit 0.
+run "$FACET" eval test.mat --in dirs.csv
+expect_rc 0 "eval with only good rows"
+echo "$out" >dirs.out
+near_row dirs.out 1 "0.24/pi" "0.44/pi" "0.64/pi"
+near_row dirs.out 2 "0.48/pi" "0.68/pi" "0.88/pi"
+
+# Header only: no rows, exit 0.
+printf 'wi_x,wi_y,wi_z,wo_x,wo_y,wo_z\n' >empty_rows.csv
+run "$FACET" eval test.mat --in empty_rows.csv
+expect_rc 0 "eval with no data rows"
+expect_eq "$out" "r,g,b" "eval with no data rows: header only"
+
+# ---- --set ---------------------------------------------------------------------
+run "$FACET" eval test.mat --set alpha=1 --in dirs.csv
+expect_rc 0 "--set float"
+echo "$out" >set1.out
+near_row set1.out 1 "0.21/pi" "0.41/pi" "0.61/pi"
+# mirror 60 deg with a = 1: 0.07 * (1/pi) / (4 * 0.25) = 0.07/pi
+near_row set1.out 2 "0.27/pi" "0.47/pi" "0.67/pi"
+
+run "$FACET" eval test.mat --set albedo=0,0.5,1 --in dirs.csv
+expect_rc 0 "--set rgb r,g,b"
+echo "$out" >set2.out
+near_row set2.out 1 "0.04/pi" "0.54/pi" "1.04/pi"
+
+run "$FACET" eval test.mat --set albedo=0.3 --set alpha=1 --in dirs.csv
+expect_rc 0 "--set rgb with one value (all channels) and a float"
+echo "$out" >set3.out
+near_row set3.out 1 "0.31/pi" "0.31/pi" "0.31/pi"
+
+run "$FACET" eval test.mat --set nope=1 --in dirs.csv
+expect_rc 2 "--set of an unknown input"
+expect_first_line "$err" "facet: --set: material 'test' has no input 'nope'" "--set of an unknown input: message"
+
+run "$FACET" eval test.mat --set alpha=1,2,3 --in dirs.csv
+expect_rc 2 "--set of three values for a float input"
+expect_first_line "$err" "facet: --set alpha: input 'alpha' is float; give one value" "--set float arity: message"
+
+run "$FACET" eval test.mat --set alpha=abc --in dirs.csv
+expect_rc 2 "--set of a non-number"
+expect_first_line "$err" "facet: --set alpha: 'abc' is not a finite number" "--set non-number: message"
+
+run "$FACET" eval test.mat --set alpha=nan --in dirs.csv
+expect_rc 2 "--set of NaN"
+
+run "$FACET" eval test.mat --set albedo=1,2 --in dirs.csv
+expect_rc 2 "--set of two values"
+
+run "$FACET" eval test.mat --set alpha --in dirs.csv
+expect_rc 2 "--set without '='"
+expect_first_line "$err" "facet: --set expects NAME=VALUE, got 'alpha'" "--set without '=': message"
+
+# ---- input columns ---------------------------------------------------------------
+cat >channels.csv <<EOF
+wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,albedo.g,alpha
+0,0,1,0,0,1,0,0.5
+0,0,1,0,0,1,1,1
+EOF
+run "$FACET" eval test.mat --in channels.csv
+expect_rc 0 "a column per rgb channel (albedo.g)"
+echo "$out" >channels.out
+near_row channels.out 1 "0.24/pi" "0.04/pi" "0.64/pi"
+near_row channels.out 2 "0.21/pi" "1.01/pi" "0.61/pi"
+
+cat >whole.csv <<EOF
+wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,albedo
+0,0,1,0,0,1,0.1
+EOF
+run "$FACET" eval test.mat --in whole.csv
+expect_rc 0 "an rgb input column sets all three channels"
+echo "$out" >whole.out
+near_row whole.out 1 "0.14/pi" "0.14/pi" "0.14/pi"
+
+cat >unknown_col.csv <<EOF
+wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,bogus
+0,0,1,0,0,1,1
+EOF
+run "$FACET" eval test.mat --in unknown_col.csv
+expect_rc 2 "unknown column"
+expect_eq "$err" "unknown_col.csv:1: error: column 'bogus' is not an input of material 'test' (inputs: alpha, albedo)" \
+    "unknown column: message"
+expect_eq "$out" "" "unknown column: no output"
+
+run "$FACET" eval test.mat --set alpha=1 --in mixed.csv
+expect_rc 2 "a column for an input bound with --set"
+expect_eq "$err" "mixed.csv:1: error: column 'alpha' sets input 'alpha', which is bound with --set" \
+    "column bound with --set: message"
+
+printf 'wi_x,wi_y,wi_z,wo_x,wo_y\n0,0,1,0,0\n' >no_woz.csv
+run "$FACET" eval test.mat --in no_woz.csv
+expect_rc 2 "missing direction column"
+expect_eq "$err" "no_woz.csv:1: error: missing column 'wo_z' (the header needs wi_x,wi_y,wi_z,wo_x,wo_y,wo_z)" \
+    "missing direction column: message"
+
+: >empty.csv
+run "$FACET" eval test.mat --in empty.csv
+expect_rc 2 "empty CSV"
+
+run "$FACET" eval test.mat --in does_not_exist.csv
+expect_rc 2 "missing CSV"
+expect_eq "$err" "does_not_exist.csv: error: cannot open file" "missing CSV: message"
+
+# ---- --out, --material -------------------------------------------------------------
+run "$FACET" eval test.mat --in mixed.csv --out written.csv
+expect_rc 1 "--out with bad rows"
+expect_eq "$out" "" "--out: nothing on stdout"
+expect_eq "$(cat written.csv 2>/dev/null)" "$(cat mixed.out)" "--out: the file holds what stdout would"
+
+run "$FACET" eval test.mat --in dirs.csv --out nodir/x.csv
+expect_rc 2 "--out into a missing directory"
+
+run "$FACET" eval test.mat --material other --in dirs.csv
+expect_rc 0 "--material picks the second material"
+echo "$out" >other.out
+# Beckmann a = 0.25 at h = n: D = 1/(pi a^2) = 16/pi; f = D/4 (no F, no G, no diffuse).
+near_row other.out 1 "4/pi" "4/pi" "4/pi"
+# mirror 60 deg: D/(4 cos^2 60) = D.
+near_row other.out 2 "16/pi" "16/pi" "16/pi"
+
+run "$FACET" eval test.mat --material nope --in dirs.csv
+expect_rc 2 "--material that does not exist"
+expect_first_line "$err" "facet: eval: no material named 'nope' in test.mat" "--material nope: message"
+
+run "$FACET" eval bad.mat --in dirs.csv
+expect_rc 65 "eval of a bad material"
+expect_eq "$err" "$bad_diags" "eval of a bad material: the same diagnostics as check"
+
+# ---- usage errors ------------------------------------------------------------------
+run "$FACET"
+expect_rc 2 "no arguments"
+run "$FACET" frobnicate
+expect_rc 2 "unknown command"
+expect_first_line "$err" "facet: unknown command 'frobnicate'" "unknown command: message"
+run "$FACET" eval test.mat
+expect_rc 2 "eval without --in"
+expect_first_line "$err" "facet: eval: --in IN.csv is required" "eval without --in: message"
+run "$FACET" eval --in dirs.csv
+expect_rc 2 "eval without a material file"
+run "$FACET" eval test.mat --in
+expect_rc 2 "--in without a value"
+run "$FACET" eval test.mat --in dirs.csv --frobnicate
+expect_rc 2 "unknown eval option"
+run "$FACET" eval test.mat other.mat --in dirs.csv
+expect_rc 2 "two material files"
+run "$FACET" eval test.mat --backend bogus --in dirs.csv
+expect_rc 2 "unknown backend"
+run "$FACET" check --frobnicate
+expect_rc 2 "unknown check option"
+run "$FACET" --help
+expect_rc 0 "--help"
+expect_first_line "$out" "usage: facet <command> [options]" "--help prints usage on stdout"
+
+echo "cli_test: $checks checks, $failures failed"
+[ "$failures" -eq 0 ]
