@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The README's main command: install what is missing, build, and run Facet on
-# every shipped material (check, then evaluate a direction sample).
+# every shipped material: check them, then `facet bench` (speed against error
+# for every backend x math mode, with the AOT baseline where one exists).
+# Tables: terminal, build/bench/bench.md, bench.json, bench.png.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
@@ -8,9 +10,4 @@ scripts/build.sh
 facet=build/compiler/facet
 $facet check materials/*.mat
 echo "all $(ls materials/*.mat | wc -l) materials check"
-sample=build/main-sample.csv
-printf 'wi_x,wi_y,wi_z,wo_x,wo_y,wo_z\n0,0,1,0,0,1\n0.6,0,0.8,-0.6,0,0.8\n0.8,0.0,0.6,-0.48,0.64,0.6\n0.9949874,0,0.1,-0.9949874,0,0.1\n' > "$sample"
-for m in materials/*.mat; do
-  echo "== $m"
-  $facet eval "$m" --in "$sample"
-done
+$facet bench materials/*.mat bench/models/*.mat --out build/bench

@@ -254,3 +254,30 @@ TEST_CASE("option strings are validated") {
     CHECK(c.compileText(kGold, "t.mat", "", opts("set.shine=1"), d) == nullptr);
     CHECK(d.str() == "t.mat:2:10: error: cannot bind 'shine': material 'gold' has no such input (inputs: roughness, tint)\n");
 }
+
+TEST_CASE("tolerance selection never returns a variant whose measured error exceeds the tolerance") {
+    Compiler c;
+    size_t checked = 0;
+    for (const char* file : {"gold", "aluminium", "glass", "cook_torrance_classic", "legacy_blinn_phong", "satin_gaussian"}) {
+        std::string path = fmt::format("{}/materials/{}.mat", FACET_SOURCE_DIR, file);
+        for (double tol : {1e-2, 1e-3, 1e-5}) {
+            DiagnosticEngine d;
+            CompileOptions o = opts(fmt::format("backend=simd;cache=off;tolerance={}", tol));
+            auto k = c.compileFile(path, "", o, d);
+            REQUIRE_MESSAGE(k, d.str());
+            INFO(file << " tolerance " << tol << " picked " << k->variant() << " measured " << k->measuredError());
+            CHECK(k->measuredError() >= 0);
+            CHECK(k->measuredError() <= tol);
+            // The measurement is reproducible: measuring the chosen kernel again gives the same number.
+            CHECK(measureKernelError(*k, k->material()) == k->measuredError());
+            ++checked;
+        }
+    }
+    CHECK(checked == 18);
+    // Model substitutions are only picked when a tolerance allows them:
+    // plain math=fast never uses Walter's Lambda or Schlick for a dielectric.
+    DiagnosticEngine d;
+    auto fast = c.compileFile(fmt::format("{}/materials/aluminium.mat", FACET_SOURCE_DIR), "", opts("math=fast;cache=off"), d);
+    REQUIRE(fast);
+    CHECK(fast->variant() == "fast");
+}
