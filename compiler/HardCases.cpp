@@ -431,6 +431,9 @@ std::vector<HardCaseMaterial> hardCaseMaterials(std::vector<std::string>* reject
             if (g.smith && !n.smith) continue;          // no closed-form Lambda
             if (n.family == "ward" && g.name != "none") continue;  // ward is a whole lobe
             for (const FresnelForm& f : fresnelForms()) {
+                // schlick(eta) differs from schlick(f0) only in how f0 is
+                // computed (independent of D and G): a few pairs suffice.
+                if (f.key == "schlick_eta" && g.name != "none" && g.name != "smith_height_correlated") continue;
                 std::string inputs = n.inputs + "\n" + g.inputs + "\n" + f.inputs + "\n";
                 std::string body = inputs + "ndf = " + n.stmt + ";\nmasking = " + g.stmt + ";\nfresnel = " + f.stmt +
                                    ";\n" + f.extra + "\n";
@@ -502,6 +505,20 @@ std::vector<HardCaseMaterial> hardCaseMaterials(std::vector<std::string>* reject
          "smith_separable", "schlick"},
         {"hcc_schlick_smith_k0", "ndf = beckmann(0.3); masking = schlick_smith(0);", "beckmann", "schlick_smith", "none"},
         {"hcc_schlick_smith_k1", "ndf = ggx(0.3); masking = schlick_smith(1);", "ggx", "schlick_smith", "none"},
+        // energy = kulla_conty (its tables need constant gamma / k): f_ms on the hard cases.
+        {"hcc_kc_ggx_conductor",
+         "input alpha = 0.3; ndf = ggx(alpha); masking = smith_height_correlated; "
+         "fresnel = conductor(eta = rgb(0.14, 1, 1.38), k = rgb(3.7, 0, 1.9)); energy = kulla_conty;",
+         "ggx", "smith_height_correlated", "conductor"},
+        {"hcc_kc_beckmann_dielectric",
+         "input alpha = 0.3; input eta = rgb(1.5, 1, 0.7); ndf = beckmann(alpha); masking = smith_separable; "
+         "fresnel = dielectric(eta); energy = kulla_conty;",
+         "beckmann", "smith_separable", "dielectric"},
+        {"hcc_kc_ggx_aniso_schlick",
+         "input alpha_x = 0.05; input alpha_y = 0.5; input f0 = rgb(0.04, 0.5, 0.9); "
+         "ndf = ggx(alpha_x = alpha_x, alpha_y = alpha_y); masking = smith_height_direction_correlated; "
+         "fresnel = schlick(f0 = f0); energy = kulla_conty;",
+         "ggx", "smith_height_direction_correlated", "schlick"},
         {"hcc_ranged_roughness",
          "input roughness = 0.5 in 0 .. 1; input tint = rgb(1, 0.5, 0.25) in 0 .. 1; let alpha = roughness * roughness; "
          "ndf = ggx(alpha); masking = smith_height_correlated; fresnel = schlick(f0 = tint); diffuse = lambert(tint);",

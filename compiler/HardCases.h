@@ -71,8 +71,10 @@ struct HardCaseMaterial {
 
 // Every NDF form x masking x Fresnel combination the checker accepts
 // (`none`, the Smith variants only with an NDF that has a Smith Lambda, ward
-// only with masking = none), model parameters as unranged inputs, a
-// Lambert base on the schlick(f0) variants; then constant-parameter and
+// only with masking = none; the schlick(eta) form only with masking none and
+// smith_height_correlated, as it differs from schlick(f0) only in how f0 is
+// computed), model parameters as unranged inputs, a Lambert base on the
+// schlick(f0) variants; then constant-parameter and
 // range-clamped materials for the model-parameter hard cases. Only texts
 // the checker accepts are returned; `rejected` (if given) receives the
 // generated texts it refused, which should be none.

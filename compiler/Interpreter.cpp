@@ -53,15 +53,6 @@ Real integrate(const F& f, Real a, Real b, int panels) {
     return sum;
 }
 
-// Beckmann Smith Lambda for a = cot(theta_v) / alpha_v (Walter et al. 2007):
-// Lambda = (erf(a) - 1)/2 + exp(-a^2) / (2 a sqrt(pi)), written with erfc so
-// that it does not cancel for large a.
-template <typename Real>
-Real beckmannLambda(Real a) {
-    using std::erfc; using std::exp; using std::sqrt;
-    return (exp(-a * a) / (a * sqrt(kPi<Real>)) - erfc(a)) / 2;
-}
-
 // cos of the half angle, wi.h = wo.h = |wi + wo| / 2 for unit vectors (at most 1).
 template <typename Real>
 Real halfAngleCos(const Vec3<Real>& wi, const Vec3<Real>& wo) {
@@ -158,17 +149,21 @@ void normalizedPair(const Real wi[3], const Real wo[3], Vec3<Real>& ui, Vec3<Rea
 template <typename Real>
 Real gaussianNdfNorm(Real alpha) {
     using std::cos; using std::exp; using std::min; using std::sin;
-    // One-entry memo per thread: resolve() runs for every evaluation and a
-    // sample mostly shares alpha, while the quadrature costs 512 exp/cos/sin
-    // (milliseconds in __float128).
-    thread_local Real lastAlpha = -1, lastNorm = 0;
-    if (alpha == lastAlpha) return lastNorm;
+    // A small memo per thread: resolve() runs for every evaluation and a
+    // sample mostly shares a few alphas, while the quadrature costs 512
+    // exp/cos/sin (milliseconds in __float128).
+    constexpr int kMemo = 4;
+    thread_local Real memoAlpha[kMemo] = {-1, -1, -1, -1}, memoNorm[kMemo] = {};
+    thread_local int memoNext = 0;
+    for (int i = 0; i < kMemo; ++i)
+        if (memoAlpha[i] == alpha) return memoNorm[i];
     // The integrand is negligible beyond 8 alpha (exp(-64)).
     Real upper = min(kPi<Real> / 2, 8 * alpha);
     auto f = [&](Real t) { return exp(-t * t / (alpha * alpha)) * cos(t) * sin(t); };
     Real norm = 2 * kPi<Real> * integrate<Real>(f, Real(0), upper, 64);
-    lastAlpha = alpha;
-    lastNorm = norm;
+    memoAlpha[memoNext] = alpha;
+    memoNorm[memoNext] = norm;
+    memoNext = (memoNext + 1) % kMemo;
     return norm;
 }
 
@@ -264,8 +259,9 @@ Real ResolvedMaterial<Real>::cosLambda(const Vec3<Real>& v) const {
         }
         case NdfModel::Beckmann:
         case NdfModel::BlinnPhong: {
-            // Lambda = (exp(-a^2) / (a sqrt(pi)) - erfc(a)) / 2, a = vz / s, s = sqrt(proj)
-            // (beckmannLambda); times vz, using vz / a = s:
+            // Walter et al. 2007: Lambda = (erf(a) - 1)/2 + exp(-a^2) / (2 a sqrt(pi)),
+            // a = cot(theta_v) / alpha_v = vz / s, s = sqrt(proj), written with erfc so
+            // that it does not cancel for large a; times vz, using vz / a = s:
             Real s = sqrt(proj), a = v.z / s;
             return (s * exp(-a * a) / sqrt(kPi<Real>) - v.z * erfc(a)) / 2;
         }

@@ -164,7 +164,10 @@ double albedoOf(const ResolvedMaterial<double>& m, double alpha, double mu, cons
     // The peak's angular width: alpha is the slope scale for ggx, beckmann
     // and gtr, an angle for gaussian; blinn_phong uses its Beckmann alpha.
     double scale = std::atan(alpha);
-    std::vector<Special> specials = {{0, scale / 8}, {thetaFull, q.kinkPanel}, {thetaEnd, q.kinkPanel}};
+    // (The second special keeps panels narrow over the shoulder of
+    // Gaussian-like peaks: beckmann, blinn_phong, gaussian.)
+    std::vector<Special> specials = {
+        {0, scale / 8}, {2 * scale, scale / 4}, {thetaFull, q.kinkPanel}, {thetaEnd, q.kinkPanel}};
     if (azimuthal) specials.push_back({thetaO / 2, q.kinkPanel});
     if (kinkMasking) {
         // theta_h where a kink's cos(phi) = (oh* - mu ct)/(so st) crosses 1 or the cut.

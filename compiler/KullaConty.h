@@ -75,7 +75,7 @@ namespace facet {
 
 // Bumped whenever the table contents would change (grid, quadrature,
 // formulas): cached EXR files of another version are rebuilt.
-constexpr int kEnergyTableVersion = 1;
+constexpr int kEnergyTableVersion = 2;
 
 // What an E table depends on besides alpha.
 struct EnergyTableKey {
@@ -107,9 +107,11 @@ EnergyTableKey energyTableKey(const CheckedMaterial& material);
 // Quadrature settings (part of the EXR metadata: a table built with other
 // settings is stale).
 struct EnergyQuadrature {
-    // Defaults: error < 1.1e-5 against a 100x finer quadrature (GGX and
-    // Beckmann, every masking, alpha in [1e-4, 1], mu in [1e-6, 1]); the
-    // table's interpolation error is much larger (see tests/energy).
+    // Defaults: |E - E_fine| < 2.5e-5 against a much finer quadrature (16-point
+    // panels half as wide, 16 x 8 azimuth panels) for ggx, beckmann, blinn_phong
+    // and gaussian with every masking they allow, alpha in [1e-4, 1], mu in
+    // [1e-6, 1]; < 1e-5 for the Smith forms. The table's interpolation error is
+    // larger (~5e-4 at worst in [0.05, 1]^2, see tests/energy).
     int thetaPoints = 4;          // Gauss-Legendre points per theta_h panel
     double thetaMaxPanel = 0.2;   // widest theta_h panel (radians)
     double kinkPanel = 1e-3;      // first theta_h panel at the azimuth-cut kinks

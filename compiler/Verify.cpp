@@ -187,6 +187,9 @@ SampleStats checkKernel(const std::string& backend, const KernelRun& run, const 
             continue;
         }
         double kappa = -1;  // computed once per lane, when needed
+        bool subnormal = false;
+        for (const auto* w : {&c.wi, &c.wo})
+            for (double x : *w) subnormal |= x != 0 && std::fabs(x) < double(FLT_MIN);
         for (int ch = 0; ch < 3; ++ch) {
             double g = got[ch], w = r.rgb[ch];
             if (!std::isfinite(g) || std::fabs(w) > double(FLT_MAX)) continue;
@@ -216,6 +219,8 @@ SampleStats checkKernel(const std::string& backend, const KernelRun& run, const 
                                        kappa >= 0 ? fmt::format(" (kappa {:.3g})", kappa) : std::string()));
                 continue;
             }
+            s.maxRelWithin = std::max(s.maxRelWithin, rel);
+            if (!subnormal) s.maxRelNormal = std::max(s.maxRelNormal, rel);
             if (rel > s.maxRel) {
                 s.maxRel = rel;
                 s.worstCase = i;

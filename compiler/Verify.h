@@ -83,6 +83,8 @@ struct SampleStats {
     size_t illConditioned = 0;  // values with an error above 8 u but within 16 kappa u
     double maxKappa = 0;        // of those
     double bound = 0, maxRel = 0;  // maxRel: over the values not explained by conditioning (failures included)
+    double maxRelWithin = 0;       // the same over the values within the bound (the accuracy where it passes)
+    double maxRelNormal = 0;       // maxRelWithin over cases without a float-subnormal direction component
     size_t worstCase = SIZE_MAX;
     int worstChannel = 0;
     double worstGot = 0, worstWant = 0;
