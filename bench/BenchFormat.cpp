@@ -1,6 +1,7 @@
 // BenchFormat: terminal table, Markdown and JSON of a bench report (see BenchFormat.h).
 #include "BenchFormat.h"
 
+#include <array>
 #include <cmath>
 #include <fmt/format.h>
 
@@ -63,6 +64,17 @@ std::string header(const BenchReport& report, const MaterialBench& m) {
 
 }  // namespace
 
+std::string energyTableLine(const MaterialBench& m) {
+    if (!m.energyTable) return "";
+    const EnergyTableBench& e = *m.energyTable;
+    std::string s = fmt::format("Kulla-Conty tables: {} ({}), built in {:.1f} ms (cold, {} x {} grid; wall time, {} "
+                                "thread{})",
+                                e.pair(), e.key, e.buildMs, e.muCount, e.alphaCount, e.threads, e.threads == 1 ? "" : "s");
+    if (e.cachedLoadMs) s += fmt::format(" / loaded from cache in {:.3f} ms", *e.cachedLoadMs);
+    else s += fmt::format(" / not loaded from cache: {}", e.note);
+    return s;
+}
+
 std::string summaryLine(const MaterialBench& m) {
     const BenchRow* simd = m.find("simd", "exact");
     const BenchRow* scalar = m.find("scalar", "exact");
@@ -73,13 +85,13 @@ std::string summaryLine(const MaterialBench& m) {
     if (aot) s += fmt::format("; aot {:.2f} ns/eval, JIT/AOT {:.2f}", aot->nsPerEval, simd->nsPerEval / aot->nsPerEval);
     s += fmt::format("; compile cold {} ms, memory hit {} ms, disk hit {} ms", opt(simd->coldMs, "{:.2f}"),
                      opt(simd->memoryHitMs, "{:.3f}"), opt(simd->diskHitMs, "{:.3f}"));
-    if (m.kullaContyMs) s += fmt::format("; Kulla-Conty table {} {:.0f} ms", m.kullaContyPair, *m.kullaContyMs);
     return s;
 }
 
 void printTable(const BenchReport& report, std::FILE* out) {
     for (const MaterialBench& m : report.materials) {
         std::fprintf(out, "\n%s\n", header(report, m).c_str());
+        if (m.energyTable) std::fprintf(out, "  %s\n", energyTableLine(m).c_str());
         std::string line;
         for (const Column& c : columns())
             line += fmt::format(fmt::runtime(c.left ? "{:<{}} " : "{:>{}} "), c.title, c.width);
@@ -117,6 +129,7 @@ std::string markdown(const BenchReport& report) {
         md += fmt::format("\n## {}\n\n`{}`, AOT twin: {}", m.material, m.file,
                           m.aotModel.empty() ? (m.aotNote.empty() ? "none" : m.aotNote) : "`" + m.aotModel + "`");
         md += fmt::format(". Regular sample {} lanes, hard-case sample {} lanes.\n\n", m.regularLanes, m.hardLanes);
+        if (m.energyTable) md += energyTableLine(m) + ".\n\n";
         md += "|";
         for (const Column& c : columns()) md += fmt::format(" {} |", c.title);
         md += "\n|";
@@ -178,6 +191,14 @@ public:
         key(k);
         value(v);
     }
+    // "k": [numbers]
+    template <typename Range>
+    void numbers(const std::string& k, const Range& values) {
+        key(k);
+        open('[');
+        for (auto x : values) value(double(x));
+        close(']');
+    }
 
 private:
     void sep() {
@@ -215,14 +236,8 @@ void writeError(Json& j, const ErrorStats& e) {
         j.open('{');
         j.field("lane", int64_t(w.lane));
         j.field("channel", std::string(1, "rgb"[w.channel]));
-        j.key("wi");
-        j.open('[');
-        for (float x : w.wi) j.value(double(x));
-        j.close(']');
-        j.key("wo");
-        j.open('[');
-        for (float x : w.wo) j.value(double(x));
-        j.close(']');
+        j.numbers("wi", w.wi);
+        j.numbers("wo", w.wo);
         j.key("inputs");
         j.open('{');
         for (const auto& [name, v] : w.inputs) j.field(name, double(v));
@@ -232,6 +247,27 @@ void writeError(Json& j, const ErrorStats& e) {
         j.field("rel", w.rel);
         j.close('}');
     }
+    j.close('}');
+}
+
+void writeEnergyTable(Json& j, const std::optional<EnergyTableBench>& table) {
+    if (!table) {
+        j.raw("null");
+        return;
+    }
+    const EnergyTableBench& e = *table;
+    j.open('{');
+    j.field("pair", e.pair());
+    j.field("ndf", e.ndf);
+    j.field("masking", e.masking);
+    j.field("key", e.key);
+    j.field("build_ms", e.buildMs);
+    j.field("build_threads", int64_t(e.threads));
+    j.field("cached_load_ms", e.cachedLoadMs);
+    j.field("cached_load_runs", int64_t(e.loadRuns));
+    j.numbers("grid", std::array<int, 2>{e.muCount, e.alphaCount});  // mu nodes, alpha nodes
+    j.field("cache_file", e.cacheFile);
+    j.field("note", e.note);
     j.close('}');
 }
 
@@ -272,8 +308,11 @@ std::string json(const BenchReport& report) {
         else j.value(m.aotModel);
         j.field("aot_note", m.aotNote);
         j.field("parse_check_ms", m.parseCheckMs);
-        j.field("kulla_conty_ms", m.kullaContyMs);
-        j.field("kulla_conty_pair", m.kullaContyPair);
+        // kulla_conty_ms / kulla_conty_pair: energy_table.build_ms / .key (kept for older readers).
+        j.field("kulla_conty_ms", m.energyTable ? std::optional<double>(m.energyTable->buildMs) : std::nullopt);
+        j.field("kulla_conty_pair", m.energyTable ? m.energyTable->key : std::string());
+        j.key("energy_table");
+        writeEnergyTable(j, m.energyTable);
         j.field("regular_lanes", int64_t(m.regularLanes));
         j.field("hard_lanes", int64_t(m.hardLanes));
         j.field("summary", summaryLine(m));

@@ -19,4 +19,9 @@ std::string json(const BenchReport& report);
 // One line per material: SIMD exact vs AOT and vs scalar, compile times.
 std::string summaryLine(const MaterialBench& m);
 
+// "Kulla-Conty tables: ggx x smith_height_correlated (key), built in X ms
+// (cold, 64 x 64 grid; ...) / loaded from cache in Y ms" for a material with
+// energy = kulla_conty, "" for the others.
+std::string energyTableLine(const MaterialBench& m);
+
 }  // namespace facet::bench

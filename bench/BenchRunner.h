@@ -84,13 +84,30 @@ struct BenchRow {
     std::string label() const { return backend + " " + mode; }
 };
 
+// The Kulla-Conty E table of a material with energy = kulla_conty: its
+// (NDF, masking) pair, the time to build it by quadrature (cold: directly,
+// not through any cache; wall time, on `threads` threads) and the time to
+// load it back from the EXR file in the table cache directory (median of
+// `loadRuns` reads, CPU time of the benchmarking thread like the other times).
+struct EnergyTableBench {
+    std::string ndf, masking;  // "ggx", "smith_height_correlated"
+    std::string key;           // the table key, e.g. "ggx_smith_height_correlated"
+    int muCount = 0, alphaCount = 0;
+    int threads = 0;
+    double buildMs = 0;
+    std::optional<double> cachedLoadMs;  // none when the cache could not be written or read (see note)
+    int loadRuns = 0;
+    std::string cacheFile;  // the EXR read back
+    std::string note;       // why cachedLoadMs is missing, else ""
+    std::string pair() const { return ndf + " x " + masking; }
+};
+
 struct MaterialBench {
     std::string file, material;
     std::string aotModel;  // "" when the file has no AOT twin
     std::string aotNote;   // why the AOT row is missing, if the tag did not fit
     double parseCheckMs = 0;
-    std::optional<double> kullaContyMs;  // table build of the material's pair (energy = kulla_conty)
-    std::string kullaContyPair;
+    std::optional<EnergyTableBench> energyTable;  // energy = kulla_conty only
     size_t regularLanes = 0, hardLanes = 0;
     std::vector<BenchRow> rows;
     const BenchRow* find(const std::string& backend, const std::string& mode) const;
@@ -109,6 +126,13 @@ struct BenchReport {
 // per row as it is measured.
 bool benchFile(const std::string& path, const BenchSettings& settings, BenchReport& report,
                DiagnosticEngine& diags, std::FILE* progress);
+
+// Builds the Kulla-Conty table of `material` (energy = kulla_conty, else
+// nullopt) cold, stores it in the table cache directory (`cacheDir`, default
+// defaultTableCacheDir(); "" or unwritable: no cached load) unless a valid
+// file is there already, and times reading that file back `loadRuns` times.
+std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& material, int loadRuns,
+                                                 const std::optional<std::string>& cacheDir = std::nullopt);
 
 // Fills the host fields of a report (CPU, features, vector width).
 void describeHost(BenchReport& report);

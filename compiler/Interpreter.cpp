@@ -6,6 +6,7 @@
 
 #include "Diagnostics.h"
 #include "KullaContyEval.h"
+#include "Quadrature.h"
 
 #include <cmath>
 #include <complex>
@@ -29,28 +30,6 @@ Real expm1OverX(Real y) {
     using std::expm1;
     if (y == 0) return 1;
     return expm1(y) / y;
-}
-
-// Composite 8-point Gauss-Legendre quadrature of f over [a, b].
-template <typename Real, typename F>
-Real integrate(const F& f, Real a, Real b, int panels) {
-    static const long double nodes[4] = {0.1834346424956498049394761423601839807L,
-                                         0.5255324099163289858177390491892463490L,
-                                         0.7966664774136267395915539364758304368L,
-                                         0.9602898564975362316835608685694729904L};
-    static const long double weights[4] = {0.3626837833783619829651504492771956121L,
-                                           0.3137066458778872873379622019866013132L,
-                                           0.2223810344533744705443559944262408844L,
-                                           0.1012285362903762591525313543099621901L};
-    Real sum = 0, h = (b - a) / panels;
-    for (int p = 0; p < panels; ++p) {
-        Real mid = a + (p + Real(0.5)) * h, half = h / 2;
-        for (int i = 0; i < 4; ++i) {
-            Real d = half * Real(nodes[i]);
-            sum += Real(weights[i]) * half * (f(mid - d) + f(mid + d));
-        }
-    }
-    return sum;
 }
 
 // cos of the half angle, wi.h = wo.h = |wi + wo| / 2 for unit vectors (at most 1).
@@ -160,7 +139,8 @@ Real gaussianNdfNorm(Real alpha) {
     // The integrand is negligible beyond 8 alpha (exp(-64)).
     Real upper = min(kPi<Real> / 2, 8 * alpha);
     auto f = [&](Real t) { return exp(-t * t / (alpha * alpha)) * cos(t) * sin(t); };
-    Real norm = 2 * kPi<Real> * integrate<Real>(f, Real(0), upper, 64);
+    static const quadrature::GaussLegendre<Real>& gl8 = quadrature::gaussLegendre<Real>(8);
+    Real norm = 2 * kPi<Real> * quadrature::integrateUniform(f, Real(0), upper, 64, gl8);
     memoAlpha[memoNext] = alpha;
     memoNorm[memoNext] = norm;
     memoNext = (memoNext + 1) % kMemo;

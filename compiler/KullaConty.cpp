@@ -3,6 +3,7 @@
 
 #include "ExprEval.h"
 #include "Interpreter.h"
+#include "Quadrature.h"
 
 #include <algorithm>
 #include <chrono>
@@ -16,85 +17,10 @@ namespace {
 
 constexpr double kPi = 3.141592653589793238462643383279502884;
 
-// ---- quadrature helpers --------------------------------------------------
-
-// n-point Gauss-Legendre rule on [-1, 1] (Newton on P_n), cached per n.
-struct GaussRule {
-    std::vector<double> x, w;
-};
-const GaussRule& gaussRule(int n) {
-    static std::mutex mutex;
-    static std::vector<std::unique_ptr<GaussRule>> rules(65);
-    internal_assert(n >= 1 && n <= 64) << "Gauss-Legendre order " << n;
-    std::lock_guard<std::mutex> lock(mutex);
-    if (!rules[n]) {
-        auto r = std::make_unique<GaussRule>();
-        r->x.resize(n);
-        r->w.resize(n);
-        for (int i = 0; i < n; ++i) {
-            double z = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 1;
-            for (int it = 0; it < 100; ++it) {
-                double p0 = 1, p1 = z;
-                for (int k = 2; k <= n; ++k) {
-                    double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                double pn = n == 1 ? z : p1, pm = n == 1 ? 1 : p0;
-                dp = n * (z * pn - pm) / (z * z - 1);
-                double dz = pn / dp;
-                z -= dz;
-                if (std::abs(dz) < 1e-16) break;
-            }
-            r->x[i] = z;
-            r->w[i] = 2 / ((1 - z * z) * dp * dp);
-        }
-        rules[n] = std::move(r);
-    }
-    return *rules[n];
-}
-
-// Sum over consecutive break points of n-point Gauss-Legendre panels.
-template <typename F>
-double integrateBreaks(const F& f, const std::vector<double>& br, const GaussRule& g) {
-    double sum = 0;
-    for (size_t p = 0; p + 1 < br.size(); ++p) {
-        double a = br[p], b = br[p + 1];
-        if (!(b > a)) continue;
-        double mid = (a + b) / 2, half = (b - a) / 2, s = 0;
-        for (size_t i = 0; i < g.x.size(); ++i) s += g.w[i] * f(mid + half * g.x[i]);
-        sum += s * half;
-    }
-    return sum;
-}
-
-// Break points on [a, b]: panels graded geometrically (factor 2) away from
-// each special point, starting at width h0, none wider than maxWidth.
-struct Special {
-    double at, h0;
-};
-std::vector<double> gradedBreaks(double a, double b, const std::vector<Special>& specials, double maxWidth) {
-    std::vector<double> br = {a, b};
-    for (const Special& s : specials) {
-        if (s.at < a || s.at > b) continue;
-        br.push_back(s.at);
-        for (double d = s.h0; d < b - a; d *= 2) {
-            if (s.at - d > a) br.push_back(s.at - d);
-            if (s.at + d < b) br.push_back(s.at + d);
-        }
-    }
-    std::sort(br.begin(), br.end());
-    std::vector<double> out;
-    for (double x : br)
-        if (out.empty() || x - out.back() > 1e-14) out.push_back(x);
-    std::vector<double> fine;
-    for (size_t i = 0; i + 1 < out.size(); ++i) {
-        int n = std::max(1, int(std::ceil((out[i + 1] - out[i]) / maxWidth)));
-        for (int k = 0; k < n; ++k) fine.push_back(out[i] + (out[i + 1] - out[i]) * k / n);
-    }
-    fine.push_back(out.back());
-    return fine;
-}
+using quadrature::gaussLegendre;
+using quadrature::GradePoint;
+using quadrature::gradedBreaks;
+using quadrature::integratePanels;
 
 // The specular lobe of a table key at one alpha, F = 1, as a reference material.
 ResolvedMaterial<double> lobeMaterial(const EnergyTableKey& key, double alpha) {
@@ -166,7 +92,7 @@ double albedoOf(const ResolvedMaterial<double>& m, double alpha, double mu, cons
     double scale = std::atan(alpha);
     // (The second special keeps panels narrow over the shoulder of
     // Gaussian-like peaks: beckmann, blinn_phong, gaussian.)
-    std::vector<Special> specials = {
+    std::vector<GradePoint> specials = {
         {0, scale / 8}, {2 * scale, scale / 4}, {thetaFull, q.kinkPanel}, {thetaEnd, q.kinkPanel}};
     if (azimuthal) specials.push_back({thetaO / 2, q.kinkPanel});
     if (kinkMasking) {
@@ -210,8 +136,8 @@ double albedoOf(const ResolvedMaterial<double>& m, double alpha, double mu, cons
         }
     }
     std::vector<double> br = gradedBreaks(0, thetaEnd, specials, q.thetaMaxPanel);
-    const GaussRule& gt = gaussRule(q.thetaPoints);
-    const GaussRule& gp = gaussRule(q.phiPoints);
+    const auto& gt = gaussLegendre<double>(q.thetaPoints);
+    const auto& gp = gaussLegendre<double>(q.phiPoints);
     auto inner = [&](double th) {
         double st = std::sin(th), ct = std::cos(th);
         double phiMax = std::acos(cutCos(th));
@@ -251,9 +177,9 @@ double albedoOf(const ResolvedMaterial<double>& m, double alpha, double mu, cons
                 for (double f = phiMax / 4; f > phiMax * 1e-2; f /= 4) pb.push_back(f);
             std::sort(pb.begin(), pb.end());
         }
-        return 2 * d / mu * integrateBreaks(g, pb, gp) * st;
+        return 2 * d / mu * integratePanels(g, pb, gp) * st;
     };
-    return integrateBreaks(inner, br, gt);
+    return integratePanels(inner, br, gt);
 }
 
 // Does the expression depend on an input (directly or through lets)? Returns
@@ -286,6 +212,16 @@ double constantOf(const Expr& e, const CheckedMaterial& m) {
 }
 
 std::string shortNumber(double x) { return fmt::format("{}", x); }
+
+// Bilinear interpolation in a row-major float grid of rows of `rowLength`:
+// between columns col, col + 1 at fraction s and rows row, row + 1 at fraction t.
+double bilinear(const float* grid, int rowLength, int row, int col, double s, double t) {
+    const float* r0 = &grid[size_t(row) * rowLength + col];
+    const float* r1 = r0 + rowLength;
+    double a = r0[0] + (double(r0[1]) - r0[0]) * s;
+    double b = r1[0] + (double(r1[1]) - r1[0]) * s;
+    return a + (b - a) * t;
+}
 
 }  // namespace
 
@@ -395,12 +331,7 @@ double EnergyTable::alphaCoord(double alpha) const {
 double EnergyTable::ecAt(double mu, double alpha) const {
     double u = muCoord(mu), v = alphaCoord(alpha);
     int j = std::min(int(u), muCount - 2), i = std::min(int(v), alphaCount - 2);
-    double s = u - j, t = v - i;
-    const float* r0 = &ec[size_t(i) * muCount + j];
-    const float* r1 = r0 + muCount;
-    double a = r0[0] + (double(r0[1]) - r0[0]) * s;
-    double b = r1[0] + (double(r1[1]) - r1[0]) * s;
-    return a + (b - a) * t;
+    return bilinear(ec.data(), muCount, i, j, u - j, v - i);
 }
 
 double EnergyTable::ecAvgAt(double alpha) const {
@@ -425,7 +356,7 @@ void EnergyTable::computeAverages() {
     // Within cell j of a row, u = j + t and mu = (u/M)^2 (M = muCount - 1), so
     // 2 Int Ec mu dmu = (4/M^4) Sum_j Int_0^1 Ec(t) (j + t)^3 dt, a degree-4
     // polynomial per cell: the 3-point Gauss-Legendre rule is exact.
-    const GaussRule& g = gaussRule(3);
+    const auto& g = gaussLegendre<double>(3);
     double M = muCount - 1;
     ecAvg.assign(alphaCount, 0);
     for (int i = 0; i < alphaCount; ++i) {
@@ -500,19 +431,20 @@ std::shared_ptr<EnergyTable> buildEnergyTable(const EnergyTableKey& key, const E
 
 namespace {
 
-// 2 Int_0^1 F(mu) mu dmu for the reference Fresnel of `r` (channel 0), with
-// panels graded toward grazing incidence (features of width ~1/|N|) and
-// toward the critical angle of total internal reflection (a square-root kink).
+// 2 Int_0^1 F(mu) mu dmu for the reference Fresnel of `r` (channel 0).
 double fresnelAverageOf(const ResolvedMaterial<double>& r) {
-    double n = r.eta[0], k = r.k[0];
-    double mag = std::sqrt(n * n + k * k);
-    std::vector<Special> sp = {{0, std::min(1.0, 1 / std::max(mag, 1e-12)) / 64}};
-    if (n < 1) sp.push_back({std::sqrt((1 - n) * (1 + n)), 1e-6});
-    std::vector<double> br = gradedBreaks(0, 1, sp, 1.0 / 16);
-    return 2 * integrateBreaks([&](double mu) { return r.F(mu, 0) * mu; }, br, gaussRule(12));
+    std::vector<double> br = fresnelAverageBreaks(r.eta[0], r.k[0]);
+    return 2 * integratePanels([&](double mu) { return r.F(mu, 0) * mu; }, br, gaussLegendre<double>(12));
 }
 
 }  // namespace
+
+std::vector<double> fresnelAverageBreaks(double eta, double k) {
+    double mag = std::hypot(eta, k);  // no overflow to inf (h0 = 0) for huge eta or k
+    std::vector<GradePoint> sp = {{0, std::min(1.0, 1 / std::max(mag, 1e-12)) / 64}};
+    if (eta < 1) sp.push_back({std::sqrt((1 - eta) * (1 + eta)), 1e-6});
+    return gradedBreaks(0, 1, sp, 1.0 / 16);
+}
 
 double fresnelAverageDielectric(double eta) {
     ResolvedMaterial<double> r;
@@ -559,12 +491,8 @@ double FresnelAverageTables::conductorAt(double eta, double k) const {
     };
     double u = coord(eta), v = coord(std::sqrt(k));
     int i = std::min(int(u), kConductorCount - 2), j = std::min(int(v), kConductorCount - 2);
-    double s = u - i, t = v - j;
-    const float* r0 = &conductor[size_t(j) * kConductorCount + i];
-    const float* r1 = r0 + kConductorCount;
-    double a = r0[0] + (double(r0[1]) - r0[0]) * s;
-    double b = r1[0] + (double(r1[1]) - r1[0]) * s;
-    return std::min(1.0, conductorSchlickAverage(eta, k) + a + (b - a) * t);
+    double residual = bilinear(conductor.data(), kConductorCount, j, i, u - i, v - j);
+    return std::min(1.0, conductorSchlickAverage(eta, k) + residual);
 }
 
 const FresnelAverageTables& fresnelAverageTables() {

@@ -182,6 +182,12 @@ inline double fresnelAverageSchlick(double f0) { return (20 * f0 + 1) / 21; }
 double fresnelAverageDielectric(double eta);
 double fresnelAverageConductor(double eta, double k);
 
+// The panels of both F_avg quadratures (these and the interpreter's,
+// KullaContyEval.h) on [0, 1]: graded toward grazing incidence (features of
+// width ~1/|eta + ik|) and, for eta < 1, toward the critical angle of total
+// internal reflection (a square-root kink); none wider than 1/16.
+std::vector<double> fresnelAverageBreaks(double eta, double k);
+
 // Schlick's average at the conductor's normal reflectance,
 // F0 = ((eta-1)^2 + k^2) / ((eta+1)^2 + k^2): the base the conductor table corrects.
 double conductorSchlickAverage(double eta, double k);

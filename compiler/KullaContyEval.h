@@ -9,6 +9,7 @@
 
 #include "Interpreter.h"
 #include "KullaConty.h"
+#include "Quadrature.h"
 
 #include <array>
 #include <memory>
@@ -28,10 +29,9 @@ double energyAlpha(const ResolvedMaterial<Real>& r) {
     }
 }
 
-// F_avg = 2 Int_0^1 F(mu) mu dmu of channel ch, by Gauss-Legendre panels
-// graded toward grazing incidence and toward the critical angle of total
-// internal reflection (break points in double, sums in Real). Schlick in
-// closed form, (20 f0 + 1)/21.
+// F_avg = 2 Int_0^1 F(mu) mu dmu of channel ch, by 8-point Gauss-Legendre on
+// the panels of fresnelAverageBreaks (break points in double, nodes and sums
+// in Real). Schlick in closed form, (20 f0 + 1)/21.
 template <typename Real>
 Real fresnelAverage(const ResolvedMaterial<Real>& r, int ch) {
     switch (r.fresnel) {
@@ -58,38 +58,9 @@ Real fresnelAverage(const ResolvedMaterial<Real>& r, int ch) {
     Memo& mm = memo[ch];
     if (mm.set && mm.model == r.fresnel && mm.eta == eta && mm.k == k) return mm.value;
 
-    double n = double(eta), kk = double(k);
-    double mag = std::sqrt(n * n + kk * kk);
-    std::vector<double> br = {0, 1};
-    double h0 = std::min(1.0, 1 / std::max(mag, 1e-12)) / 64;
-    for (double d = h0; d < 1; d *= 2) br.push_back(d);
-    if (n < 1) {
-        double c = std::sqrt((1 - n) * (1 + n));
-        br.push_back(c);
-        for (double d = 1e-6; d < 1; d *= 2) {
-            if (c - d > 0) br.push_back(c - d);
-            if (c + d < 1) br.push_back(c + d);
-        }
-    }
-    for (int i = 1; i < 16; ++i) br.push_back(i / 16.0);
-    std::sort(br.begin(), br.end());
-    br.erase(std::unique(br.begin(), br.end()), br.end());
-    // 8-point Gauss-Legendre nodes and weights on [-1, 1].
-    static const long double x8[4] = {0.1834346424956498049394761423601839807L, 0.5255324099163289858177390491892463490L,
-                                      0.7966664774136267395915539364758304368L, 0.9602898564975362316835608685694729904L};
-    static const long double w8[4] = {0.3626837833783619829651504492771956121L, 0.3137066458778872873379622019866013132L,
-                                      0.2223810344533744705443559944262408844L, 0.1012285362903762591525313543099621901L};
-    Real sum = 0;
-    for (size_t p = 0; p + 1 < br.size(); ++p) {
-        Real a = Real(br[p]), b = Real(br[p + 1]);
-        Real mid = (a + b) / 2, half = (b - a) / 2, s = 0;
-        for (int i = 0; i < 4; ++i) {
-            Real d = half * Real(x8[i]);
-            Real m1 = mid - d, m2 = mid + d;
-            s += Real(w8[i]) * (r.F(m1, ch) * m1 + r.F(m2, ch) * m2);
-        }
-        sum += s * half;
-    }
+    std::vector<double> br = fresnelAverageBreaks(double(eta), double(k));
+    static const quadrature::GaussLegendre<Real>& gl8 = quadrature::gaussLegendre<Real>(8);
+    Real sum = quadrature::integratePanels([&](Real mu) { return r.F(mu, ch) * mu; }, br, gl8);
     Real value = 2 * sum;
     if (value > 1) value = 1;
     mm = {r.fresnel, eta, k, value, true};

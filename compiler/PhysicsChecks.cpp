@@ -4,6 +4,7 @@
 
 #include "Interpreter.h"
 #include "KullaConty.h"
+#include "Quadrature.h"
 
 #include <algorithm>
 #include <cmath>
@@ -27,53 +28,13 @@ V dirOf(double theta, double phi) {
 }
 double dot(const V& a, const V& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
-// 8-point Gauss-Legendre rule on [-1, 1] (nodes +-x[i], weights w[i]).
-constexpr double kGlX[4] = {0.1834346424956498049394761423601839807, 0.5255324099163289858177390491892463490,
-                            0.7966664774136267395915539364758304368, 0.9602898564975362316835608685694729904};
-constexpr double kGlW[4] = {0.3626837833783619829651504492771956121, 0.3137066458778872873379622019866013132,
-                            0.2223810344533744705443559944262408844, 0.1012285362903762591525313543099621901};
+using quadrature::GradePoint;
 
+// Sum of 8-point Gauss-Legendre panels between the break points.
 template <typename F>
 double integratePanels(const F& f, const std::vector<double>& br) {
-    double sum = 0;
-    for (size_t p = 0; p + 1 < br.size(); ++p) {
-        double a = br[p], b = br[p + 1];
-        if (!(b > a)) continue;
-        double mid = (a + b) / 2, half = (b - a) / 2, s = 0;
-        for (int i = 0; i < 4; ++i) s += kGlW[i] * (f(mid - half * kGlX[i]) + f(mid + half * kGlX[i]));
-        sum += s * half;
-    }
-    return sum;
-}
-
-struct Special {
-    double at, h0;
-};
-
-// Break points of [a, b]: each special point with panels growing by 2 away
-// from it (first width h0), and no panel wider than maxWidth.
-std::vector<double> graded(double a, double b, const std::vector<Special>& specials, double maxWidth) {
-    std::vector<double> br = {a, b};
-    for (const Special& s : specials) {
-        if (s.at < a || s.at > b) continue;
-        br.push_back(s.at);
-        for (double d = s.h0; d < b - a; d *= 2) {
-            if (s.at - d > a) br.push_back(s.at - d);
-            if (s.at + d < b) br.push_back(s.at + d);
-        }
-    }
-    std::sort(br.begin(), br.end());
-    std::vector<double> out;
-    for (double x : br)
-        if (out.empty() || x - out.back() > 1e-14 * std::max(1.0, std::fabs(x))) out.push_back(x);
-    if (out.back() < b) out.back() = b;
-    std::vector<double> fine;
-    for (size_t i = 0; i + 1 < out.size(); ++i) {
-        int n = std::max(1, int(std::ceil((out[i + 1] - out[i]) / maxWidth)));
-        for (int k = 0; k < n; ++k) fine.push_back(out[i] + (out[i + 1] - out[i]) * k / n);
-    }
-    fine.push_back(out.back());
-    return fine;
+    static const quadrature::GaussLegendre<double>& gl8 = quadrature::gaussLegendre<double>(8);
+    return quadrature::integratePanels(f, br, gl8);
 }
 
 // Half-width of {phi : cos(phi - center) > num/den} (den >= 0).
@@ -118,19 +79,19 @@ double hemisphere(const F& f, const HW& hw, const Grid& g) {
         if (w <= 0) return 0.0;
         double st = std::sin(theta), ct = std::cos(theta);
         auto h = [&](double phi) { return f(V{st * std::cos(phi), st * std::sin(phi), ct}); };
-        std::vector<Special> sp = {{g.center, w / g.phiPanels / 64}};
+        std::vector<GradePoint> sp = {{g.center, w / g.phiPanels / 64}};
         if (g.axisH0 > 0)
             for (int k = -8; k <= 8; ++k) sp.push_back({k * kPi / 2, g.axisH0});
-        return integratePanels(h, graded(g.center - w, g.center + w, sp, w / g.phiPanels)) * st;
+        return integratePanels(h, quadrature::gradedBreaks(g.center - w, g.center + w, sp, w / g.phiPanels)) * st;
     };
     return integratePanels(inner, g.thetaBreaks);
 }
 
 Grid ndfGrid(const Lobe& l, double kinkTheta, double center) {
     Grid g;
-    std::vector<Special> sp = {{0, l.scale / 8}};
+    std::vector<GradePoint> sp = {{0, l.scale / 8}};
     if (kinkTheta > 0) sp.push_back({kinkTheta, 1e-5});
-    g.thetaBreaks = graded(0, kPi / 2, sp, 0.1);
+    g.thetaBreaks = quadrature::gradedBreaks(0, kPi / 2, sp, 0.1);
     g.center = center;
     g.phiPanels = l.ratio < 0.5 ? 16 : 8;
     g.axisH0 = l.ratio < 0.5 ? l.ratio / 8 : 0;
@@ -282,8 +243,8 @@ std::vector<PhysicsCheck> physicsChecks(const CheckedMaterial& m, const PhysicsO
                     V wo = dirOf(tor, por);
                     Grid g;
                     double thetaFull = (kPi / 2 - tor) / 2, thetaEnd = (kPi / 2 + tor) / 2;
-                    g.thetaBreaks =
-                        graded(0, thetaEnd, {{0, lobe.scale / 8}, {thetaFull, 1e-4}, {thetaEnd, 1e-4}}, 0.08);
+                    g.thetaBreaks = quadrature::gradedBreaks(
+                        0, thetaEnd, {{0, lobe.scale / 8}, {thetaFull, 1e-4}, {thetaEnd, 1e-4}}, 0.08);
                     g.center = por;
                     g.phiPanels = aniso ? 16 : 8;
                     g.axisH0 = lobe.ratio < 0.5 ? lobe.ratio / 8 : 0;

@@ -38,6 +38,24 @@ std::string defaultTableCacheDir() {
     return "";
 }
 
+std::string replaceEnergyTableExr(const EnergyTable& table, const std::string& path) {
+    // Write next to the target and rename over it: readers in other
+    // threads or processes see the old file or the new one, never half.
+    static std::atomic<unsigned> counter{0};
+    std::filesystem::path target(path);
+    std::filesystem::path dir = target.parent_path();
+    std::error_code ec;
+    if (!dir.empty()) std::filesystem::create_directories(dir, ec);
+    std::string tmp = (dir / fmt::format(".{}.{}.{}.tmp.exr", target.stem().string(), ::getpid(), counter++)).string();
+    std::string err = writeEnergyTableExr(table, tmp);
+    if (err.empty()) {
+        std::filesystem::rename(tmp, path, ec);
+        if (ec) err = fmt::format("cannot rename {} to {}: {}", tmp, path, ec.message());
+    }
+    if (!err.empty()) std::filesystem::remove(tmp, ec);
+    return err;
+}
+
 const char* tableFileStatusName(TableFileStatus s) {
     switch (s) {
         case TableFileStatus::Ok: return "ok";
@@ -269,18 +287,7 @@ std::shared_ptr<const EnergyTable> TableCache::produce(const EnergyTableKey& key
     if (!table) {
         table = buildEnergyTable(key, quadrature_);
         if (!path.empty()) {
-            // Write next to the target and rename over it: readers in other
-            // threads or processes see the old file or the new one, never half.
-            static std::atomic<unsigned> counter{0};
-            std::error_code ec;
-            std::filesystem::create_directories(dir_, ec);
-            std::string tmp = fmt::format("{}/.kc_{}.{}.{}.tmp.exr", dir_, key.name(), ::getpid(), counter++);
-            ev.writeError = writeEnergyTableExr(*table, tmp);
-            if (ev.writeError.empty()) {
-                std::filesystem::rename(tmp, path, ec);
-                if (ec) ev.writeError = fmt::format("cannot rename {} to {}: {}", tmp, path, ec.message());
-            }
-            if (!ev.writeError.empty()) std::filesystem::remove(tmp, ec);
+            ev.writeError = replaceEnergyTableExr(*table, path);
         }
     }
     ev.millis = millisSince(start);

@@ -42,6 +42,10 @@ std::string defaultTableCacheDir();
 // Writes `table` to `path` (any directory must exist). Returns "" or an error message.
 std::string writeEnergyTableExr(const EnergyTable& table, const std::string& path);
 
+// Writes `table` to `path` atomically (a temporary file in the same
+// directory, renamed over `path`; the directory is created). "" or an error.
+std::string replaceEnergyTableExr(const EnergyTable& table, const std::string& path);
+
 enum class TableFileStatus { Ok, Missing, Unreadable, Stale, Corrupt };
 const char* tableFileStatusName(TableFileStatus s);
 

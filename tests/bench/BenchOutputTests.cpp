@@ -3,19 +3,26 @@
 // One quick bench of the GGX/Schlick reference model (AOT twin included) is
 // shared by the tests: its JSON must parse (a small strict JSON parser below)
 // and carry every field with the right type for every row, and the scatter
-// plot must be written with the documented size.
+// plot must be written with the documented size. A quick bench of
+// materials/gold.mat (energy = kulla_conty) must report its Kulla-Conty
+// table (cold build, cached load) in the JSON, Markdown and terminal output.
 #include "BenchFormat.h"
 #include "BenchPlot.h"
 #include "BenchRunner.h"
+#include "Checker.h"
+#include "KullaConty.h"
 
 #include <OpenImageIO/imageio.h>
 #include <doctest/doctest.h>
 
 #include <cctype>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <variant>
@@ -152,22 +159,39 @@ private:
     size_t p_ = 0;
 };
 
+// A quick bench of one file (path relative to the source tree).
+bench::BenchReport quickBench(const std::string& file) {
+    bench::BenchReport r;
+    r.settings = bench::BenchSettings::quickSettings();
+    r.settings.lanes = 2048;
+    r.settings.runs = 3;
+    r.settings.compileRuns = 1;
+    bench::describeHost(r);
+    DiagnosticEngine diags;
+    bool ok = bench::benchFile(std::string(FACET_SOURCE_DIR) + "/" + file, r.settings, r, diags, nullptr);
+    if (!ok) throw std::runtime_error(diags.str());
+    return r;
+}
+
 // The report of one quick bench, computed once for all tests here.
 const bench::BenchReport& quickReport() {
-    static const bench::BenchReport report = [] {
-        bench::BenchReport r;
-        r.settings = bench::BenchSettings::quickSettings();
-        r.settings.lanes = 2048;
-        r.settings.runs = 3;
-        r.settings.compileRuns = 1;
-        bench::describeHost(r);
-        DiagnosticEngine diags;
-        bool ok = bench::benchFile(std::string(FACET_SOURCE_DIR) + "/bench/models/ggx_schlick.mat", r.settings, r,
-                                   diags, nullptr);
-        if (!ok) throw std::runtime_error(diags.str());
-        return r;
-    }();
+    static const bench::BenchReport report = quickBench("bench/models/ggx_schlick.mat");
     return report;
+}
+
+// The same for a material with energy = kulla_conty (GGX, height-correlated Smith).
+const bench::BenchReport& kullaContyReport() {
+    static const bench::BenchReport report = quickBench("materials/gold.mat");
+    return report;
+}
+
+// The JSON of a one-material report, parsed: that material's object.
+JsonObject materialJson(const bench::BenchReport& report) {
+    std::string text = bench::json(report);
+    JsonValue doc = JsonParser(text).parseDocument();
+    const JsonArray& materials = doc.obj().at("materials").arr();
+    REQUIRE(materials.size() == 1);
+    return materials[0].obj();
 }
 
 enum class Kind { Number, String, Bool, Object, Array, NumberOrNull, StringOrNull, ObjectOrNull };
@@ -245,9 +269,12 @@ TEST_CASE("bench --json output parses and has every field") {
     checkField(m, "aot", Kind::StringOrNull);
     for (const char* k : {"parse_check_ms", "regular_lanes", "hard_lanes"}) checkField(m, k, Kind::Number);
     checkField(m, "kulla_conty_ms", Kind::NumberOrNull);
+    checkField(m, "energy_table", Kind::ObjectOrNull);
     checkField(m, "rows", Kind::Array);
     CHECK(m.at("material").str() == "ggx_schlick");
     CHECK(m.at("aot").str() == "ggx_schlick");
+    CHECK(m.at("energy_table").isNull());  // energy = none
+    CHECK(m.at("kulla_conty_ms").isNull());
 
     // Every backend x mode, and the AOT row.
     std::set<std::pair<std::string, std::string>> seen;
@@ -282,6 +309,73 @@ TEST_CASE("bench --json output parses and has every field") {
         for (const char* mode : {"exact", "fast", "tol 1e-3", "tol 1e-5"}) CHECK(seen.count({b, mode}));
     CHECK(seen.count({"aot", "hand-written"}));
     CHECK(seen.size() == 13);
+}
+
+TEST_CASE("a kulla_conty material reports its table: cold build and cached load") {
+    const bench::BenchReport& report = kullaContyReport();
+    REQUIRE(report.materials.size() == 1);
+    const JsonObject m = materialJson(report);
+    CHECK(m.at("material").str() == "gold");
+    checkField(m, "energy_table", Kind::Object);
+    const JsonObject& e = m.at("energy_table").obj();
+    for (const char* k : {"pair", "ndf", "masking", "key", "cache_file", "note"}) checkField(e, k, Kind::String);
+    for (const char* k : {"build_ms", "build_threads", "cached_load_ms", "cached_load_runs"})
+        checkField(e, k, Kind::Number);
+    checkField(e, "grid", Kind::Array);
+    CHECK(e.at("pair").str() == "ggx x smith_height_correlated");
+    CHECK(e.at("ndf").str() == "ggx");
+    CHECK(e.at("masking").str() == "smith_height_correlated");
+    CHECK(e.at("key").str() == "ggx_smith_height_correlated");
+    CHECK(e.at("build_ms").num() > 0);
+    CHECK(e.at("build_threads").num() >= 1);
+    CHECK(e.at("cached_load_ms").num() > 0);
+    CHECK(e.at("cached_load_runs").num() >= 1);
+    CHECK(e.at("note").str() == "");
+    // A cache hit is a small file read; the quadrature is not.
+    CHECK(e.at("cached_load_ms").num() < e.at("build_ms").num());
+    REQUIRE(e.at("grid").arr().size() == 2);
+    CHECK(e.at("grid").arr()[0].num() == EnergyTable::kMuCount);
+    CHECK(e.at("grid").arr()[1].num() == EnergyTable::kAlphaCount);
+    CHECK(std::filesystem::exists(e.at("cache_file").str()));
+    CHECK(e.at("cache_file").str().find("kc_ggx_smith_height_correlated.exr") != std::string::npos);
+    // The older fields agree.
+    CHECK(m.at("kulla_conty_ms").num() == e.at("build_ms").num());
+    CHECK(m.at("kulla_conty_pair").str() == "ggx_smith_height_correlated");
+
+    // Terminal and Markdown show it in the material's section, before the rows.
+    std::string line = bench::energyTableLine(report.materials[0]);
+    CHECK(line.find("Kulla-Conty tables: ggx x smith_height_correlated (ggx_smith_height_correlated), built in ") == 0);
+    CHECK(line.find(" ms (cold, 64 x 64 grid") != std::string::npos);
+    CHECK(line.find(" / loaded from cache in ") != std::string::npos);
+    std::string md = bench::markdown(report);
+    size_t at = md.find(line);
+    CHECK(at != std::string::npos);
+    CHECK(at > md.find("## gold"));
+    CHECK(at < md.find("| backend |"));
+    char* buf = nullptr;
+    size_t size = 0;
+    std::FILE* out = open_memstream(&buf, &size);
+    REQUIRE(out);
+    bench::printTable(report, out);
+    std::fclose(out);
+    std::string text(buf, size);
+    std::free(buf);
+    at = text.find("  " + line + "\n");
+    CHECK(at != std::string::npos);
+    CHECK(at < text.find("backend "));
+    // No such line for a material without energy compensation.
+    CHECK(bench::energyTableLine(quickReport().materials.at(0)).empty());
+}
+
+TEST_CASE("the Kulla-Conty table bench without a cache directory reports why there is no cached load") {
+    DiagnosticEngine diags;
+    CheckedProgram program = loadProgramFile(std::string(FACET_SOURCE_DIR) + "/materials/gold.mat", diags);
+    REQUIRE(!diags.hasErrors());
+    std::optional<bench::EnergyTableBench> e = bench::benchEnergyTable(program.materials.at(0), 1, std::string());
+    REQUIRE(e);
+    CHECK(e->buildMs > 0);
+    CHECK(!e->cachedLoadMs);
+    CHECK(e->note.find("no table cache directory") != std::string::npos);
 }
 
 TEST_CASE("the Markdown and terminal reports name every row") {

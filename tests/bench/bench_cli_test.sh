@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # `facet bench --quick --json` on one material, end to end: exit 0 within
 # seconds, JSON on stdout that parses with every field, and bench.md,
-# bench.json and a 1600x1000 bench.png in --out DIR.
-# usage: bench_cli_test.sh FACET MATERIAL.mat OUTDIR
+# bench.json and a 1600x1000 bench.png in --out DIR. With KC_MATERIAL.mat
+# (energy = kulla_conty), also its Kulla-Conty table fields (energy_table:
+# cold build and cached load) in the JSON and its line in bench.md.
+# usage: bench_cli_test.sh FACET MATERIAL.mat OUTDIR [KC_MATERIAL.mat]
 set -euo pipefail
-facet=$1 material=$2 out=$3
+facet=$1 material=$2 out=$3 kc_material=${4:-}
 rm -rf "$out"
 mkdir -p "$out"
 start=$(date +%s%N)
@@ -25,8 +27,9 @@ for path in (out + "/stdout.json", out + "/report/bench.json"):
     assert len(doc["materials"]) == 1
     m = doc["materials"][0]
     for k in ("file", "material", "aot", "aot_note", "parse_check_ms", "kulla_conty_ms", "kulla_conty_pair",
-              "regular_lanes", "hard_lanes", "summary", "rows"):
+              "energy_table", "regular_lanes", "hard_lanes", "summary", "rows"):
         assert k in m, (path, k)
+    assert m["energy_table"] is None, m["energy_table"]  # energy = none
     row_keys = ("backend", "mode", "options", "variant", "measured_error", "width", "lanes", "runs", "ns_per_eval",
                 "ns_per_eval_min", "evals_per_second", "compile_cold_ms", "compile_memory_hit_ms",
                 "compile_disk_hit_ms", "jit_over_aot", "error_regular", "error_hard")
@@ -52,4 +55,31 @@ assert (width, height) == (1600, 1000), (width, height)
 md = open(out + "/report/bench.md").read()
 assert "## ggx_schlick" in md and "JIT/AOT" in md
 print("ok: JSON parses with every field; bench.md; bench.png 1600x1000")
+PY
+
+[[ -z "$kc_material" ]] && exit 0
+"$facet" bench --quick --json --out "$out/kc" "$kc_material" >"$out/kc.json"
+python3 - "$out" <<'PY'
+import json, os, sys
+out = sys.argv[1]
+for path in (out + "/kc.json", out + "/kc/bench.json"):
+    with open(path) as f:
+        m = json.load(f)["materials"][0]
+    e = m["energy_table"]
+    assert isinstance(e, dict), (path, e)
+    for k, t in (("pair", str), ("ndf", str), ("masking", str), ("key", str), ("build_ms", (int, float)),
+                 ("build_threads", int), ("cached_load_ms", (int, float)), ("cached_load_runs", int),
+                 ("grid", list), ("cache_file", str), ("note", str)):
+        assert isinstance(e.get(k), t), (path, k, e.get(k))
+    assert e["pair"] == e["ndf"] + " x " + e["masking"], e
+    assert e["build_ms"] > 0 and e["cached_load_ms"] > 0 and e["build_threads"] >= 1, e
+    assert e["grid"] == [64, 64], e["grid"]
+    assert e["note"] == "" and os.path.exists(e["cache_file"]), e
+    assert m["kulla_conty_ms"] == e["build_ms"] and m["kulla_conty_pair"] == e["key"], m
+md = open(out + "/kc/bench.md").read()
+line = "Kulla-Conty tables: %s (%s), built in " % (e["pair"], e["key"])
+assert line in md and " / loaded from cache in " in md, md[:2000]
+assert md.index(line) < md.index("| backend |")
+print("ok: %s: energy_table %s, built in %.0f ms, loaded from cache in %.2f ms"
+      % (m["material"], e["pair"], e["build_ms"], e["cached_load_ms"]))
 PY

@@ -37,6 +37,24 @@ struct TempDir {
     }
 };
 
+// Reads the float pixels of an EXR, lets `edit` change them, and writes the
+// file back with the same spec (metadata included).
+template <typename Edit>
+void editPixels(const std::string& path, const Edit& edit) {
+    auto in = OIIO::ImageInput::open(path);
+    REQUIRE(in);
+    OIIO::ImageSpec spec = in->spec();
+    std::vector<float> px(size_t(spec.width) * spec.height * spec.nchannels);
+    REQUIRE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()));
+    in->close();
+    edit(spec, px);
+    auto out = OIIO::ImageOutput::create(path);
+    REQUIRE(out);
+    REQUIRE(out->open(path, spec));
+    REQUIRE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    out->close();
+}
+
 EnergyTableKey ggx() {
     EnergyTableKey k;
     k.ndf = facet::NdfModel::Ggx;
@@ -151,40 +169,23 @@ TEST_CASE("missing, then disk; memory sharing; stale, corrupt and unreadable fil
         rebuiltBecause("stale");
     }
     SUBCASE("corrupt: a NaN pixel") {
-        auto in = OIIO::ImageInput::open(path);
-        REQUIRE(in);
-        OIIO::ImageSpec spec = in->spec();
-        std::vector<float> px(size_t(spec.width) * spec.height * spec.nchannels);
-        REQUIRE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()));
-        in->close();
-        px[(5 * spec.width + 7) * 4 + 1] = std::nanf("");
-        auto out = OIIO::ImageOutput::create(path);
-        REQUIRE(out);
-        REQUIRE(out->open(path, spec));
-        REQUIRE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
-        out->close();
+        editPixels(path, [](const OIIO::ImageSpec& spec, std::vector<float>& px) {
+            px[(5 * spec.width + 7) * 4 + 1] = std::nanf("");
+        });
         rebuiltBecause("corrupt");
     }
     SUBCASE("corrupt: one value changed (E + Ec no longer 1 / EcAvg no longer the row integral)") {
-        auto in = OIIO::ImageInput::open(path);
-        REQUIRE(in);
-        OIIO::ImageSpec spec = in->spec();
-        std::vector<float> px(size_t(spec.width) * spec.height * spec.nchannels);
-        REQUIRE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()));
-        in->close();
-        auto index = [&](const char* name) {
-            return int(std::find(spec.channelnames.begin(), spec.channelnames.end(), name) - spec.channelnames.begin());
-        };
-        REQUIRE(index("Ec") < 4);
-        REQUIRE(index("E") < 4);
-        size_t p = (20 * spec.width + 30) * 4;
-        px[p + index("Ec")] += 0.01f;
-        px[p + index("E")] -= 0.01f;  // still E + Ec = 1: caught by the row integral
-        auto out = OIIO::ImageOutput::create(path);
-        REQUIRE(out);
-        REQUIRE(out->open(path, spec));
-        REQUIRE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
-        out->close();
+        editPixels(path, [](const OIIO::ImageSpec& spec, std::vector<float>& px) {
+            auto index = [&](const char* name) {
+                return int(std::find(spec.channelnames.begin(), spec.channelnames.end(), name) -
+                           spec.channelnames.begin());
+            };
+            REQUIRE(index("Ec") < 4);
+            REQUIRE(index("E") < 4);
+            size_t p = (20 * spec.width + 30) * 4;
+            px[p + index("Ec")] += 0.01f;
+            px[p + index("E")] -= 0.01f;  // still E + Ec = 1: caught by the row integral
+        });
         rebuiltBecause("corrupt");
     }
     SUBCASE("unreadable: truncated file") {

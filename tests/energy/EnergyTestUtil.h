@@ -15,14 +15,29 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <array>
 #include <memory>
 #include <string>
+#include <thread>
+#include <vector>
 
 namespace energy {
 
 using physics::kPi;
 using facet::Vec3;
+
+// Runs fn(i) for i in [0, n) on all cores (at most 8 threads).
+template <typename F>
+void parallelFor(size_t n, const F& fn) {
+    unsigned nt = std::clamp(std::thread::hardware_concurrency(), 1u, 8u);
+    std::vector<std::thread> pool;
+    for (unsigned t = 0; t < nt; ++t)
+        pool.emplace_back([&, t] {
+            for (size_t i = t; i < n; i += nt) fn(i);
+        });
+    for (auto& th : pool) th.join();
+}
 
 inline facet::TableCache& memoryTables() {
     static facet::TableCache cache("");

@@ -18,17 +18,6 @@ using facet::NdfModel;
 
 namespace {
 
-template <typename F>
-void parallelFor(size_t n, const F& fn) {
-    unsigned nt = std::clamp(std::thread::hardware_concurrency(), 1u, 8u);
-    std::vector<std::thread> pool;
-    for (unsigned t = 0; t < nt; ++t)
-        pool.emplace_back([&, t] {
-            for (size_t i = t; i < n; i += nt) fn(i);
-        });
-    for (auto& th : pool) th.join();
-}
-
 EnergyTableKey key(NdfModel n, MaskingModel m, double gamma = 0, double k = 0) {
     EnergyTableKey key;
     key.ndf = n;

@@ -42,18 +42,6 @@ struct FurnaceRow {
     double alpha, mu, total, ss;
 };
 
-// Runs fn(i) for i in [0, n) on all cores.
-template <typename F>
-void parallelFor(size_t n, const F& fn) {
-    unsigned nt = std::clamp(std::thread::hardware_concurrency(), 1u, 8u);
-    std::vector<std::thread> pool;
-    for (unsigned t = 0; t < nt; ++t)
-        pool.emplace_back([&, t] {
-            for (size_t i = t; i < n; i += nt) fn(i);
-        });
-    for (auto& th : pool) th.join();
-}
-
 void whiteFurnace(const std::string& ndf, const std::string& masking) {
     TestMaterial kc("input alpha = 0.3 in 0.0001 .. 2; ndf = " + ndf + "(alpha); masking = " + masking +
                     "; energy = kulla_conty;");
