@@ -28,10 +28,14 @@ public:
     const std::string& cpuFeatures() const { return features_; }
     int hostVectorWidth() const;  // 16 with AVX-512F, 8 with AVX2, else 4
 
-    // Prepares `module` for this target, runs the O3 pipeline, and returns
-    // the object code.
+    // optimize() prepares `module` for this target and runs the short
+    // function pipeline described in Jit.cpp; emitObject() returns its
+    // object code.
     void optimize(llvm::Module& module);
     std::unique_ptr<llvm::MemoryBuffer> emitObject(llvm::Module& module);
+    // Names the pipeline and codegen level: part of the kernel cache key,
+    // so that a change to either never serves objects compiled before it.
+    static constexpr const char* kPipelineId = "early-cse,reassociate,instcombine;codegen-O3";
 
     // Links an object into a fresh JITDylib; returns it. lookup() finds a
     // symbol in it; release() unloads it.

@@ -371,13 +371,13 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
 
     // The cache key: what the kernel computes (the specialized material,
     // printed), how (options incl. tolerance, width), and with what (LLVM,
-    // CPU, codegen build).
+    // CPU, codegen build and optimization pipeline).
     std::string tableId = kernel->energyTable_ ? fmt::format("{}/v{}/{}", kernel->energyTable_->key.name(),
                                                              kEnergyTableVersion, kernel->energyTable_->quadrature.describe())
                                                : "";
-    std::string keyText = fmt::format("{}|{}|w{}|{}|{}|{}|{}|{}", printMaterial(kernel->material_), options.canonical(),
-                                      lowering.width, LLVM_VERSION_STRING, jit_->cpuName(), jit_->cpuFeatures(),
-                                      kLoweringBuildStamp, tableId);
+    std::string keyText = fmt::format("{}|{}|w{}|{}|{}|{}|{}|{}|{}", printMaterial(kernel->material_),
+                                      options.canonical(), lowering.width, LLVM_VERSION_STRING, jit_->cpuName(),
+                                      jit_->cpuFeatures(), kLoweringBuildStamp, FacetJit::kPipelineId, tableId);
     auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(keyText));
     std::string key = llvm::toHex(digest, true);
     std::string prefix = "facet_" + key.substr(0, 16);

@@ -1,0 +1,179 @@
+// facet_compile_timing: cold JIT compile time and kernel speed, per material.
+//
+//   facet_compile_timing [--runs N] [--evals N] [--dump DIR] [--no-speed] FILE.mat...
+//
+// For every material and each of simd exact, simd fast and scalar exact it
+// prints the median (over --runs, default 11) cold compile time with
+// cache=off, split into lowering, the middle-end (FacetJit::optimize) and
+// object emission (FacetJit::emitObject), and for the SIMD rows the median
+// ns/eval of a batch of --evals (default 65536) lanes of `facet bench`'s
+// regular sample (scalar rows: 8192 lanes one by one through Kernel::eval).
+// With --dump DIR it writes the outputs of the regular and
+// hard-case samples to DIR/<material>.<row>.bin, to compare two builds bit
+// for bit (cmp). Times are CPU time of this thread (see BenchRunner.cpp).
+#include "BenchSamples.h"
+#include "Checker.h"
+#include "Jit.h"
+#include "Kernel.h"
+#include "Lowering.h"
+
+#include <llvm/IR/LLVMContext.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <string>
+#include <vector>
+
+using namespace facet;
+
+namespace {
+
+double nowNs() {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) * 1e9 + double(ts.tv_nsec);
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    size_t n = v.size();
+    return n == 0 ? 0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct Row {
+    const char* name;
+    const char* options;
+};
+const Row kRows[] = {{"simd-exact", "backend=simd;math=exact;cache=off"},
+                     {"simd-fast", "backend=simd;math=fast;cache=off"},
+                     {"scalar-exact", "backend=scalar;math=exact;cache=off"}};
+
+void dump(const std::string& path, const Kernel& k, const bench::Sample& s) {
+    std::vector<float> c[3];
+    float* out[3];
+    for (int i = 0; i < 3; ++i) c[i].assign(s.size(), -1.0f), out[i] = c[i].data();
+    int64_t invalid = k.evalBatch(int64_t(s.size()), s.wi(), s.wo(), s.inputs(), out);
+    std::ofstream f(path, std::ios::binary | std::ios::app);
+    f.write(reinterpret_cast<const char*>(&invalid), sizeof invalid);
+    for (auto& v : c) f.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * sizeof(float)));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    int runs = 11;
+    size_t evals = 65536;
+    bool speed = true;
+    std::string dumpDir;
+    std::vector<std::string> files;
+    for (int i = 1; i < argc; ++i) {
+        std::string a = argv[i];
+        if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
+        else if (a == "--evals" && i + 1 < argc) evals = size_t(std::atoll(argv[++i]));
+        else if (a == "--dump" && i + 1 < argc) dumpDir = argv[++i];
+        else if (a == "--no-speed") speed = false;
+        else files.push_back(a);
+    }
+    Compiler compiler;
+    compiler.setCacheDir("");
+    std::vector<double> allCold;
+    std::printf("%-26s %-12s %8s %8s %8s %8s %9s\n", "material", "row", "cold ms", "lower", "opt", "emit", "ns/eval");
+    for (const std::string& file : files) {
+        DiagnosticEngine diags;
+        CheckedProgram program = loadProgramFile(file, diags);
+        if (diags.hasErrors()) {
+            std::fprintf(stderr, "%s", diags.str().c_str());
+            return 1;
+        }
+        for (const CheckedMaterial& m : program.materials) {
+            bench::Sample regular = bench::regularSample(m, evals, 1234);
+            bench::Sample hard = bench::hardCaseSample(m);
+            for (const Row& row : kRows) {
+                CompileOptions options;
+                std::string err = CompileOptions::parse(row.options, options);
+                if (!err.empty()) return std::fprintf(stderr, "%s\n", err.c_str()), 2;
+                std::unique_ptr<Kernel> kernel = compiler.compileMaterial(m, options, diags);  // untimed warm-up
+                if (!kernel) return std::fprintf(stderr, "%s", diags.str().c_str()), 1;
+                std::vector<std::unique_ptr<Kernel>> keep;
+                std::vector<double> cold;
+                for (int r = 0; r < runs; ++r) {
+                    double t0 = nowNs();
+                    keep.push_back(compiler.compileMaterial(m, options, diags));
+                    cold.push_back((nowNs() - t0) * 1e-6);
+                }
+                keep.clear();
+                // The same compile in phases (what Compiler::compileObject does).
+                LoweringOptions lo;
+                lo.energyTable = kernel->energyTable().get();
+                lo.math = options.math;
+                lo.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
+                lo.width = options.backend == Backend::Simd ? kernel->width() : 4;
+                lo.emitScalar = options.backend == Backend::Scalar;
+                lo.emitBatch = options.backend == Backend::Simd;
+                std::vector<double> tl, to, te;
+                for (int r = 0; r < runs; ++r) {
+                    llvm::LLVMContext context;
+                    double t0 = nowNs();
+                    LoweredModule lowered = lowerMaterial(m, lo, context, "facet_timing");
+                    double t1 = nowNs();
+                    compiler.jit().optimize(*lowered.module);
+                    double t2 = nowNs();
+                    compiler.jit().emitObject(*lowered.module);
+                    double t3 = nowNs();
+                    tl.push_back((t1 - t0) * 1e-6), to.push_back((t2 - t1) * 1e-6), te.push_back((t3 - t2) * 1e-6);
+                }
+                double ns = 0;
+                if (speed && options.backend == Backend::Scalar) {
+                    // Lane by lane through Kernel::eval, as a renderer calls the scalar entry.
+                    size_t n = std::min<size_t>(regular.size(), 8192);
+                    std::vector<float> in(std::max<size_t>(1, regular.slots.size()));
+                    std::vector<double> t;
+                    for (int r = 0; r < 21; ++r) {
+                        float sink = 0;
+                        double t0 = nowNs();
+                        for (size_t i = 0; i < n; ++i) {
+                            float a[3] = {regular.dir[0][i], regular.dir[1][i], regular.dir[2][i]};
+                            float b[3] = {regular.dir[3][i], regular.dir[4][i], regular.dir[5][i]}, o[3];
+                            for (size_t j = 0; j < regular.slots.size(); ++j) in[j] = regular.slots[j][i];
+                            kernel->eval(a, b, in.data(), o);
+                            sink += o[0];
+                        }
+                        t.push_back((nowNs() - t0) / double(n));
+                        if (sink == -1.0f) std::printf(" ");  // keeps the loop
+                    }
+                    ns = median(t);
+                }
+                if (speed && options.backend == Backend::Simd) {
+                    std::vector<float> c[3];
+                    float* out[3];
+                    for (int i = 0; i < 3; ++i) c[i].assign(regular.size(), 0.0f), out[i] = c[i].data();
+                    std::vector<double> t;
+                    for (int r = 0; r < 3; ++r) kernel->evalBatch(int64_t(regular.size()), regular.wi(), regular.wo(), regular.inputs(), out);
+                    for (int r = 0; r < 41; ++r) {
+                        double t0 = nowNs();
+                        kernel->evalBatch(int64_t(regular.size()), regular.wi(), regular.wo(), regular.inputs(), out);
+                        t.push_back((nowNs() - t0) / double(regular.size()));
+                    }
+                    ns = median(t);
+                }
+                if (!dumpDir.empty()) {
+                    std::string path = dumpDir + "/" + m.name + "." + row.name + ".bin";
+                    std::remove(path.c_str());
+                    dump(path, *kernel, regular);
+                    dump(path, *kernel, hard);
+                }
+                double c = median(cold);
+                allCold.push_back(c);
+                std::printf("%-26s %-12s %8.2f %8.2f %8.2f %8.2f %9.3f\n", m.name.c_str(), row.name, c, median(tl),
+                            median(to), median(te), ns);
+                std::fflush(stdout);
+            }
+        }
+    }
+    std::printf("median cold ms over all rows: %.2f (max %.2f)\n", median(allCold),
+                allCold.empty() ? 0.0 : *std::max_element(allCold.begin(), allCold.end()));
+    return 0;
+}
