@@ -91,10 +91,17 @@ struct SampleStats {
     // Cases that failed, with the reason (the first few of each kind).
     std::vector<std::pair<size_t, std::string>> failures;
 
-    bool ok() const {
-        return nan == 0 && inf == 0 && negative == 0 && missedInvalid == 0 && unexpectedInvalid == 0 &&
-               invalidNonZero == 0 && validityMismatch == 0 && !countMismatch && beyondBound == 0;
+    // Whether the accuracy (bound, validity of valid lanes) is a pass/fail
+    // criterion: exact mode. Fast mode computes in float throughout and
+    // its hard-case accuracy is reported, not enforced (docs/numerics.md).
+    bool accuracyEnforced = true;
+
+    // Outputs finite and >= 0; invalid inputs give 0 and are counted.
+    bool safe() const {
+        return nan == 0 && inf == 0 && negative == 0 && missedInvalid == 0 && invalidNonZero == 0 && !countMismatch;
     }
+    bool accurate() const { return unexpectedInvalid == 0 && validityMismatch == 0 && beyondBound == 0; }
+    bool ok() const { return safe() && (accurate() || !accuracyEnforced); }
     std::string summary() const;  // one line
 };
 

@@ -10,10 +10,12 @@
 
 #include <llvm/IR/Constants.h>
 #include <llvm/IR/IRBuilder.h>
+#include <llvm/IR/IntrinsicsX86.h>
 #include <llvm/IR/Verifier.h>
 #include <llvm/Support/raw_ostream.h>
 
 #include <cmath>
+#include <limits>
 
 namespace facet {
 
@@ -88,46 +90,67 @@ public:
 
     Result emit(std::array<Value*, 3> wi, std::array<Value*, 3> wo, const std::vector<Value*>& slots) {
         MathEmitter& m = f_;
-        MathEmitter& d = d_;
         // SPEC 2: non-finite or non-unit directions are invalid lanes; valid
         // ones are renormalized. Normalization and the half vector are
-        // computed in double: wi + wo cancels when the directions are nearly
-        // opposite, and the float rounding of the renormalization would then
-        // decide h (and so D, G and F) by itself.
+        // computed in the precise type (double in exact mode): wi + wo
+        // cancels when the directions are nearly opposite, and the float
+        // rounding of the renormalization would then decide h (and so D, G
+        // and F) by itself. Fast mode keeps them in float (measured: 25% to
+        // 50% errors at grazing, near-opposite directions with small alpha;
+        // docs/numerics.md) -- in double it was no faster than exact mode.
+        MathEmitter& d = d_;
         std::array<Value*, 3> wiD, woD;
-        auto direction = [&](const std::array<Value*, 3>& w, std::array<Value*, 3>& out) {
+        // A valid direction has |w| within 1e-3 of 1, so 1/|w| =
+        // (1 + delta)^(-1/2), delta = |w|^2 - 1 in [-2e-3, 2e-3], is a
+        // polynomial: the binomial series to delta^6 leaves 0.23 delta^7 <
+        // 3e-20, below double rounding. No square root or division (they
+        // bound the exact kernels' speed); lanes outside the range are
+        // invalid and their value unused.
+        auto normalize = [&](const std::array<Value*, 3>& w, std::array<Value*, 3>& out) {
             Value* finite = b_.CreateAnd(b_.CreateAnd(m.isFinite(w[0]), m.isFinite(w[1])), m.isFinite(w[2]));
             for (int i = 0; i < 3; ++i) out[i] = d.convert(w[i], d.type());
-            Value* len = d.sqrt(d.fma(out[0], out[0], d.fma(out[1], out[1], d.mul(out[2], out[2]))));
-            Value* unit = d.le(d.abs(d.sub(len, d.c(1.0))), d.c(kUnitTolerance));
+            Value* len2 = d.fma(out[0], out[0], d.fma(out[1], out[1], d.mul(out[2], out[2])));
+            Value* unit = b_.CreateAnd(d.ge(len2, d.c((1 - kUnitTolerance) * (1 - kUnitTolerance))),
+                                       d.le(len2, d.c((1 + kUnitTolerance) * (1 + kUnitTolerance))));
             markInvalid(b_.CreateNot(b_.CreateAnd(finite, unit)));
-            Value* inv = d.div(d.c(1.0), len);
+            Value* delta = d.sub(len2, d.c(1.0));
+            Value* inv = d.poly(delta, {1.0, -1.0 / 2, 3.0 / 8, -5.0 / 16, 35.0 / 128, -63.0 / 256, 231.0 / 1024});
             for (Value*& x : out) x = d.mul(x, inv);
         };
-        direction(wi, wiD);
-        direction(wo, woD);
+        normalize(wi, wiD);
+        normalize(wo, woD);
         std::array<Value*, 3> hD = {d.add(wiD[0], woD[0]), d.add(wiD[1], woD[1]), d.add(wiD[2], woD[2])};
         Value* hlen = d.sqrt(d.fma(hD[0], hD[0], d.fma(hD[1], hD[1], d.mul(hD[2], hD[2]))));
-        Value* hinv = d.div(d.c(1.0), hlen);
-        for (Value*& x : hD) x = d.mul(x, hinv);
         // wi.h = wo.h = |wi + wo| / 2 for unit vectors: one value for both
         // keeps f exactly reciprocal. 1 - cos = |wi - wo|^2 / (2 (2 + |wi + wo|))
         // (from |wi + wo|^2 + |wi - wo|^2 = 4) has no cancellation at wi = wo.
         Value* cosD = d.minnum(d.mul(hlen, d.c(0.5)), d.c(1.0));
         std::array<Value*, 3> diff = {d.sub(wiD[0], woD[0]), d.sub(wiD[1], woD[1]), d.sub(wiD[2], woD[2])};
         Value* diff2 = d.fma(diff[0], diff[0], d.fma(diff[1], diff[1], d.mul(diff[2], diff[2])));
-        Value* oneMinusCos = d.div(diff2, d.mul(d.c(2.0), d.add(d.c(2.0), hlen)));
+        // 1/hlen and 1/(2 (2 + hlen)) from one division.
+        Value* twoSum = d.mul(d.c(2.0), d.add(d.c(2.0), hlen));
+        Value* recip = d.div(d.c(1.0), d.mul(hlen, twoSum));
+        Value* hinv = d.mul(twoSum, recip);
+        for (Value*& x : hD) x = d.mul(x, hinv);
+        Value* oneMinusCos = d.mul(diff2, d.mul(hlen, recip));
+        oneMinusCos = d.minnum(oneMinusCos, d.c(1.0));
+        Value* sin2 = d.mul(oneMinusCos, d.add(d.c(1.0), cosD));
         Geometry g;
+        g.hNonZero = d.gt(hlen, d.c(0.0));
+        // Rounded once to the lane type.
+        MathEmitter& p = d_;
         for (int i = 0; i < 3; ++i) {
             g.wi[i] = m.convert(wiD[i], m.type());
             g.wo[i] = m.convert(woD[i], m.type());
             g.h[i] = m.convert(hD[i], m.type());
+            g.hD[i] = p.convert(hD[i], p.type());
+            g.wiD[i] = p.convert(wiD[i], p.type());
+            g.woD[i] = p.convert(woD[i], p.type());
         }
-        g.hD = hD;
         g.oh = m.convert(cosD, m.type());
-        g.cosD = cosD;
-        g.oneMinusCos = m.convert(d.minnum(oneMinusCos, d.c(1.0)), m.type());
-        g.hNonZero = d.gt(hlen, d.c(0.0));
+        g.cosD = p.convert(cosD, p.type());
+        g.oneMinusCosD = p.convert(oneMinusCos, p.type());
+        g.sin2D = p.convert(sin2, p.type());
         // Inputs: non-finite values are invalid; in-range clamping. Inputs,
         // lets and model parameters are evaluated in double: a parameter
         // such as alpha enters exp() multiplied by tens in the NDF tails, and
@@ -139,8 +162,8 @@ public:
             for (int ch = 0; ch < in.slotCount(); ++ch) {
                 Value* x = slots.at(in.firstSlot + ch);
                 markInvalid(b_.CreateNot(m.isFinite(x)));
-                x = d.convert(x, d.type());
-                if (in.hasRange) x = d.maxnum(d.minnum(x, d.c(in.hi)), d.c(in.lo));
+                x = p.convert(x, p.type());
+                if (in.hasRange) x = p.maxnum(p.minnum(x, p.c(in.hi)), p.c(in.lo));
                 v.c[ch] = x;
             }
             if (!v.rgb) v.c[1] = v.c[2] = v.c[0];
@@ -177,8 +200,10 @@ private:
     struct Geometry {
         std::array<Value*, 3> wi, wo, h;
         std::array<Value*, 3> hD;  // h in double, for NDFs whose exponent amplifies rounding
+        std::array<Value*, 3> wiD, woD;  // the unit directions in the precise type
         Value* cosD;               // wo.h = wi.h in [0, 1], precise type (exact Fresnel near its critical angle)
-        Value* oneMinusCos;        // 1 - wo.h = |wo - h|^2 / 2, float, without cancellation at wi = wo
+        Value* oneMinusCosD;       // 1 - wo.h = |wo - h|^2 / 2, precise type, without cancellation at wi = wo
+        Value* sin2D;              // 1 - (wo.h)^2 from the same, precise type
         Value* oh;
         Value* hNonZero;
     };
@@ -335,7 +360,7 @@ private:
         bool isotropic = false;
         Value* exponent = nullptr;  // blinn_phong (double)
         Value* gamma = nullptr;     // gtr (double)
-        Value* gaussianNorm = nullptr;
+        Value* gaussianNorm = nullptr;  // precise type
     };
 
     Ndf ndfParams() {
@@ -347,7 +372,12 @@ private:
             case NdfModel::Beckmann:
             case NdfModel::Ward:
                 n.axD = scalarParam(use, param::AlphaX, kMinAlpha, INFINITY, false);
-                n.isotropic = use.args[param::AlphaX] == use.args[param::AlphaY];
+                // One alpha (the checker's flag; specialization may have
+                // copied the shared expression), or equal constants: the
+                // isotropic forms save divisions.
+                n.isotropic = use.isotropic || use.args[param::AlphaX] == use.args[param::AlphaY] ||
+                              (isConstantExpr(*use.args[param::AlphaX]) && isConstantExpr(*use.args[param::AlphaY]) &&
+                               constantValue(*use.args[param::AlphaX])[0] == constantValue(*use.args[param::AlphaY])[0]);
                 n.ayD = n.isotropic ? n.axD : scalarParam(use, param::AlphaY, kMinAlpha, INFINITY, false);
                 break;
             case NdfModel::BlinnPhong: n.exponent = scalarParam(use, param::Exponent, 0, kMaxPhongExponent, false); break;
@@ -362,7 +392,7 @@ private:
                 const Expr& arg = *use.args[param::GaussianAlpha];
                 if (isConstantExpr(arg)) {
                     double alpha = std::max(constantValue(arg)[0], kMinAlpha);
-                    n.gaussianNorm = m.c(gaussianNdfNorm<double>(alpha));
+                    n.gaussianNorm = d_.c(gaussianNdfNorm<double>(alpha));
                 } else {
                     n.gaussianNorm = gaussianNormLookup(n.axD);
                 }
@@ -417,7 +447,18 @@ private:
         Value* w2 = d.mul(d.mul(sm1, d.mul(s, s2)), d.c(-0.5));
         Value* w3 = d.mul(d.mul(sm1, d.mul(s, s1)), d.c(1.0 / 6.0));
         Value* q = d.fma(w0, p0, d.fma(w1, p1, d.fma(w2, p2, d.mul(w3, p3))));
-        return f_.convert(d.exp(q), f_.type());
+        return d_.convert(d.exp(q), d_.type());
+    }
+
+    // exp(-e) for the NDF tails (e >= 0), 0 where it would leave the
+    // precise type's normal range: the argument is clamped first, because a
+    // subnormal result costs a ~100-cycle microcode assist per operation and
+    // random directions with small alpha hit it in most lanes.
+    Value* expTail(Value* e) {
+        MathEmitter& d = d_;
+        double limit = d.isDouble() ? 700.0 : 85.0;
+        Value* v = d.exp(d.neg(d.minnum(e, d.c(limit))));
+        return d.select(d.gt(e, d.c(limit)), d.c(0.0), v);
     }
 
     Value* intrinsic(llvm::Intrinsic::ID id, Value* a) { return b_.CreateIntrinsic(id, {a->getType()}, {a}); }
@@ -451,24 +492,43 @@ private:
         return d.div(s, z2);
     }
 
+    // D(h) in the precise type: the NDFs with an exponent are evaluated in
+    // it, and even GGX's float value is carried on in it, because D can be
+    // far below float range where D G / (ci co) is not (Beckmann tails at
+    // grazing).
     Value* D(const Ndf& n, const std::array<Value*, 3>& h, const std::array<Value*, 3>& hD) {
         MathEmitter& m = f_;
-        Value *x2 = m.mul(h[0], h[0]), *y2 = m.mul(h[1], h[1]), *z2 = m.mul(h[2], h[2]);
-        auto slope2 = [&]() { return this->slope2(n, h); };
         switch (mat_.ndfModel()) {
             case NdfModel::Ggx: {
-                Value* t = m.add(slope2(), z2);
-                return m.div(m.c(1.0 / kPi), m.mul(m.mul(n.ax, n.ay), m.mul(t, t)));
+                if (n.isotropic) {
+                    // 1 / (pi a^2 (s2/a^2 + mz^2)^2) = a^2 / (pi (s2 + a^2 mz^2)^2): one division.
+                    Value* a2 = m.mul(n.ax, n.ax);
+                    Value* t = m.fma(a2, m.mul(h[2], h[2]), m.fma(h[0], h[0], m.mul(h[1], h[1])));
+                    Value* D = m.div(m.mul(a2, m.c(1.0 / kPi)), m.mul(t, t));
+                    // a^2 beyond float (alpha > 1.8e19): D < 1e-38 / mz^4 is 0, not Inf/Inf.
+                    return d_.convert(m.select(m.isFinite(a2), D, m.c(0.0)), d_.type());
+                }
+                Value* t = m.fma(h[2], h[2], slope2(n, h));
+                return d_.convert(m.div(m.c(1.0 / kPi), m.mul(m.mul(n.ax, n.ay), m.mul(t, t))), d_.type());
             }
             case NdfModel::Beckmann: {
                 MathEmitter& d = d_;
-                Value* e = slopeExponentD(n, hD);
                 Value* z2d = d.mul(hD[2], hD[2]);
-                Value* axy = d.mul(n.axD, n.ayD);
-                Value* D = d.div(d.exp(d.neg(e)), d.mul(d.mul(d.c(kPi), axy), d.mul(z2d, z2d)));
+                Value *e, *D;
+                if (n.isotropic) {
+                    // One division: t = 1/(a^2 mz^2), e = (mx^2 + my^2) t, and
+                    // 1/(pi a^2 mz^4) = t (t a^2) / pi.
+                    Value* a2 = d.mul(n.axD, n.axD);
+                    Value* t = d.div(d.c(1.0), d.mul(a2, z2d));
+                    e = d.mul(d.fma(hD[0], hD[0], d.mul(hD[1], hD[1])), t);
+                    D = d.mul(expTail(e), d.mul(d.mul(t, d.mul(t, a2)), d.c(1.0 / kPi)));
+                } else {
+                    e = slopeExponentD(n, hD);
+                    Value* axy = d.mul(n.axD, n.ayD);
+                    D = d.div(expTail(e), d.mul(d.mul(d.c(kPi), axy), d.mul(z2d, z2d)));
+                }
                 // exp underflowed: 0, not 0/0 when mz^4 underflows too.
-                D = d.select(d.gt(e, d.c(d.isDouble() ? 700.0 : 85.0)), d.c(0.0), D);
-                return m.convert(D, m.type());
+                return d.select(d.gt(e, d.c(d.isDouble() ? 700.0 : 85.0)), d.c(0.0), D);
             }
             case NdfModel::BlinnPhong: {
                 // mz^e = exp(e/2 log1p(-(mx^2 + my^2))) in double: mz itself
@@ -480,36 +540,51 @@ private:
                 Value* s2 = d.minnum(d.fma(hD[0], hD[0], d.mul(hD[1], hD[1])), d.c(1.0));
                 Value* lnz = d.select(d.lt(s2, d.c(0.5)), d.mul(d.c(0.5), d.log1p(d.neg(s2))), d.log(hD[2]));
                 Value* E = d.convert(n.exponent, d.type());
-                Value* p = d.exp(d.mul(E, lnz));
+                Value* p = expTail(d.neg(d.mul(E, lnz)));
                 p = d.select(d.eq(E, d.c(0.0)), d.c(1.0), p);
                 Value* norm = d.mul(d.add(E, d.c(2.0)), d.c(1.0 / (2 * kPi)));
-                return f_.convert(d.mul(norm, p), f_.type());
+                return d.mul(norm, p);
             }
             case NdfModel::Gtr: {
-                // c / t^gamma, c = phi(L) / (pi phi((1 - gamma) L)), L = ln a^2,
-                // t = a^2 mz^2 + mx^2 + my^2; all in double.
+                // D = c / t^gamma, c = phi(L) / (pi phi((1 - gamma) L)), L = ln a^2,
+                // phi(y) = expm1(y)/y, t = a^2 mz^2 + mx^2 + my^2; all in the
+                // precise type and in log form, as in the interpreter: for large
+                // gamma phi((1 - gamma) L) overflows while t^gamma underflows.
+                // With y = (1 - gamma) L > 1, log phi(y) = y + log(1 - e^-y) - log y,
+                // and y - gamma log t = -L - gamma log1p(s2 (1 - a^2)/a^2): the two
+                // terms of size gamma L cancel analytically instead of in rounding.
                 MathEmitter& d = d_;
                 Value* A2 = d.mul(n.axD, n.axD);
                 Value* L = d.log(A2);
                 Value* G = n.gamma;
-                Value* c = d.div(expm1OverX(L), d.mul(d.c(kPi), expm1OverX(d.mul(d.sub(d.c(1.0), G), L))));
-                Value* t = d.fma(A2, d.mul(hD[2], hD[2]), d.fma(hD[0], hD[0], d.mul(hD[1], hD[1])));
-                return f_.convert(d.mul(c, d.exp(d.neg(d.mul(G, d.log(t))))), f_.type());
+                Value* logPhiL = d.log(expm1OverX(L));
+                Value* y = d.mul(d.sub(d.c(1.0), G), L);
+                Value* s2 = d.fma(hD[0], hD[0], d.mul(hD[1], hD[1]));
+                Value* yBig = d.maxnum(y, d.c(1.0));  // keeps the unused lanes finite
+                Value* big = d.sub(d.add(d.sub(d.sub(logPhiL, L), d.log(d.sub(d.c(1.0), d.exp(d.neg(yBig))))), d.log(yBig)),
+                                   d.mul(G, d.log1p(d.mul(s2, d.div(d.sub(d.c(1.0), A2), A2)))));
+                Value* t = d.fma(A2, d.mul(hD[2], hD[2]), s2);
+                Value* small = d.sub(d.sub(logPhiL, d.log(expm1OverX(d.minnum(y, d.c(1.0))))), d.mul(G, d.log(t)));
+                Value* logD = d.select(d.gt(y, d.c(1.0)), big, small);
+                return d.mul(d.exp(logD), d.c(1.0 / kPi));
             }
             case NdfModel::Gaussian: {
                 // theta^2/alpha^2 is an exponent too: double.
                 MathEmitter& d = d_;
                 Value* theta = d.atan2(d.sqrt(d.fma(hD[0], hD[0], d.mul(hD[1], hD[1]))), hD[2]);
                 Value* e = d.div(d.mul(theta, theta), d.mul(n.axD, n.axD));
-                return m.div(m.convert(d.exp(d.neg(e)), m.type()), n.gaussianNorm);
+                return d.div(expTail(e), n.gaussianNorm);
             }
             case NdfModel::Ward: break;
         }
         internal_error << "D for ward";
     }
 
-    // Smith Lambda(v) for ggx, beckmann and blinn_phong.
-    Value* lambda(const Ndf& n, const std::array<Value*, 3>& v) {
+    // (n.v) Lambda(v) for ggx, beckmann and blinn_phong: finite for every
+    // n.v >= 0, where Lambda itself grows like 1/(n.v) and overflows at
+    // grazing. Same forms as the interpreter's cosLambda.
+    // alpha(v)^2 sin^2(theta_v) = (vx ax)^2 + (vy ay)^2, float.
+    Value* smithProj(const Ndf& n, const std::array<Value*, 3>& v) {
         MathEmitter& m = f_;
         Value *ax = n.ax, *ay = n.ay;
         bool iso = n.isotropic;
@@ -517,155 +592,318 @@ private:
             ax = ay = m.convert(d_.sqrt(d_.div(d_.c(2.0), d_.add(n.exponent, d_.c(2.0)))), m.type());
             iso = true;
         }
-        Value* proj = iso ? m.mul(m.mul(ax, ax), m.fma(v[0], v[0], m.mul(v[1], v[1])))
-                          : m.fma(m.mul(v[0], ax), m.mul(v[0], ax), m.mul(m.mul(v[1], ay), m.mul(v[1], ay)));
-        if (mat_.ndfModel() == NdfModel::Ggx) {
-            // t = alpha tan(theta); Lambda = (sqrt(1 + t^2) - 1)/2 written as
-            // t^2 / (2 (1 + sqrt(1 + t^2))), and (t - 1)/2 once t^2 would overflow.
-            Value* t = m.div(m.sqrt(proj), v[2]);
-            Value* t2 = m.mul(t, t);
-            Value* small = m.div(t2, m.mul(m.c(2.0), m.add(m.c(1.0), m.sqrt(m.add(m.c(1.0), t2)))));
-            return m.select(m.gt(t, m.c(1e7)), m.mul(m.sub(t, m.c(1.0)), m.c(0.5)), small);
-        }
-        Value* a = m.div(v[2], m.sqrt(proj));
-        if (opt_.variant.walterLambda) {
-            // Walter et al. 2007, eq. 27 (as Lambda = 1/G1 - 1): rational in a,
-            // 0 for a >= 1.6. Relative error in G1 below about 0.4%.
-            Value* num = m.poly(a, {1.0, -1.259, 0.396});
-            Value* den = m.mul(a, m.poly(a, {3.535, 2.181}));
-            Value* l = m.select(m.lt(a, m.c(1.6)), m.div(num, den), m.c(0.0));
-            return m.select(m.eq(proj, m.c(0.0)), m.c(0.0), l);
-        }
-        // Beckmann: a = cot / alpha; Lambda = (exp(-a^2)/(a sqrt(pi)) - erfc(a)) / 2.
-        Value* l = m.mul(m.c(0.5), m.sub(m.div(m.exp(m.neg(m.mul(a, a))), m.mul(a, m.c(std::sqrt(kPi)))), m.erfc(a)));
-        l = m.maxnum(l, m.c(0.0));
-        return m.select(m.eq(proj, m.c(0.0)), m.c(0.0), l);
+        // Products with alpha first: alpha^2 may overflow float (alpha up to
+        // FLT_MAX is a valid parameter), and Inf * 0 at v = n would be NaN.
+        Value *px = m.mul(v[0], ax), *py = m.mul(v[1], iso ? ax : ay);
+        return m.fma(px, px, m.mul(py, py));
     }
 
-    Value* G(const Ndf& n, const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo,
-             const std::array<Value*, 3>& h, Value* ci, Value* co, Value* oh) {
+    // GGX: R(v) = sqrt((n.v)^2 + proj) = (n.v) (1 + 2 Lambda(v)), so that
+    // (n.v)(1 + Lambda) = ((n.v) + R)/2 and ci co (1 + Li + Lo) =
+    // (co Ri + ci Ro)/2: sums of positive terms, no division, no
+    // cancellation (the height-correlated form of Heitz 2014 / Lagarde).
+    Value* ggxRoot(const Ndf& n, const std::array<Value*, 3>& v) {
         MathEmitter& m = f_;
-        Value* nh = h[2];
-        Value* one = m.c(1.0);
+        return m.sqrt(m.fma(v[2], v[2], smithProj(n, v)));
+    }
+
+    Value* cosLambda(const Ndf& n, const std::array<Value*, 3>& v) {
+        MathEmitter& m = f_;
+        Value* proj = smithProj(n, v);
+        Value* vz = v[2];
+        if (mat_.ndfModel() == NdfModel::Ggx) {
+            // vz Lambda = vz (sqrt(1 + proj/vz^2) - 1)/2 = proj / (2 (vz + sqrt(vz^2 + proj))):
+            // no cancellation for small proj, no overflow for small vz.
+            // (proj = Inf for alpha beyond ~1e19: Lambda = Inf, G = 0, not Inf/Inf.)
+            Value* cl = m.div(proj, m.mul(m.c(2.0), m.add(vz, m.sqrt(m.fma(vz, vz, proj)))));
+            return m.select(m.isFinite(proj), cl, proj);
+        }
+        Value* s = m.sqrt(proj);
+        Value* a = m.div(vz, s);  // cot(theta_v) / alpha_v
+        Value* cl;
+        if (opt_.variant.walterLambda) {
+            // Walter et al. 2007, eq. 27 (as Lambda = 1/G1 - 1): rational in a,
+            // 0 for a >= 1.6; relative error in G1 below about 0.4%. Times vz
+            // (vz / a = s): s (1 - 1.259 a + 0.396 a^2) / (3.535 + 2.181 a).
+            Value* r = m.div(m.mul(s, m.poly(a, {1.0, -1.259, 0.396})), m.poly(a, {3.535, 2.181}));
+            cl = m.select(m.lt(a, m.c(1.6)), r, m.c(0.0));
+        } else {
+            // Lambda = (exp(-a^2)/(a sqrt(pi)) - erfc(a)) / 2; times vz (vz / a = s).
+            // Beyond a = 4, Lambda < 2.5e-10 is below float resolution next to
+            // 1 in G1 = 1/(1 + Lambda): 0. The argument is clamped first so
+            // that exp and erfc never produce subnormals (each costs a
+            // microcode assist: the Beckmann kernels ran 5x slower on random
+            // directions before).
+            Value* ac = m.minnum(a, m.c(4.0));
+            cl = m.mul(m.c(0.5), m.sub(m.mul(s, m.mul(m.exp(m.neg(m.mul(ac, ac))), m.c(1.0 / std::sqrt(kPi)))),
+                                       m.mul(vz, m.erfc(ac))));
+            cl = m.select(m.gt(a, m.c(4.0)), m.c(0.0), m.maxnum(cl, m.c(0.0)));
+        }
+        return m.select(m.eq(proj, m.c(0.0)), m.c(0.0), cl);
+    }
+
+    // D G / ((n.wi)(n.wo)) for the masking model, formed without G and
+    // without dividing two underflowed values: at grazing G and ci co go to
+    // zero together (a float-subnormal n.w makes 4 ci co zero in float, and
+    // implicit G with it: 0/0) while the quotient is moderate. Each case is
+    // the SPEC 3 G divided by ci co and simplified (the interpreter's
+    // GOverCosines). The combination is done in the precise type, where D
+    // (possibly far below float range) and 1/(ci co) (possibly far above)
+    // meet. In float (fast mode) the Smith forms are scaled by
+    // a = max(ci, co) (ri = ci/a, ro = co/a, one of them 1), so that no sum
+    // of products falls into the subnormal range, and divisions are chained
+    // so that an intermediate overflows only if the result does.
+    Value* gOverCosines(const Ndf& n, const Geometry& geo, Value* D) {
+        MathEmitter& m = f_;
+        MathEmitter& p = d_;
+        const bool wide = p.isDouble();
+        const std::array<Value*, 3>&wi = geo.wi, &wo = geo.wo;
+        Value *ci = geo.wiD[2], *co = geo.woD[2];
+        Value *oh = geo.cosD, *nh = geo.hD[2];
+        Value* one = p.c(1.0);
         auto azimuthWeight = [&] {
             Value* cross = m.abs(m.sub(m.mul(wi[0], wo[1]), m.mul(wi[1], wo[0])));
             Value* dot = m.fma(wi[0], wo[0], m.mul(wi[1], wo[1]));
             Value* phi = m.mul(m.c(4.41), m.atan2(cross, dot));
-            return m.div(phi, m.add(phi, one));
+            return p.convert(m.div(phi, m.add(phi, m.c(1.0))), p.type());
+        };
+        auto over = [&](Value* x, Value* y, Value* z) {  // x / (y z)
+            return wide ? p.div(x, p.mul(y, z)) : p.div(p.div(x, y), z);
         };
         switch (mat_.maskingModel()) {
-            case MaskingModel::None: return one;
-            case MaskingModel::Implicit: return m.mul(ci, co);
-            case MaskingModel::CookTorrance: {
-                Value* k = m.div(m.mul(m.c(2.0), nh), oh);
-                return m.minnum(one, m.mul(k, m.minnum(ci, co)));
+            case MaskingModel::None: return over(D, ci, co);
+            case MaskingModel::Implicit: return D;
+            case MaskingModel::CookTorrance: {  // min(1, 2 nh co / oh, 2 nh ci / oh) / (ci co)
+                Value* k = p.mul(p.div(D, oh), p.mul(p.c(2.0), nh));
+                return p.minnum(over(D, ci, co), p.div(k, p.maxnum(ci, co)));
             }
-            case MaskingModel::Kelemen: return m.div(m.mul(ci, co), m.mul(oh, oh));
-            case MaskingModel::Neumann: return m.div(m.mul(ci, co), m.maxnum(ci, co));
-            case MaskingModel::SchlickSmith: {
-                Value* k = scalarParam(mat_.masking, param::SchlickK, 0, 1);
-                Value* omk = m.sub(one, k);
-                auto g1 = [&](Value* c) { return m.div(c, m.fma(c, omk, k)); };
-                return m.mul(g1(ci), g1(co));
+            case MaskingModel::Kelemen: return over(D, oh, oh);
+            case MaskingModel::Neumann: return p.div(D, p.maxnum(ci, co));
+            case MaskingModel::SchlickSmith: {  // G1(c) / c = 1 / (c (1 - k) + k)
+                Value* k = p.convert(scalarParam(mat_.masking, param::SchlickK, 0, 1), p.type());
+                Value* omk = p.sub(one, k);
+                return over(D, p.fma(ci, omk, k), p.fma(co, omk, k));
             }
-            case MaskingModel::SmithSeparable:
-                return m.div(one, m.mul(m.add(one, lambda(n, wi)), m.add(one, lambda(n, wo))));
-            case MaskingModel::SmithHeightCorrelated:
-                return m.div(one, m.add(one, m.add(lambda(n, wi), lambda(n, wo))));
-            case MaskingModel::SmithDirectionCorrelated: {
-                Value* g1i = m.div(one, m.add(one, lambda(n, wi)));
-                Value* g1o = m.div(one, m.add(one, lambda(n, wo)));
-                Value* w = azimuthWeight();
-                return m.fma(w, m.mul(g1i, g1o), m.mul(m.sub(one, w), m.minnum(g1i, g1o)));
-            }
-            case MaskingModel::SmithHeightDirectionCorrelated: {
-                Value *li = lambda(n, wi), *lo = lambda(n, wo);
-                return m.div(one, m.add(one, m.fma(azimuthWeight(), m.minnum(li, lo), m.maxnum(li, lo))));
-            }
+            default: break;
         }
-        internal_error << "unknown masking";
+        const bool ggxRoots = mat_.ndfModel() == NdfModel::Ggx &&
+                              mat_.maskingModel() != MaskingModel::SmithHeightDirectionCorrelated;
+        Value *li = nullptr, *lo = nullptr, *ai, *ao;  // ai = ci (1 + Li), ao = co (1 + Lo)
+        Value *rootI = nullptr, *rootO = nullptr;
+        if (ggxRoots) {
+            rootI = p.convert(ggxRoot(n, wi), p.type());
+            rootO = p.convert(ggxRoot(n, wo), p.type());
+            ai = p.mul(p.add(ci, rootI), p.c(0.5));
+            ao = p.mul(p.add(co, rootO), p.c(0.5));
+        } else {
+            // (n.v) Lambda(v), computed in float: it enters sums with n.v.
+            li = p.convert(cosLambda(n, wi), p.type());
+            lo = p.convert(cosLambda(n, wo), p.type());
+            ai = p.add(ci, li);
+            ao = p.add(co, lo);
+        }
+        switch (mat_.maskingModel()) {
+            case MaskingModel::SmithSeparable:  // G1(v) / (n.v) = 1 / ((n.v) (1 + Lambda(v)))
+                return over(D, ai, ao);
+            case MaskingModel::SmithDirectionCorrelated: {
+                // G1i G1o / (ci co) = 1 / (ai ao), min(G1i, G1o) / (ci co) = 1 / max(ai co, ao ci)
+                Value* w = azimuthWeight();
+                Value* least = wide ? p.div(D, p.maxnum(p.mul(ai, co), p.mul(ao, ci)))
+                                    : p.minnum(p.div(p.div(D, ai), co), p.div(p.div(D, ao), ci));
+                return p.fma(w, over(D, ai, ao), p.mul(p.sub(one, w), least));
+            }
+            default: break;
+        }
+        // Height-correlated forms: D / (ci co (1 + Li + Lo)), and with
+        // max(Li, Lo) + w min(Li, Lo) for the direction-aware one.
+        Value *a = one, *ri = ci, *ro = co;
+        if (!wide) {
+            a = p.maxnum(ci, co);
+            ri = p.div(ci, a);
+            ro = p.div(co, a);
+        }
+        Value* den;
+        if (ggxRoots) {  // height-correlated: (co Ri + ci Ro) / (2 a)
+            den = p.mul(p.fma(ro, rootI, p.mul(ri, rootO)), p.c(0.5));
+        } else {
+            Value *pi = p.mul(ro, li), *po = p.mul(ri, lo);  // ci co Li / a, ci co Lo / a
+            Value* rest = mat_.maskingModel() == MaskingModel::SmithHeightCorrelated
+                              ? p.add(pi, po)
+                              : p.fma(azimuthWeight(), p.minnum(pi, po), p.maxnum(pi, po));
+            den = p.fma(ci, ro, rest);
+        }
+        return wide ? p.div(D, den) : p.div(p.div(D, den), a);
     }
 
-    LVal fresnel(const Geometry& geo) {
-        MathEmitter& m = f_;
-        MathEmitter& d = d_;
-        Value* one = m.c(1.0);
-        Value* dOne = d.c(1.0);
-        Value* c = geo.cosD;  // double
+    // Whether the exact dielectric/conductor Fresnel can be evaluated in
+    // float: its parameters are constants away from the ill-conditioned
+    // regions (dielectric: eta >= 1.01 in every channel, no critical angle
+    // and no eta - 1 cancellation; conductor: |N^2 - 1| >= 0.1). Then the
+    // formulas are well-conditioned in cos(theta), which comes rounded from
+    // the double geometry; the measured error stays within the exact-mode
+    // error of the rest of the kernel (tests/jit, differential). Saves the
+    // double divisions and square roots that bound the exact kernels.
+    bool exactFresnelInFloat() const {
         const ModelUse& use = mat_.fresnel;
+        if (mat_.fresnelModel() == FresnelModel::Dielectric) {
+            const Expr& eta = *use.args[param::DielectricEta];
+            if (!isConstantExpr(eta)) return false;
+            for (double v : constantValue(eta))
+                if (!(v >= 1.01 && v <= 1e3)) return false;
+            return true;
+        }
+        if (mat_.fresnelModel() == FresnelModel::Conductor) {
+            const Expr &eta = *use.args[param::ConductorEta], &k = *use.args[param::ConductorK];
+            if (!isConstantExpr(eta) || !isConstantExpr(k)) return false;
+            std::array<double, 3> ev = constantValue(eta), kv = constantValue(k);
+            for (int ch = 0; ch < 3; ++ch) {
+                double n = std::max(ev[ch], kMinEta), kk = std::max(kv[ch], 0.0);
+                double er = (n - 1) * (n + 1) - kk * kk, ei = 2 * n * kk;
+                if (!(er * er + ei * ei >= 0.01 && n <= 1e3 && kk <= 1e3)) return false;
+            }
+            return true;
+        }
+        return false;
+    }
+
+    // cos(theta_d) for the exact Fresnel terms in emitter `e`. In float it
+    // is kept >= 1e-18: below that F equals F(0) to float precision (its
+    // slope in c is O(|N|)), and float-subnormal cosines would lose their
+    // bits in c gp, c^2 (3.9e-5 error measured at wi.h = 7e-43).
+    Value* fresnelCos(MathEmitter& e, const Geometry& geo) {
+        Value* c = e.convert(geo.cosD, e.type());
+        return e.isDouble() ? c : e.maxnum(c, e.c(1e-18));
+    }
+
+    // Upper clamp of eta and k for the exact Fresnel terms. In double none
+    // is needed (N^4 stays finite for any float parameter). In float (fast
+    // mode) |N|^4 overflows beyond ~4e9; at 1e9, F differs from 1 by less
+    // than 4/|N| = 4e-9 at every angle except the Brewster dip of rp at
+    // cos < 1e-9 (see docs/numerics.md).
+    double maxFresnelIndex() const { return opt_.variant.precise ? INFINITY : 1e9; }
+
+    // F per channel, in the precise type (it multiplies D G / (ci co) there:
+    // with f0 = 0, Schlick's (1 - c)^5 can be far below float range where
+    // the product is not).
+    LVal fresnel(const Geometry& geo) {
+        MathEmitter& d = d_;
+        Value* dOne = d.c(1.0);
+        const ModelUse& use = mat_.fresnel;
+        Value* q = geo.oneMinusCosD;
+        Value* q2 = d.mul(q, q);
+        Value* q5 = d.mul(d.mul(q2, q2), q);
+        auto schlickF0FromEta = [&](const LVal& eta) {
+            return map({eta}, true, [&](auto& x) {
+                Value* r = d.div(d.sub(x[0], dOne), d.add(x[0], dOne));
+                return d.mul(r, r);
+            });
+        };
         switch (mat_.fresnelModel()) {
-            case FresnelModel::None: return LVal::scalar(one);
+            case FresnelModel::None: return LVal::scalar(dOne);
             case FresnelModel::Schlick: {
-                Value* q = geo.oneMinusCos;
-                Value* q2 = m.mul(q, q);
-                Value* q5 = m.mul(m.mul(q2, q2), q);
-                LVal f0;
-                if (use.has(param::F0)) {
-                    f0 = rgbParam(use, param::F0, 0, 1);
-                } else {
-                    LVal eta = rgbParam(use, param::SchlickEta, kMinEta, INFINITY);
-                    f0 = map({eta}, true, [&](auto& x) {
-                        Value* r = m.div(m.sub(x[0], one), m.add(x[0], one));
-                        return m.mul(r, r);
-                    });
-                }
-                return map({f0}, true, [&](auto& x) { return m.fma(m.sub(one, x[0]), q5, x[0]); });
+                LVal f0 = use.has(param::F0) ? rgbParam(use, param::F0, 0, 1, false)
+                                             : schlickF0FromEta(rgbParam(use, param::SchlickEta, kMinEta, INFINITY, false));
+                return map({f0}, true, [&](auto& x) { return d.fma(d.sub(dOne, x[0]), q5, x[0]); });
             }
             case FresnelModel::Dielectric: {
                 if (opt_.variant.schlickDielectric) {
                     // Schlick with f0 = ((eta - 1)/(eta + 1))^2: only chosen by a
                     // tolerance that its measured error meets.
-                    LVal eta = rgbParam(use, param::DielectricEta, kMinEta, INFINITY);
-                    Value* q = geo.oneMinusCos;
-                    Value* q2 = m.mul(q, q);
-                    Value* q5 = m.mul(m.mul(q2, q2), q);
-                    return map({eta}, true, [&](auto& x) {
-                        Value* r = m.div(m.sub(x[0], one), m.add(x[0], one));
-                        Value* f0 = m.mul(r, r);
-                        return m.fma(m.sub(one, f0), q5, f0);
-                    });
+                    LVal f0 = schlickF0FromEta(rgbParam(use, param::DielectricEta, kMinEta, INFINITY, false));
+                    return map({f0}, true, [&](auto& x) { return d.fma(d.sub(dOne, x[0]), q5, x[0]); });
                 }
-                // In double: near the critical angle F depends on sqrt(g^2)
-                // with g^2 -> 0, which turns float rounding of cos into
-                // visible error.
-                LVal eta = rgbParam(use, param::DielectricEta, kMinEta, INFINITY, false);
+                // Near the critical angle (eta < 1) F depends on sqrt(g^2) with
+                // g^2 -> 0, which turns float rounding of cos into visible
+                // error; near eta = 1 everything is relative to eta - 1. So
+                // the precise type, unless eta is a constant >= 1.01
+                // (exactFresnelInFloat).
+                MathEmitter& d = exactFresnelInFloat() ? f_ : d_;
+                bool inFloat = &d == &f_;
+                Value* dOne = d.c(1.0);
+                Value* c = fresnelCos(d, geo);
+                LVal eta = rgbParam(use, param::DielectricEta, kMinEta, maxFresnelIndex(), inFloat);
                 Value* c2 = d.mul(c, c);
                 return map({eta}, true, [&](auto& x) {
-                    // g^2 = eta^2 - sin^2; g - c = (eta^2 - 1)/(g + c) without cancellation.
+                    // g^2 = eta^2 - sin^2 = (eta^2 - 1) + c^2 and, with gp = g + c,
+                    // g - c = (eta^2 - 1)/gp (pbrt's form, no cancellation):
+                    //   A = (g - c)/(g + c) = e/gp^2,   e = eta^2 - 1,
+                    //   B = (c gp - 1)/(c (g - c) + 1) = gp (c gp - 1)/(c e + gp),
+                    //   F = A^2 (1 + B^2) / 2,
+                    // with one division for both (c e + gp = g + c eta^2 > 0).
                     Value* n = x[0];
-                    Value* e2m1 = d.mul(d.sub(n, dOne), d.add(n, dOne));
-                    Value* g2 = d.add(e2m1, c2);
+                    Value* e = d.mul(d.sub(n, dOne), d.add(n, dOne));
+                    Value* g2 = d.add(e, c2);
                     Value* g = d.sqrt(d.maxnum(g2, d.c(0.0)));
                     Value* gp = d.add(g, c);
-                    Value* gm = d.div(e2m1, gp);
-                    Value* A = d.div(gm, gp);
-                    Value* B = d.div(d.fma(c, gp, d.c(-1.0)), d.fma(c, gm, dOne));
+                    Value* den = d.fma(c, e, gp);
+                    Value* gp2 = d.mul(gp, gp);
+                    Value* q = d.div(dOne, d.mul(gp2, den));
+                    Value* A = d.mul(d.mul(e, den), q);
+                    Value* B = d.mul(d.mul(gp, d.fma(c, gp, d.c(-1.0))), d.mul(gp2, q));
                     Value* F = d.mul(d.mul(d.c(0.5), d.mul(A, A)), d.fma(B, B, dOne));
                     Value* tir = b_.CreateOr(d.le(g2, d.c(0.0)), d.eq(gp, d.c(0.0)));
-                    return m.convert(d.select(tir, dOne, F), m.type());
+                    return d_.convert(d.select(tir, dOne, F), d_.type());
                 });
             }
             case FresnelModel::Conductor: {
-                LVal eta = rgbParam(use, param::ConductorEta, kMinEta, INFINITY, false);
-                LVal k = rgbParam(use, param::ConductorK, 0, INFINITY, false);
+                MathEmitter& d = exactFresnelInFloat() ? f_ : d_;
+                bool inFloat = &d == &f_;
+                Value* dOne = d.c(1.0);
+                Value* c = fresnelCos(d, geo);
+                LVal eta = rgbParam(use, param::ConductorEta, kMinEta, maxFresnelIndex(), inFloat);
+                LVal k = rgbParam(use, param::ConductorK, 0, maxFresnelIndex(), inFloat);
                 Value* c2 = d.mul(c, c);
-                Value* s2 = d.mul(d.sub(dOne, c), d.add(dOne, c));
+                Value* s2 = d.convert(geo.sin2D, d.type());
                 return map({eta, k}, true, [&](auto& x) {
-                    // |N cos_t|^2 = a^2 + b^2 with N = eta + ik (Born & Wolf):
-                    // t0 = eta^2 - k^2 - sin^2, a2b2 = sqrt(t0^2 + 4 eta^2 k^2).
+                    // N = eta + ik, e = N^2 - 1, g = N cos(theta_t) = sqrt(e + c^2)
+                    // (principal root), and the reflection amplitudes written so
+                    // that nothing cancels as N -> 1 (F -> 0 exactly there):
+                    //   rs = -e / (c + g)^2,  rp = e (N^2 c^2 - s2) / (N^2 c + g)^2.
+                    // The Born-Wolf real form cancels near eta = 1, k = 0, where
+                    // rounding noise of either sign made F negative. Only squared
+                    // moduli are needed, and one division serves both quotients.
                     Value *n = x[0], *kk = x[1];
-                    Value* n2 = d.mul(n, n);
-                    Value* k2 = d.mul(kk, kk);
-                    Value* t0 = d.sub(d.sub(n2, k2), s2);
-                    Value* a2b2 = d.sqrt(d.fma(t0, t0, d.mul(d.c(4.0), d.mul(n2, k2))));
-                    Value* a = d.sqrt(d.maxnum(d.mul(d.c(0.5), d.add(a2b2, t0)), d.c(0.0)));
-                    Value* t1 = d.add(a2b2, c2);
-                    Value* t2 = d.mul(d.mul(d.c(2.0), c), a);
-                    Value* Rs = d.div(d.sub(t1, t2), d.add(t1, t2));
-                    Value* t3 = d.fma(c2, a2b2, d.mul(s2, s2));
-                    Value* t4 = d.mul(t2, s2);
-                    Value* Rp = d.mul(Rs, d.div(d.sub(t3, t4), d.add(t3, t4)));
-                    return m.convert(d.mul(d.c(0.5), d.add(Rs, Rp)), m.type());
+                    Value* n2k2 = d.sub(d.mul(n, n), d.mul(kk, kk));             // Re N^2
+                    Value* er = d.fma(d.sub(n, dOne), d.add(n, dOne), d.neg(d.mul(kk, kk)));  // Re e
+                    Value* ei = d.mul(d.mul(d.c(2.0), n), kk);                   // Im e = Im N^2
+                    Value* e2 = d.fma(er, er, d.mul(ei, ei));
+                    // g^2 = e + c^2 = N^2 - s2: whichever real part cancels less.
+                    Value* viaE = d.add(er, c2);
+                    Value* viaN = d.sub(n2k2, s2);
+                    Value* useN = d.lt(d.add(d.abs(n2k2), s2), d.add(d.abs(er), c2));
+                    Value* zr = d.select(useN, viaN, viaE);
+                    // Principal sqrt of zr + i ei (ei >= 0): the larger part by
+                    // sqrt((|z| + |zr|)/2), the other as ei / (2 larger).
+                    Value* mod = d.sqrt(d.fma(zr, zr, d.mul(ei, ei)));
+                    Value* right = d.ge(zr, d.c(0.0));
+                    Value* major = d.sqrt(d.mul(d.c(0.5), d.add(mod, d.abs(zr))));
+                    Value* minor = d.select(d.gt(major, d.c(0.0)), d.div(ei, d.mul(d.c(2.0), major)), d.c(0.0));
+                    Value* gr = d.select(right, major, minor);
+                    Value* gi = d.select(right, minor, major);
+                    Value* cg = d.add(c, gr);
+                    Value* rsDen = d.fma(cg, cg, d.mul(gi, gi));                 // |c + g|^2
+                    Value* q1r = d.fma(n2k2, c2, d.neg(s2));                     // N^2 c^2 - s2
+                    Value* q1i = d.mul(ei, c2);
+                    Value* q2r = d.fma(n2k2, c, gr);                             // N^2 c + g
+                    Value* q2i = d.fma(ei, c, gi);
+                    Value* rpDen = d.fma(q2r, q2r, d.mul(q2i, q2i));
+                    // In double one division serves both: 1/rsDen = rpDen q, 1/rpDen =
+                    // rsDen q (rsDen ~ |N|^2 and rpDen ~ |N|^6 at most: their product
+                    // stays finite). In float (|N| up to 1e9 in fast mode) it would not.
+                    Value *invRs, *invRp;
+                    if (d.isDouble()) {
+                        Value* q = d.div(dOne, d.mul(rsDen, rpDen));
+                        invRs = d.mul(rpDen, q);
+                        invRp = d.mul(rsDen, q);
+                    } else {
+                        invRs = d.div(dOne, rsDen);
+                        invRp = d.div(dOne, rpDen);
+                    }
+                    Value* rs = d.mul(d.mul(e2, invRs), invRs);
+                    Value* rp = d.mul(d.mul(e2, invRp), d.mul(d.fma(q1r, q1r, d.mul(q1i, q1i)), invRp));
+                    Value* F = d.mul(d.c(0.5), d.add(rs, rp));
+                    // e = 0 (N = 1): no interface, F = 0 (also at c = 0, where both quotients are 0/0).
+                    return d_.convert(d.select(d.gt(e2, d.c(0.0)), F, d.c(0.0)), d_.type());
                 });
             }
         }
@@ -834,49 +1072,53 @@ private:
             Value* den = d.sub(d.c(1.0), d.mul(favg, ecAvg));
             Value* term = d.div(d.mul(d.mul(favg, favg), d.sub(d.c(1.0), ecAvg)), den);
             term = d.select(d.gt(den, d.c(0.0)), term, d.c(0.0));
-            out[ch] = f_.convert(d.mul(lobe, term), f_.type());
+            out[ch] = d.mul(lobe, term);
         }
         return out;
     }
 
     std::array<Value*, 3> brdf(const Geometry& geo) {
         MathEmitter& m = f_;
+        MathEmitter& d = d_;
         const std::array<Value*, 3>&wi = geo.wi, &wo = geo.wo, &h = geo.h;
-        Value *ci = wi[2], *co = wo[2], *oh = geo.oh;
+        Value *ci = wi[2], *co = wo[2];
         Value* above = b_.CreateAnd(m.gt(ci, m.c(0.0)), m.gt(co, m.c(0.0)));
 
+        // Specular lobe, F and the sum in the precise type (see gOverCosines
+        // and fresnel: factors beyond float range whose product is not).
         Ndf n = ndfParams();
         Value* spec;
         if (mat_.ndfModel() == NdfModel::Ward) {
-            MathEmitter& d = d_;
             Value* e = slopeExponentD(n, geo.hD);
-            Value* lobe = m.div(m.convert(d.exp(d.neg(e)), m.type()),
-                                m.mul(m.mul(m.c(4 * kPi), m.mul(n.ax, n.ay)), m.sqrt(m.mul(ci, co))));
-            spec = lobe;
+            Value* ciD = geo.wiD[2], *coD = geo.woD[2];
+            // sqrt(ci) sqrt(co) in float: ci co underflows for float-subnormal cosines.
+            Value* root = d.isDouble() ? d.sqrt(d.mul(ciD, coD)) : d.mul(d.sqrt(ciD), d.sqrt(coD));
+            spec = d.div(d.div(expTail(e), d.mul(d.c(4 * kPi), d.mul(n.axD, n.ayD))), root);
         } else {
-            Value* dv = D(n, h, geo.hD);
-            Value* g = G(n, wi, wo, h, ci, co, oh);
-            spec = m.div(m.mul(dv, g), m.mul(m.mul(m.c(4.0), ci), co));
+            spec = gOverCosines(n, geo, d.mul(D(n, h, geo.hD), d.c(0.25)));
         }
         LVal F = fresnel(geo);
-        LVal diffuse = LVal::scalar(m.c(0.0));
+        LVal diffuse = LVal::scalar(d.c(0.0));
         bool hasDiffuse = mat_.diffuseModel() == DiffuseModel::Lambert;
         if (hasDiffuse) {
-            LVal albedo = rgbParam(mat_.diffuse, param::Albedo, 0, INFINITY);
-            diffuse = map({albedo}, true, [&](auto& x) { return m.mul(x[0], m.c(1.0 / kPi)); });
+            LVal albedo = rgbParam(mat_.diffuse, param::Albedo, 0, INFINITY, false);
+            diffuse = map({albedo}, true, [&](auto& x) { return d.mul(x[0], d.c(1.0 / kPi)); });
         }
         LVal specV = LVal::scalar(spec);
+        bool fresnelCanVanish = mat_.fresnelModel() != FresnelModel::None;
         LVal total = map({F, specV, diffuse}, true, [&](auto& x) {
-            Value* s = m.mul(x[0], x[1]);
-            return hasDiffuse ? m.add(s, x[2]) : s;
+            Value* s = d.mul(x[0], x[1]);
+            // F = 0 (eta = 1: no interface) is 0 even where the lobe overflows (no 0 * Inf).
+            if (fresnelCanVanish) s = d.select(d.eq(x[0], d.c(0.0)), d.c(0.0), s);
+            return hasDiffuse ? d.add(s, x[2]) : s;
         });
         if (mat_.energyModel() == EnergyModel::KullaConty) {
             std::array<Value*, 3> ms = energyCompensation(n, ci, co);
-            for (int ch = 0; ch < 3; ++ch) total.c[ch] = m.add(total.c[ch], ms[ch]);
+            for (int ch = 0; ch < 3; ++ch) total.c[ch] = d.add(total.c[ch], ms[ch]);
         }
         // Below the horizon (or wi + wo = 0): f = 0, a valid lane.
         Value* valid = b_.CreateAnd(above, geo.hNonZero);
-        return map({total}, true, [&](auto& x) { return m.select(valid, x[0], m.c(0.0)); }).c;
+        return map({total}, true, [&](auto& x) { return m.select(valid, m.convert(x[0], m.type()), m.c(0.0)); }).c;
     }
 
     const CheckedMaterial& mat_;
@@ -910,6 +1152,39 @@ void addKernelAttributes(llvm::Function* fn, int width, const MathVariant& varia
     fn->addFnAttr("prefer-vector-width", bits);
 }
 
+// Fast mode runs with subnormals flushed to zero (x86: MXCSR FTZ and DAZ
+// for the duration of the call, restored on return), as -ffast-math code
+// does. A subnormal operand or result costs a microcode assist of ~100
+// cycles, and fast kernels produce them routinely in NDF and Smith tails
+// (Beckmann + conductor fast ran at 14 ns/eval, 5x GGX). Exact mode keeps
+// IEEE subnormals: a float-subnormal n.w is a valid input there.
+class DenormalFlush {
+public:
+    DenormalFlush(llvm::IRBuilder<>& b, llvm::Function* fn, const MathVariant& variant) : b_(b) {
+#if defined(__x86_64__) || defined(__i386__)
+        if (variant.precise) return;
+        fn->addFnAttr("denormal-fp-math", "preserve-sign,preserve-sign");
+        saved_ = b.CreateAlloca(b.getInt32Ty(), nullptr, "mxcsr.saved");
+        llvm::Value* flushed = b.CreateAlloca(b.getInt32Ty(), nullptr, "mxcsr.flushed");
+        b.CreateIntrinsic(llvm::Intrinsic::x86_sse_stmxcsr, {}, {saved_});
+        llvm::Value* bits = b.CreateLoad(b.getInt32Ty(), saved_);
+        b.CreateStore(b.CreateOr(bits, b.getInt32(0x8040)), flushed);  // FTZ (bit 15) | DAZ (bit 6)
+        b.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {flushed});
+#else
+        (void)fn;
+        (void)variant;
+#endif
+    }
+    // Emits the restore at the current insertion point (before each return).
+    void restore() {
+        if (saved_) b_.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {saved_});
+    }
+
+private:
+    llvm::IRBuilder<>& b_;
+    llvm::Value* saved_ = nullptr;
+};
+
 // The scalar kernel: `<name>_status` computes one lane and returns 1 if it
 // was invalid; `<name>` is the SPEC's void entry point, a thin wrapper.
 void emitScalarEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llvm::Module& module,
@@ -921,6 +1196,7 @@ void emitScalarEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llv
     auto* fn = llvm::Function::Create(statusTy, llvm::Function::ExternalLinkage, name + "_status", module);
     addKernelAttributes(fn, 1, opt.variant);
     b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", fn));
+    DenormalFlush flush(b, fn, opt.variant);
     llvm::Value *wiP = fn->getArg(0), *woP = fn->getArg(1), *inP = fn->getArg(2), *outP = fn->getArg(3);
     llvm::Type* f32 = b.getFloatTy();
     std::array<llvm::Value*, 3> wi, wo;
@@ -939,6 +1215,7 @@ void emitScalarEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llv
     LaneEmitter lanes(mat, opt, b, f32, module);
     LaneEmitter::Result r = lanes.emit(wi, wo, slots);
     for (int i = 0; i < 3; ++i) b.CreateStore(r.rgb[i], b.CreateConstGEP1_32(f32, outP, i));
+    flush.restore();
     b.CreateRet(b.CreateZExt(r.invalid, b.getInt32Ty()));
 
     auto* voidTy = llvm::FunctionType::get(b.getVoidTy(), {ptr, ptr, ptr, ptr}, false);
@@ -966,11 +1243,10 @@ void emitBatchEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llvm
     auto* entry = llvm::BasicBlock::Create(ctx, "entry", fn);
     auto* header = llvm::BasicBlock::Create(ctx, "loop.header", fn);
     auto* body = llvm::BasicBlock::Create(ctx, "loop.body", fn);
-    auto* tailCheck = llvm::BasicBlock::Create(ctx, "tail.check", fn);
-    auto* tail = llvm::BasicBlock::Create(ctx, "tail", fn);
     auto* exit = llvm::BasicBlock::Create(ctx, "exit", fn);
 
     b.SetInsertPoint(entry);
+    DenormalFlush flush(b, fn, opt.variant);
     std::array<llvm::Value*, 3> wiP, woP, outP;
     for (int i = 0; i < 3; ++i) {
         wiP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, wiA, i), "wi.ptr");
@@ -992,68 +1268,109 @@ void emitBatchEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llvm
         slotBase.push_back(b.CreateSelect(useDefault, dflt, loaded));
         slotStep.push_back(b.CreateSelect(useDefault, llvm::ConstantInt::get(i64, 0), llvm::ConstantInt::get(i64, 1)));
     }
-    b.CreateBr(header);
 
     auto popcount = [&](llvm::Value* mask) {
         llvm::Value* bits = b.CreateBitCast(mask, b.getIntNTy(W));
         llvm::Value* cnt = b.CreateUnaryIntrinsic(llvm::Intrinsic::ctpop, bits);
         return b.CreateZExt(cnt, i64);
     };
-    auto emitStep = [&](llvm::Value* i, llvm::Value* mask /* null = all lanes */) {
-        auto load = [&](llvm::Value* base, llvm::Value* index, float passthru) -> llvm::Value* {
-            llvm::Value* p = b.CreateGEP(f32, base, index);
-            if (!mask) return b.CreateAlignedLoad(vecTy, p, llvm::Align(4));
-            return b.CreateMaskedLoad(vecTy, p, llvm::Align(4), mask, llvm::ConstantFP::get(vecTy, passthru));
-        };
-        std::array<llvm::Value*, 3> wi, wo;
-        for (int c = 0; c < 3; ++c) {
-            // Masked-off lanes read a valid direction (0,0,1) so they cost nothing.
-            wi[c] = load(wiP[c], i, c == 2 ? 1.0f : 0.0f);
-            wo[c] = load(woP[c], i, c == 2 ? 1.0f : 0.0f);
-        }
-        std::vector<llvm::Value*> slots;
-        for (int s = 0; s < mat.slotCount; ++s)
-            slots.push_back(load(slotBase[s], b.CreateMul(i, slotStep[s]), float(defaults[s])));
-        LaneEmitter lanes(mat, opt, b, vecTy, module);
-        LaneEmitter::Result r = lanes.emit(wi, wo, slots);
-        for (int c = 0; c < 3; ++c) {
-            llvm::Value* p = b.CreateGEP(f32, outP[c], i);
-            if (mask) b.CreateMaskedStore(r.rgb[c], p, llvm::Align(4), mask);
-            else b.CreateAlignedStore(r.rgb[c], p, llvm::Align(4));
-        }
-        return popcount(mask ? b.CreateAnd(r.invalid, mask) : r.invalid);
-    };
+
+    // The lane body is emitted once (it is most of the module: emitting it a
+    // second time for the remainder doubled the compile time). The last,
+    // partial chunk is staged through W-lane buffers on the stack: masked
+    // loads fill them (masked-off lanes read the valid direction (0,0,1) and
+    // the slot defaults), the body runs on the buffers, and masked stores
+    // write the valid lanes back.
+    const int streams = 6 + mat.slotCount;  // wi xyz, wo xyz, slots
+    llvm::Value* stageIn = b.CreateAlloca(vecTy, b.getInt32(streams), "stage.in");
+    llvm::Value* stageOut = b.CreateAlloca(vecTy, b.getInt32(3), "stage.out");
+    b.CreateBr(header);
 
     b.SetInsertPoint(header);
     llvm::PHINode* i = b.CreatePHI(i64, 2, "i");
     llvm::PHINode* count = b.CreatePHI(i64, 2, "invalid");
     i->addIncoming(llvm::ConstantInt::get(i64, 0), entry);
     count->addIncoming(llvm::ConstantInt::get(i64, 0), entry);
-    llvm::Value* next = b.CreateAdd(i, llvm::ConstantInt::get(i64, W));
-    b.CreateCondBr(b.CreateICmpSLE(next, n), body, tailCheck);
+    llvm::Value* remaining = b.CreateSub(n, i);
+    b.CreateCondBr(b.CreateICmpSGT(remaining, llvm::ConstantInt::get(i64, 0)), body, exit);
 
     b.SetInsertPoint(body);
-    llvm::Value* bodyCount = b.CreateAdd(count, emitStep(i, nullptr));
-    i->addIncoming(next, b.GetInsertBlock());
-    count->addIncoming(bodyCount, b.GetInsertBlock());
-    b.CreateBr(header);
-
-    b.SetInsertPoint(tailCheck);
-    llvm::Value* remaining = b.CreateSub(n, i);
-    b.CreateCondBr(b.CreateICmpSGT(remaining, llvm::ConstantInt::get(i64, 0)), tail, exit);
-
-    b.SetInsertPoint(tail);
+    llvm::Value* partial = b.CreateICmpSLT(remaining, llvm::ConstantInt::get(i64, W));
     std::vector<llvm::Constant*> laneIds;
     for (int l = 0; l < W; ++l) laneIds.push_back(llvm::ConstantInt::get(i64, l));
+    // All lanes on a full chunk; the first `remaining` on the last one.
     llvm::Value* mask = b.CreateICmpSLT(llvm::ConstantVector::get(laneIds), b.CreateVectorSplat(W, remaining));
-    llvm::Value* tailCount = b.CreateAdd(count, emitStep(i, mask));
-    llvm::BasicBlock* tailEnd = b.GetInsertBlock();
-    b.CreateBr(exit);
+    // Source pointers of the chunk: the caller's arrays, or the stage
+    // buffers on the partial chunk (filled below).
+    std::vector<llvm::Value*> streamPtr;
+    std::vector<float> padding;
+    for (int c = 0; c < 3; ++c) {
+        streamPtr.push_back(b.CreateGEP(f32, wiP[c], i));
+        padding.push_back(c == 2 ? 1.0f : 0.0f);
+    }
+    for (int c = 0; c < 3; ++c) {
+        streamPtr.push_back(b.CreateGEP(f32, woP[c], i));
+        padding.push_back(c == 2 ? 1.0f : 0.0f);
+    }
+    for (int s = 0; s < mat.slotCount; ++s) {
+        streamPtr.push_back(b.CreateGEP(f32, slotBase[s], b.CreateMul(i, slotStep[s])));
+        padding.push_back(float(defaults[s]));
+    }
+    auto* stageBlock = llvm::BasicBlock::Create(ctx, "stage", fn);
+    auto* compute = llvm::BasicBlock::Create(ctx, "compute", fn);
+    llvm::BasicBlock* bodyEntry = b.GetInsertBlock();
+    b.CreateCondBr(partial, stageBlock, compute);
+
+    b.SetInsertPoint(stageBlock);
+    std::vector<llvm::Value*> stagePtr;
+    for (int k = 0; k < streams; ++k) {
+        llvm::Value* v = b.CreateMaskedLoad(vecTy, streamPtr[k], llvm::Align(4), mask,
+                                            llvm::ConstantFP::get(vecTy, padding[k]));
+        stagePtr.push_back(b.CreateConstGEP1_32(vecTy, stageIn, k));
+        b.CreateAlignedStore(v, stagePtr.back(), llvm::Align(4));
+    }
+    b.CreateBr(compute);
+
+    b.SetInsertPoint(compute);
+    std::vector<llvm::PHINode*> src;
+    for (int k = 0; k < streams; ++k) {
+        src.push_back(b.CreatePHI(ptr, 2));
+        src.back()->addIncoming(streamPtr[k], bodyEntry);
+        src.back()->addIncoming(stagePtr[k], stageBlock);
+    }
+    std::array<llvm::Value*, 3> wi, wo, out;
+    std::vector<llvm::Value*> slots;
+    for (int k = 0; k < streams; ++k) {
+        llvm::Value* v = b.CreateAlignedLoad(vecTy, src[k], llvm::Align(4));
+        if (k < 3) wi[k] = v;
+        else if (k < 6) wo[k - 3] = v;
+        else slots.push_back(v);
+    }
+    for (int c = 0; c < 3; ++c) out[c] = b.CreateSelect(partial, b.CreateConstGEP1_32(vecTy, stageOut, c),
+                                                        b.CreateGEP(f32, outP[c], i));
+    LaneEmitter lanes(mat, opt, b, vecTy, module);
+    LaneEmitter::Result r = lanes.emit(wi, wo, slots);
+    for (int c = 0; c < 3; ++c) b.CreateAlignedStore(r.rgb[c], out[c], llvm::Align(4));
+    llvm::Value* bodyCount = b.CreateAdd(count, popcount(b.CreateAnd(r.invalid, mask)));
+    auto* unstage = llvm::BasicBlock::Create(ctx, "unstage", fn);
+    auto* latch = llvm::BasicBlock::Create(ctx, "latch", fn);
+    b.CreateCondBr(partial, unstage, latch);
+
+    b.SetInsertPoint(unstage);
+    for (int c = 0; c < 3; ++c) {
+        llvm::Value* v = b.CreateAlignedLoad(vecTy, b.CreateConstGEP1_32(vecTy, stageOut, c), llvm::Align(4));
+        b.CreateMaskedStore(v, b.CreateGEP(f32, outP[c], i), llvm::Align(4), mask);
+    }
+    b.CreateBr(latch);
+
+    b.SetInsertPoint(latch);
+    i->addIncoming(b.CreateAdd(i, llvm::ConstantInt::get(i64, W)), latch);
+    count->addIncoming(bodyCount, latch);
+    b.CreateBr(header);
 
     b.SetInsertPoint(exit);
-    llvm::PHINode* result = b.CreatePHI(i64, 2, "result");
-    result->addIncoming(count, tailCheck);
-    result->addIncoming(tailCount, tailEnd);
+    llvm::Value* result = count;
+    flush.restore();
     b.CreateRet(result);
 }
 

@@ -53,14 +53,15 @@ void printSample(const SampleStats& s, const CheckedMaterial& m, const std::vect
     std::string err = s.bound > 0 ? fmt::format("{:.3g}", s.maxRel) : "-";
     std::string bound = s.bound > 0 ? fmt::format("{:.0e}", s.bound) : "-";
     std::printf("    %-14s %7zu %7zu %5zu %5zu %5zu %11s %7s  %s\n", s.backend.c_str(), s.invalid, s.expectedInvalid,
-                s.nan, s.inf, s.negative, err.c_str(), bound.c_str(), s.ok() ? "ok" : "FAIL");
+                s.nan, s.inf, s.negative, err.c_str(), bound.c_str(),
+                !s.ok() ? "FAIL" : s.accurate() ? "ok" : "ok (safe; accuracy info only in fast mode)");
     if (s.bound > 0 && s.worstCase < cases.size() && (verbose || !s.ok()))
         std::printf("        worst: ch %d got %.9g want %.17g at %s\n", s.worstChannel, s.worstGot, s.worstWant,
                     shortCase(m, cases[s.worstCase]).c_str());
     if (s.illConditioned)
         std::printf("        %zu values beyond the bound at ill-conditioned inputs (within %g kappa u, max kappa %.3g)\n",
                     s.illConditioned, kConditionAllowance, s.maxKappa);
-    if (!s.ok()) {
+    if (!s.ok() || !s.accurate()) {
         std::printf("        %s\n", s.summary().c_str());
         // The first few failures of each kind (the reason up to its first ':' or number).
         std::map<std::string, int> shown;
@@ -129,6 +130,7 @@ bool verifyMaterial(const CheckedMaterial& m, const std::string& path, Compiler&
             if (kernel->backend() == Backend::Simd) name = fmt::format("simd{} {}", kernel->width(), mathModeName(o.math));
             KernelRun run = runKernel(*kernel, cases);
             SampleStats s = checkKernel(name, run, cases, ref, hardCaseBound(o.math), condition, hardCaseRoundoff(o.math));
+            s.accuracyEnforced = o.math == MathMode::Exact;
             printSample(s, m, cases, opt.verbose);
             ok &= s.ok();
         }

@@ -11,9 +11,9 @@
 //   - the double interpreter against the __float128 one: within 1e-12
 //     relative, except at ill-conditioned inputs (error within 16 kappa u,
 //     kappa estimated in __float128), which are listed with kappa;
-//   - the JIT against the double interpreter within the bound of
+//   - the exact-mode JIT against the double interpreter within the bound of
 //     compiler/Verify.h at well-conditioned inputs, and no valid lane
-//     reported invalid.
+//     reported invalid (fast mode: measured and printed).
 // Everything is computed once (two worker threads) and asserted by the test
 // cases below; the numbers quoted in docs/numerics.md are printed here.
 //
@@ -354,14 +354,16 @@ TEST_CASE("hard cases: JIT kernels never output NaN, Inf or negative values, and
     for (const auto& [v, n] : lanes) MESSAGE(v << ": " << n << " lanes");
 }
 
-// The JIT's accuracy on the hard cases. At the time of writing the lowering
-// fails this in known ways (reported to its owner; see docs/numerics.md,
-// "Open JIT issues"): float-denormal cosines make D G / (4 ci co) 0/0,
-// conductor Fresnel loses its relative accuracy (and can turn negative) as
-// eta -> 1, k -> 0, GTR with gamma >~ 300 overflows its normalization, and
-// energy = kulla_conty is not lowered yet. may_fail keeps the suite green
-// while those are open: remove it once they are fixed.
-TEST_CASE("hard cases: JIT kernels keep valid lanes valid and agree with the reference" * doctest::may_fail()) {
+// The JIT's accuracy on the hard cases. Exact mode is enforced: every
+// valid lane stays valid (unless float cannot hold the reference value or a
+// parameter) and agrees with the double interpreter within the bound of
+// compiler/Verify.h. Fast mode computes geometry, D and G in float, so at
+// float-subnormal cosines, near-opposite grazing directions with small alpha
+// and Beckmann tails it loses accuracy or drops lanes (docs/numerics.md,
+// "Fast mode"): its numbers are printed, not asserted here (its NaN/Inf/
+// negative/invalid-count guarantees are asserted above, and its accuracy on
+// the regular sample in tests/jit and tests/bench).
+TEST_CASE("hard cases: exact JIT kernels keep valid lanes valid and agree with the reference") {
     const Suite& s = suite();
     struct Worst {
         double err = 0, within = 0, normal = 0;
@@ -372,10 +374,12 @@ TEST_CASE("hard cases: JIT kernels keep valid lanes valid and agree with the ref
     for (const MaterialResult& r : s.results)
         for (const KernelResult& k : r.kernels) {
             const SampleStats& st = k.stats;
-            CHECK_MESSAGE(st.unexpectedInvalid == 0, r.hm.name << " [" << k.variant << "]: " << st.summary());
-            CHECK_MESSAGE(st.validityMismatch == 0, r.hm.name << " [" << k.variant << "]: " << st.summary());
-            CHECK_MESSAGE(st.beyondBound == 0, r.hm.name << " [" << k.variant << "]: " << st.summary());
             std::string mode = k.variant.substr(k.variant.find(' ') + 1);
+            if (mode == "exact") {
+                CHECK_MESSAGE(st.unexpectedInvalid == 0, r.hm.name << " [" << k.variant << "]: " << st.summary());
+                CHECK_MESSAGE(st.validityMismatch == 0, r.hm.name << " [" << k.variant << "]: " << st.summary());
+                CHECK_MESSAGE(st.beyondBound == 0, r.hm.name << " [" << k.variant << "]: " << st.summary());
+            }
             Worst& w = worst[mode + " " + familyOf(r)];
             if (st.maxRel > w.err) {
                 w.err = st.maxRel;
@@ -404,7 +408,7 @@ TEST_CASE("hard cases: JIT kernels keep valid lanes valid and agree with the ref
     for (const auto& [key, w] : worst)
         std::printf("  %-20s %-10.3g %-10.3g %-10.3g %s; %s\n", key.c_str(), w.err, w.within, w.normal, w.where.c_str(),
                     w.whereWithin.c_str());
-    if (!failures.empty()) std::printf("JIT failures by kind (counted up to 16 per kernel and kind):\n");
+    if (!failures.empty()) std::printf("JIT values beyond the bound by kind (fast mode: reported only; counted up to 16 per kernel and kind):\n");
     for (const auto& [kind, entry] : failures) {
         std::printf("  %zu x %s\n", entry.first, kind.c_str());
         for (const std::string& e : entry.second) std::printf("      %s\n", e.c_str());
