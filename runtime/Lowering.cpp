@@ -147,7 +147,6 @@ public:
             g.wiD[i] = p.convert(wiD[i], p.type());
             g.woD[i] = p.convert(woD[i], p.type());
         }
-        g.oh = m.convert(cosD, m.type());
         g.cosD = p.convert(cosD, p.type());
         g.oneMinusCosD = p.convert(oneMinusCos, p.type());
         g.sin2D = p.convert(sin2, p.type());
@@ -204,7 +203,6 @@ private:
         Value* cosD;               // wo.h = wi.h in [0, 1], precise type (exact Fresnel near its critical angle)
         Value* oneMinusCosD;       // 1 - wo.h = |wo - h|^2 / 2, precise type, without cancellation at wi = wo
         Value* sin2D;              // 1 - (wo.h)^2 from the same, precise type
-        Value* oh;
         Value* hNonZero;
     };
 
@@ -929,6 +927,23 @@ private:
                                   : (Value*)b_.CreateMaskedGather(fty, ptr, llvm::Align(4));
         return d.convert(v, d.type());
     }
+    // table[index] + t (table[index + 1] - table[index]): linear
+    // interpolation between two neighbouring entries.
+    Value* lerpFetch(llvm::GlobalVariable* table, Value* index, Value* t) {
+        MathEmitter& d = d_;
+        Value* a = fetch(table, index);
+        return d.fma(t, d.sub(fetch(table, d.add(index, d.c(1.0))), a), a);
+    }
+    // Bilinear interpolation in a row-major table with `stride` entries per
+    // row: rows `row` and row + 1, columns `col` and col + 1, weights tRow
+    // and tCol.
+    Value* bilerpFetch(llvm::GlobalVariable* table, int stride, Value* row, Value* col, Value* tRow, Value* tCol) {
+        MathEmitter& d = d_;
+        Value* r0 = d.fma(row, d.c(double(stride)), col);
+        Value* lo = lerpFetch(table, r0, tCol);
+        Value* hi = lerpFetch(table, d.add(r0, d.c(double(stride))), tCol);
+        return d.fma(tRow, d.sub(hi, lo), lo);
+    }
     // The roughness the E table is looked up with (KullaConty.h, energyAlpha).
     Value* energyAlpha(const Ndf& n) {
         MathEmitter& d = d_;
@@ -964,8 +979,7 @@ private:
                 Value* u = d.minnum(d.maxnum(d.mul(sPos, d.c(last)), d.c(0.0)), d.c(last));
                 Value* j = d.minnum(intrinsic(llvm::Intrinsic::floor, u), d.c(last - 1));
                 Value* tu = d.sub(u, j);
-                Value* a = fetch(gv, j);
-                Value* fa = d.fma(tu, d.sub(fetch(gv, d.add(j, d.c(1.0))), a), a);
+                Value* fa = lerpFetch(gv, j, tu);
                 return d.select(below, d.sub(d.c(1.0), d.mul(d.mul(n, n), d.sub(d.c(1.0), fa))), fa);
             }
             case FresnelModel::Conductor: {
@@ -990,14 +1004,7 @@ private:
                 Value* ub = d.minnum(d.mul(d.div(sk, d.add(sk, d.c(1.0))), d.c(last)), d.c(last));
                 Value* ia = d.minnum(intrinsic(llvm::Intrinsic::floor, ua), d.c(last - 1));
                 Value* ib = d.minnum(intrinsic(llvm::Intrinsic::floor, ub), d.c(last - 1));
-                Value *ta = d.sub(ua, ia), *tb = d.sub(ub, ib);
-                Value* row0 = d.fma(ib, d.c(double(N)), ia);
-                Value* row1 = d.add(row0, d.c(double(N)));
-                Value *a00 = fetch(gv, row0), *a01 = fetch(gv, d.add(row0, d.c(1.0)));
-                Value *a10 = fetch(gv, row1), *a11 = fetch(gv, d.add(row1, d.c(1.0)));
-                Value* r0 = d.fma(ta, d.sub(a01, a00), a00);
-                Value* r1 = d.fma(ta, d.sub(a11, a10), a10);
-                return d.add(base, d.fma(tb, d.sub(r1, r0), r0));
+                return d.add(base, bilerpFetch(gv, N, ib, ia, d.sub(ub, ib), d.sub(ua, ia)));
             }
         }
         internal_error << "unknown fresnel";
@@ -1021,17 +1028,9 @@ private:
             Value* cc = d.minnum(d.maxnum(d.convert(c, d.type()), d.c(0.0)), d.c(1.0));
             Value* u = d.mul(d.sqrt(cc), d.c(M - 1.0));
             Value* j = d.minnum(intrinsic(llvm::Intrinsic::floor, u), d.c(M - 2.0));
-            Value* tu = d.sub(u, j);
-            Value* r0 = d.fma(i, d.c(double(M)), j);
-            Value* r1 = d.add(r0, d.c(double(M)));
-            Value *a00 = fetch(ecGv, r0), *a01 = fetch(ecGv, d.add(r0, d.c(1.0)));
-            Value *a10 = fetch(ecGv, r1), *a11 = fetch(ecGv, d.add(r1, d.c(1.0)));
-            Value* lo = d.fma(tu, d.sub(a01, a00), a00);
-            Value* hi = d.fma(tu, d.sub(a11, a10), a10);
-            return d.fma(tv, d.sub(hi, lo), lo);
+            return bilerpFetch(ecGv, M, i, j, tv, d.sub(u, j));
         };
-        Value* avg0 = fetch(avgGv, i);
-        Value* ecAvg = d.fma(tv, d.sub(fetch(avgGv, d.add(i, d.c(1.0))), avg0), avg0);
+        Value* ecAvg = lerpFetch(avgGv, i, tv);
         Value* lobe = d.div(d.mul(ec(ci), ec(co)), d.mul(d.c(kPi), ecAvg));
         lobe = d.select(d.gt(ecAvg, d.c(0.0)), lobe, d.c(0.0));
 
