@@ -780,6 +780,15 @@ private:
     // cos < 1e-9 (see docs/numerics.md).
     double maxFresnelIndex() const { return opt_.variant.precise ? INFINITY : 1e9; }
 
+    // Normal-incidence reflectance ((eta - 1)/(eta + 1))^2, precise type.
+    LVal f0FromEta(const LVal& eta) {
+        MathEmitter& d = d_;
+        return map({eta}, true, [&](auto& x) {
+            Value* r = d.div(d.sub(x[0], d.c(1.0)), d.add(x[0], d.c(1.0)));
+            return d.mul(r, r);
+        });
+    }
+
     // F per channel, in the precise type (it multiplies D G / (ci co) there:
     // with f0 = 0, Schlick's (1 - c)^5 can be far below float range where
     // the product is not).
@@ -790,24 +799,18 @@ private:
         Value* q = geo.oneMinusCosD;
         Value* q2 = d.mul(q, q);
         Value* q5 = d.mul(d.mul(q2, q2), q);
-        auto schlickF0FromEta = [&](const LVal& eta) {
-            return map({eta}, true, [&](auto& x) {
-                Value* r = d.div(d.sub(x[0], dOne), d.add(x[0], dOne));
-                return d.mul(r, r);
-            });
-        };
         switch (mat_.fresnelModel()) {
             case FresnelModel::None: return LVal::scalar(dOne);
             case FresnelModel::Schlick: {
                 LVal f0 = use.has(param::F0) ? rgbParam(use, param::F0, 0, 1, false)
-                                             : schlickF0FromEta(rgbParam(use, param::SchlickEta, kMinEta, INFINITY, false));
+                                             : f0FromEta(rgbParam(use, param::SchlickEta, kMinEta, INFINITY, false));
                 return map({f0}, true, [&](auto& x) { return d.fma(d.sub(dOne, x[0]), q5, x[0]); });
             }
             case FresnelModel::Dielectric: {
                 if (opt_.variant.schlickDielectric) {
                     // Schlick with f0 = ((eta - 1)/(eta + 1))^2: only chosen by a
                     // tolerance that its measured error meets.
-                    LVal f0 = schlickF0FromEta(rgbParam(use, param::DielectricEta, kMinEta, INFINITY, false));
+                    LVal f0 = f0FromEta(rgbParam(use, param::DielectricEta, kMinEta, INFINITY, false));
                     return map({f0}, true, [&](auto& x) { return d.fma(d.sub(dOne, x[0]), q5, x[0]); });
                 }
                 // Near the critical angle (eta < 1) F depends on sqrt(g^2) with
@@ -1034,21 +1037,16 @@ private:
         Value* lobe = d.div(d.mul(ec(ci), ec(co)), d.mul(d.c(kPi), ecAvg));
         lobe = d.select(d.gt(ecAvg, d.c(0.0)), lobe, d.c(0.0));
 
-        // Fresnel parameters (again: the lowering's CSE merges them with fresnel()).
+        // Fresnel parameters (the same expressions as in fresnel(): the
+        // optimizer's CSE merges them).
         const ModelUse& use = mat_.fresnel;
         std::array<Value*, 3> f0{}, eta{}, k{};
         std::array<const Expr*, 2> constArgs{};
         switch (mat_.fresnelModel()) {
             case FresnelModel::Schlick: {
-                if (use.has(param::F0)) {
-                    f0 = rgbParam(use, param::F0, 0, 1, false).c;
-                } else {
-                    LVal e = rgbParam(use, param::SchlickEta, kMinEta, INFINITY, false);
-                    f0 = map({e}, true, [&](auto& x) {
-                             Value* r = d.div(d.sub(x[0], d.c(1.0)), d.add(x[0], d.c(1.0)));
-                             return d.mul(r, r);
-                         }).c;
-                }
+                f0 = (use.has(param::F0) ? rgbParam(use, param::F0, 0, 1, false)
+                                         : f0FromEta(rgbParam(use, param::SchlickEta, kMinEta, INFINITY, false)))
+                         .c;
                 break;
             }
             case FresnelModel::Dielectric:
