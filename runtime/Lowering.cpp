@@ -736,7 +736,8 @@ private:
     // Whether the exact dielectric/conductor Fresnel can be evaluated in
     // float: its parameters are constants away from the ill-conditioned
     // regions (dielectric: eta >= 1.01 in every channel, no critical angle
-    // and no eta - 1 cancellation; conductor: |N^2 - 1| >= 0.1). Then the
+    // and no eta - 1 cancellation; conductor: |c^2 + N^2 - 1| >= 0.1 for
+    // every c in [0, 1]). Then the
     // formulas are well-conditioned in cos(theta), which comes rounded from
     // the double geometry; the measured error stays within the exact-mode
     // error of the rest of the kernel (tests/jit, differential). Saves the
@@ -756,8 +757,14 @@ private:
             std::array<double, 3> ev = constantValue(eta), kv = constantValue(k);
             for (int ch = 0; ch < 3; ++ch) {
                 double n = std::max(ev[ch], kMinEta), kk = std::max(kv[ch], 0.0);
+                // g^2 = c^2 + e must stay away from 0 for every c in [0, 1]
+                // (|c^2 + e| >= 0.1): near it F has the square-root
+                // singularity of a critical angle (k = 0, eta < 1) or cancels
+                // (N -> 1), and float rounding of c shows (measured 1.7e-5
+                // for eta = 0.05, k = 0 before this was checked).
                 double er = (n - 1) * (n + 1) - kk * kk, ei = 2 * n * kk;
-                if (!(er * er + ei * ei >= 0.01 && n <= 1e3 && kk <= 1e3)) return false;
+                double nearestReal = er >= 0 ? er : (er <= -1 ? -(er + 1) : 0.0);
+                if (!(nearestReal * nearestReal + ei * ei >= 0.01 && n <= 1e3 && kk <= 1e3)) return false;
             }
             return true;
         }

@@ -2,6 +2,7 @@
 // caches (memory, disk, corrupted files), specialization visible in the
 // optimized IR, and vectorized math (no libm calls in SIMD kernels).
 #include "Checker.h"
+#include "Interpreter.h"
 #include "Jit.h"
 #include "Kernel.h"
 #include "Lowering.h"
@@ -280,4 +281,44 @@ TEST_CASE("tolerance selection never returns a variant whose measured error exce
     auto fast = c.compileFile(fmt::format("{}/materials/aluminium.mat", FACET_SOURCE_DIR), "", opts("math=fast;cache=off"), d);
     REQUIRE(fast);
     CHECK(fast->variant() == "fast");
+}
+
+// Exact mode evaluates a constant-parameter dielectric/conductor Fresnel in
+// float only away from its ill-conditioned regions (the critical angle of
+// k = 0, eta < 1; N -> 1): these materials sit at or near them, and a sweep
+// of wi.h across the critical angle (mirror pairs, h = n) must stay within
+// the exact-mode accuracy of the rest of the kernel (1.7e-5 when the
+// conductor with eta = 0.05, k = 0 was wrongly taken to float).
+TEST_CASE("exact Fresnel near a critical angle or N = 1 keeps exact-mode accuracy") {
+    const char* materials[] = {
+        "material m { ndf = ggx(0.3); fresnel = conductor(eta = 0.05, k = rgb(0, 0.5, 8)); }",
+        "material m { ndf = ggx(0.3); fresnel = conductor(eta = 1.02, k = 0.01); }",
+        "material m { ndf = ggx(0.3); fresnel = dielectric(rgb(0.05, 0.7, 1.005)); }",
+    };
+    Compiler c;
+    double worst = 0;
+    for (const char* text : materials) {
+        DiagnosticEngine d;
+        CheckedProgram p = loadProgramText(text, "t.mat", d);
+        REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+        Interpreter<double> interp(p.materials[0]);
+        auto k = compile(c, text, "backend=scalar;math=exact");
+        // cos(theta) from 0.998 to 1 (eta = 0.05: critical at 0.99875) and
+        // across the TIR edges of eta = 0.7 (0.714) in small steps.
+        for (double cosT = 0.6; cosT < 1.0; cosT += cosT < 0.99 ? 1e-3 : 1e-6) {
+            float sinT = float(std::sqrt(1 - cosT * cosT));
+            float wi[3] = {sinT, 0, float(cosT)}, wo[3] = {-sinT, 0, float(cosT)}, got[3];
+            k->eval(wi, wo, nullptr, got);
+            double wiD[3] = {wi[0], wi[1], wi[2]}, woD[3] = {wo[0], wo[1], wo[2]};
+            EvalResult<double> want = interp.eval(wiD, woD, nullptr);
+            REQUIRE(want.valid);
+            for (int ch = 0; ch < 3; ++ch) {
+                double rel = std::abs(got[ch] - want.rgb[ch]) / std::max(std::abs(want.rgb[ch]), 1e-30);
+                worst = std::max(worst, rel);
+                INFO(text, " cos ", cosT, " ch ", ch, " got ", got[ch], " want ", want.rgb[ch]);
+                CHECK(rel < 2e-6);
+            }
+        }
+    }
+    MESSAGE("worst relative error near critical angles and N = 1: " << worst);
 }
