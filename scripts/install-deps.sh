@@ -7,6 +7,7 @@ packages=(
   llvm-19-dev clang-19 libclang-rt-19-dev   # JIT, bitcode math library, sanitizers
   libzstd-dev zlib1g-dev libedit-dev libxml2-dev libffi-dev libcurl4-openssl-dev  # llvm-19-dev's link deps
   libopenimageio-dev openimageio-tools libfmt-dev doctest-dev  # OIIO's CMake config lists the tools
+  fonts-dejavu-core   # the TrueType font `facet render` labels its plots with (OIIO render_text)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -17,4 +17,7 @@ int cmdLut(const std::vector<std::string>& args);
 // facet bench FILE... [--out DIR] [--json] [--quick]  (BenchCommand.cpp, bench/)
 int cmdBench(const std::vector<std::string>& args);
 
+// facet render FILE -o OUT [--plot lobe|ndf] ...  (RenderCommand.cpp, runtime/preview/)
+int cmdRender(const std::vector<std::string>& args);
+
 }  // namespace facet

@@ -16,6 +16,8 @@ std::string trim(const std::string& s) {
     return s.substr(b, e - b + 1);
 }
 
+}  // namespace
+
 std::vector<std::string> splitFields(const std::string& line) {
     std::vector<std::string> out;
     size_t start = 0;
@@ -26,7 +28,6 @@ std::vector<std::string> splitFields(const std::string& line) {
         start = comma + 1;
     }
 }
-}  // namespace
 
 int CsvTable::columnIndex(const std::string& name) const {
     for (size_t i = 0; i < columns.size(); ++i)

@@ -31,4 +31,8 @@ std::optional<CsvTable> readCsv(const std::string& path, std::string& error);
 // and "inf" parse (they are numbers, and the evaluator reports them).
 std::optional<double> parseNumber(const std::string& field);
 
+// Splits a line at commas, trimming blanks around each field ("a, b" ->
+// {"a", "b"}; "" -> {""}). Also used for option values like --set NAME=r,g,b.
+std::vector<std::string> splitFields(const std::string& line);
+
 }  // namespace facet

@@ -4,6 +4,7 @@
 //   facet eval FILE [--material NAME] [--backend interp|scalar|simd] [--math exact|fast]
 //              [--width 4|8|16] [--set NAME=VALUE]... --in IN.csv [--out OUT.csv]
 //   facet ir FILE [--material NAME] [--simd] [--stages] [--set NAME=VALUE]...
+//   facet lut | bench | verify | render ...  (in their own files, Commands.h)
 //
 // Exit codes: 0 ok, 1 a check failed (e.g. invalid rows), 2 usage,
 // 65 a material file error.
@@ -36,6 +37,8 @@ const char* kUsage =
     "  lut FILE [--material NAME] -o TABLES.exr   write the Kulla-Conty E/E_avg tables (EXR)\n"
     "  bench FILE... [--out DIR] [--json] [--quick]   speed against error (bench.md/.json/.png)\n"
     "  verify FILE... [--material NAME] [--verbose]   hard cases, backends and physics (SPEC 7)\n"
+    "  render FILE -o OUT.png|.exr [--plot lobe|ndf] [--size N] [--light T,P] ...\n"
+    "                                      lit-sphere preview, lobe or NDF plot ('facet render' for all options)\n"
     "exit codes: 0 ok, 1 a check failed, 2 usage, 65 a material file error\n";
 
 struct UsageError {
@@ -66,16 +69,11 @@ void parseSet(const std::string& spec, Bindings& out) {
         throw UsageError{fmt::format("--set expects NAME=VALUE, got '{}'", spec)};
     std::string name = spec.substr(0, eq), rest = spec.substr(eq + 1);
     std::vector<double> values;
-    size_t start = 0;
-    for (;;) {
-        size_t comma = rest.find(',', start);
-        std::string field = rest.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    for (const std::string& field : splitFields(rest)) {
         std::optional<double> v = parseNumber(field);
         if (!v || !std::isfinite(*v))
             throw UsageError{fmt::format("--set {}: '{}' is not a finite number", name, field)};
         values.push_back(*v);
-        if (comma == std::string::npos) break;
-        start = comma + 1;
     }
     if (values.size() != 1 && values.size() != 3)
         throw UsageError{fmt::format("--set {}: expected one value or three (r,g,b), got {}", name, values.size())};
@@ -360,6 +358,7 @@ int main(int argc, char** argv) {
         if (command == "verify") return cmdVerify(args);
         if (command == "lut") return cmdLut(args);
         if (command == "bench") return cmdBench(args);
+        if (command == "render") return cmdRender(args);
         throw UsageError{fmt::format("unknown command '{}'", command)};
     } catch (const UsageError& e) {
         std::fprintf(stderr, "facet: %s\n%s", e.message.c_str(), kUsage);

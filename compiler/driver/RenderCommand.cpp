@@ -1,0 +1,299 @@
+// facet render: pictures of a material (runtime/preview/).
+//
+//   facet render FILE -o OUT.png|OUT.exr [--material NAME] [--size N]
+//                [--light THETA,PHI] [--view THETA,PHI] [--irradiance E]
+//                [--sky gradient|constant|none] [--sky-radiance L] [--samples N]
+//                [--exposure EV] [--threads N] [--backend simd|scalar|interp]
+//                [--math exact|fast] [--set NAME=VALUE]...
+//       a lit sphere, shaded by the compiled kernel (SphereRender.h)
+//   facet render FILE --plot lobe -o lobe.png [--theta-i A,B,...] [--size W]
+//       the BRDF in the plane of incidence, one polar curve per theta_i
+//   facet render FILE --plot ndf -o ndf.png [--alpha A,B,...] [--size W]
+//       D(theta_m) of the material's NDF at several roughnesses
+//   facet render --plot ndf --compare ggx,beckmann,blinn_phong [--alpha A,...] -o ndf.png
+//       several NDFs at matched roughness (no material file needed)
+//
+// Angles are in degrees. Exit codes as everywhere: 0 ok, 1 a check failed
+// (invalid lanes, or the image could not be written), 2 usage, 65 a
+// material file error.
+#include "Commands.h"
+
+#include "Checker.h"
+#include "CsvTable.h"
+#include "Kernel.h"
+#include "Plots.h"
+#include "SphereRender.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fmt/format.h>
+#include <optional>
+
+namespace facet {
+
+namespace {
+
+constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitUsage = 2, kExitMaterialError = 65;
+
+constexpr const char* kRenderUsage =
+    "usage: facet render FILE -o OUT.png|OUT.exr [--material NAME] [--size N] [--light THETA,PHI]\n"
+    "                    [--view THETA,PHI] [--irradiance E] [--sky gradient|constant|none]\n"
+    "                    [--sky-radiance L] [--samples N] [--exposure EV] [--threads N]\n"
+    "                    [--backend simd|scalar|interp] [--math exact|fast] [--set NAME=VALUE]...\n"
+    "       facet render FILE --plot lobe -o lobe.png [--theta-i A,B,...] [--size WIDTH]\n"
+    "       facet render FILE --plot ndf -o ndf.png [--alpha A,B,...] [--size WIDTH]\n"
+    "       facet render --plot ndf --compare NDF,NDF,... [--alpha A,...] -o ndf.png\n"
+    "angles in degrees: THETA from the view axis +Z, PHI from +X towards +Y (world up)\n";
+
+struct RenderUsageError {
+    std::string message;
+};
+
+std::vector<double> parseNumberList(const std::string& option, const std::string& text) {
+    std::vector<double> values;
+    for (const std::string& field : splitFields(text)) {
+        std::optional<double> v = parseNumber(field);
+        if (!v || !std::isfinite(*v))
+            throw RenderUsageError{fmt::format("{}: '{}' is not a finite number", option, field)};
+        values.push_back(*v);
+    }
+    return values;
+}
+
+double parseOneNumber(const std::string& option, const std::string& text) {
+    std::vector<double> v = parseNumberList(option, text);
+    if (v.size() != 1) throw RenderUsageError{fmt::format("{} expects one number, got '{}'", option, text)};
+    return v[0];
+}
+
+int parseInteger(const std::string& option, const std::string& text, int lo, int hi) {
+    double v = parseOneNumber(option, text);
+    if (v != std::floor(v) || v < lo || v > hi)
+        throw RenderUsageError{fmt::format("{} expects an integer in {} .. {}, got '{}'", option, lo, hi, text)};
+    return int(v);
+}
+
+std::pair<double, double> parseAngles(const std::string& option, const std::string& text) {
+    std::vector<double> v = parseNumberList(option, text);
+    if (v.size() != 2) throw RenderUsageError{fmt::format("{} expects THETA,PHI in degrees, got '{}'", option, text)};
+    if (v[0] < 0 || v[0] > 180) throw RenderUsageError{fmt::format("{}: theta {} is outside 0 .. 180", option, v[0])};
+    return {v[0], v[1]};
+}
+
+std::optional<NdfModel> ndfByName(const std::string& name) {
+    if (name == "ggx") return NdfModel::Ggx;
+    if (name == "beckmann") return NdfModel::Beckmann;
+    if (name == "blinn_phong") return NdfModel::BlinnPhong;
+    if (name == "gtr") return NdfModel::Gtr;
+    if (name == "gaussian") return NdfModel::Gaussian;
+    return std::nullopt;
+}
+
+const char* ndfName(NdfModel m) {
+    switch (m) {
+        case NdfModel::Ggx: return "ggx";
+        case NdfModel::Beckmann: return "beckmann";
+        case NdfModel::BlinnPhong: return "blinn_phong";
+        case NdfModel::Gtr: return "gtr";
+        case NdfModel::Gaussian: return "gaussian";
+        case NdfModel::Ward: return "ward";
+    }
+    return "?";
+}
+
+struct RenderArgs {
+    std::string file, material, out, plot, compare;
+    std::string options = "";  // compile-option string (backend, math, set.NAME)
+    std::string backend = "simd", math = "exact";
+    std::vector<double> thetaI, alphas;
+    std::optional<int> size;
+    preview::SphereScene scene;
+};
+
+RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
+    RenderArgs r;
+    for (size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        auto value = [&]() -> const std::string& {
+            if (i + 1 >= args.size()) throw RenderUsageError{fmt::format("{} needs a value", a)};
+            return args[++i];
+        };
+        if (a == "-o" || a == "--out") r.out = value();
+        else if (a == "--material") r.material = value();
+        else if (a == "--plot") {
+            r.plot = value();
+            if (r.plot != "lobe" && r.plot != "ndf")
+                throw RenderUsageError{fmt::format("--plot expects lobe or ndf, got '{}'", r.plot)};
+        } else if (a == "--compare") r.compare = value();
+        else if (a == "--size") r.size = parseInteger(a, value(), 8, 16384);
+        else if (a == "--light") std::tie(r.scene.lightThetaDeg, r.scene.lightPhiDeg) = parseAngles(a, value());
+        else if (a == "--view") std::tie(r.scene.viewThetaDeg, r.scene.viewPhiDeg) = parseAngles(a, value());
+        else if (a == "--irradiance") r.scene.lightIrradiance = parseOneNumber(a, value());
+        else if (a == "--sky") {
+            const std::string& v = value();
+            if (v == "gradient") r.scene.sky = preview::SkyModel::Gradient;
+            else if (v == "constant") r.scene.sky = preview::SkyModel::Constant;
+            else if (v == "none") r.scene.sky = preview::SkyModel::None;
+            else throw RenderUsageError{fmt::format("--sky expects gradient, constant or none, got '{}'", v)};
+        } else if (a == "--sky-radiance") r.scene.skyRadiance = parseOneNumber(a, value());
+        else if (a == "--samples") r.scene.skySamples = parseInteger(a, value(), 0, 65536);
+        else if (a == "--exposure") r.scene.exposureEv = parseOneNumber(a, value());
+        else if (a == "--threads") r.scene.threads = parseInteger(a, value(), 1, 1024);
+        else if (a == "--backend") r.backend = value();
+        else if (a == "--math") r.math = value();
+        else if (a == "--set") r.options += ";set." + value();
+        else if (a == "--theta-i") r.thetaI = parseNumberList(a, value());
+        else if (a == "--alpha") r.alphas = parseNumberList(a, value());
+        else if (!a.empty() && a[0] == '-') throw RenderUsageError{fmt::format("unknown option '{}'", a)};
+        else if (r.file.empty()) r.file = a;
+        else throw RenderUsageError{fmt::format("more than one material file ('{}' and '{}')", r.file, a)};
+    }
+    if (r.out.empty()) throw RenderUsageError{"-o OUT is required"};
+    if (!r.compare.empty() && r.plot != "ndf") throw RenderUsageError{"--compare goes with --plot ndf"};
+    if (r.file.empty() && r.compare.empty()) throw RenderUsageError{"no material file given"};
+    if (!r.thetaI.empty() && r.plot != "lobe") throw RenderUsageError{"--theta-i goes with --plot lobe"};
+    if (!r.alphas.empty() && r.plot != "ndf") throw RenderUsageError{"--alpha goes with --plot ndf"};
+    for (double a : r.alphas)
+        if (!(a > 0 && a <= 4)) throw RenderUsageError{fmt::format("--alpha: {} is outside (0, 4]", a)};
+    if (r.size) r.scene.size = *r.size;
+    if (std::string why = preview::validateScene(r.scene); !why.empty()) throw RenderUsageError{why};
+    r.options = fmt::format("backend={};math={}", r.backend, r.math) + r.options;
+    return r;
+}
+
+// Compiles the material; on failure prints the diagnostics and returns null.
+std::unique_ptr<Kernel> compileForRender(Compiler& compiler, const RenderArgs& r, int& exitCode) {
+    CompileOptions options;
+    if (std::string err = CompileOptions::parse(r.options, options); !err.empty()) throw RenderUsageError{err};
+    DiagnosticEngine diags;
+    std::unique_ptr<Kernel> kernel = compiler.compileFile(r.file, r.material, options, diags);
+    if (!kernel) {
+        std::fputs(diags.str().c_str(), stderr);
+        exitCode = kExitMaterialError;
+    }
+    return kernel;
+}
+
+int renderSphereCommand(const RenderArgs& r) {
+    Compiler compiler;
+    int exitCode = kExitOk;
+    std::unique_ptr<Kernel> kernel = compileForRender(compiler, r, exitCode);
+    if (!kernel) return exitCode;
+    preview::SphereImage image = preview::renderSphere(*kernel, r.scene);
+    const preview::RenderStats& s = image.stats;
+    std::printf("material %s: %s %s kernel (%s, %d lanes), compiled in %.1f ms (%s)\n", kernel->material().name.c_str(),
+                backendName(kernel->backend()), kernel->variant().c_str(), r.math.c_str(), kernel->width(),
+                kernel->compileMillis(), kernel->origin().c_str());
+    std::printf("rendered %dx%d: %lld pixels x %d evaluations (1 light + %d sky samples) = %.2fM evaluations in "
+                "%.3f s on %d threads (%.1fM evaluations/s; %.3f s of thread time in the kernel)\n",
+                r.scene.size, r.scene.size, (long long)s.pixels, r.scene.sky == preview::SkyModel::None ? 1 : 1 + r.scene.skySamples,
+                r.scene.sky == preview::SkyModel::None ? 0 : r.scene.skySamples, s.evaluations / 1e6, s.seconds,
+                s.threads, s.evaluations / 1e6 / std::max(s.seconds, 1e-9), s.kernelSeconds);
+    if (std::string err = preview::writeSphereImage(image, r.scene, r.out); !err.empty()) {
+        std::fprintf(stderr, "facet: render: %s\n", err.c_str());
+        return kExitCheckFailed;
+    }
+    std::printf("wrote %s\n", r.out.c_str());
+    if (s.invalidLanes) {
+        std::fprintf(stderr, "facet: render: %lld of %lld kernel lanes were invalid (shaded black): the material's "
+                     "parameters are not finite at these inputs\n", (long long)s.invalidLanes, (long long)s.evaluations);
+        return kExitCheckFailed;
+    }
+    return kExitOk;
+}
+
+int lobePlotCommand(const RenderArgs& r) {
+    Compiler compiler;
+    int exitCode = kExitOk;
+    std::unique_ptr<Kernel> kernel = compileForRender(compiler, r, exitCode);
+    if (!kernel) return exitCode;
+    preview::LobePlotOptions opt;
+    if (!r.thetaI.empty()) opt.incidentDegrees = r.thetaI;
+    if (r.size) opt.width = *r.size, opt.height = *r.size * 5 / 8;
+    opt.title = fmt::format("{}: f cos(theta_o) in the plane of incidence", kernel->material().name);
+    preview::LobePlotResult result = preview::writeLobePlot(*kernel, opt, r.out);
+    if (!result.error.empty()) {
+        std::fprintf(stderr, "facet: render: %s\n", result.error.c_str());
+        return kExitCheckFailed;
+    }
+    if (!result.warning.empty()) std::fprintf(stderr, "facet: render: warning: %s\n", result.warning.c_str());
+    for (size_t i = 0; i < result.peakValue.size(); ++i)
+        std::printf("theta_i %g: peak of luminance(f) cos(theta_o) = %.6g at theta_o = %.2f\n", opt.incidentDegrees[i],
+                    result.peakValue[i], result.peakThetaDeg[i]);
+    std::printf("wrote %s\n", r.out.c_str());
+    if (result.invalidLanes) {
+        std::fprintf(stderr, "facet: render: %lld kernel lanes were invalid\n", (long long)result.invalidLanes);
+        return kExitCheckFailed;
+    }
+    return kExitOk;
+}
+
+int ndfPlotCommand(const RenderArgs& r) {
+    std::vector<preview::NdfCurve> curves;
+    std::vector<double> alphas = r.alphas;
+    preview::NdfPlotOptions opt;
+    if (r.size) opt.width = *r.size, opt.height = *r.size * 5 / 8;
+    if (!r.compare.empty()) {
+        // Several NDFs at matched roughness.
+        if (alphas.empty()) alphas = {0.3};
+        std::vector<NdfModel> models;
+        for (const std::string& name : splitFields(r.compare)) {
+            std::optional<NdfModel> m = ndfByName(name);
+            if (!m)
+                throw RenderUsageError{fmt::format(
+                    "--compare: '{}' is not an NDF with a distribution to plot (ggx, beckmann, blinn_phong, gtr, gaussian)",
+                    name)};
+            models.push_back(*m);
+        }
+        for (double a : alphas)
+            for (NdfModel m : models)
+                curves.push_back({fmt::format("{}, alpha = {:g}", ndfName(m), a), preview::ndfAtAlpha(m, a)});
+        opt.title = alphas.size() == 1 ? fmt::format("D(theta_m) at matched roughness alpha = {:g}", alphas[0])
+                                       : std::string("D(theta_m) at matched roughness");
+    } else {
+        DiagnosticEngine diags;
+        CheckedProgram program = loadProgramFile(r.file, diags);
+        if (diags.hasErrors()) {
+            std::fputs(diags.str().c_str(), stderr);
+            return kExitMaterialError;
+        }
+        const CheckedMaterial* m = program.find(r.material);
+        if (!m) throw RenderUsageError{fmt::format("no material named '{}' in {}", r.material, r.file)};
+        NdfModel model = m->ndfModel();
+        if (model == NdfModel::Ward) {
+            std::fprintf(stderr, "%s: error: material '%s': the ward model has no microfacet distribution D to plot\n",
+                         m->loc.str().c_str(), m->name.c_str());
+            return kExitCheckFailed;
+        }
+        Interpreter<double> interp(*m);
+        ResolvedMaterial<double> resolved = interp.resolve(nullptr);
+        double gamma = model == NdfModel::Gtr && resolved.valid ? resolved.gamma : 2;
+        if (alphas.empty()) alphas = {0.1, 0.2, 0.3, 0.5, 0.8};
+        for (double a : alphas)
+            curves.push_back({fmt::format("alpha = {:g}", a), preview::ndfAtAlpha(model, a, gamma)});
+        opt.title = model == NdfModel::Gtr ? fmt::format("{}: gtr D(theta_m), gamma = {:g}", m->name, gamma)
+                                           : fmt::format("{}: {} D(theta_m)", m->name, ndfName(model));
+    }
+    if (std::string err = preview::writeNdfPlot(curves, opt, r.out); !err.empty()) {
+        std::fprintf(stderr, "facet: render: %s\n", err.c_str());
+        return kExitCheckFailed;
+    }
+    std::printf("wrote %s (%zu curves)\n", r.out.c_str(), curves.size());
+    return kExitOk;
+}
+
+}  // namespace
+
+int cmdRender(const std::vector<std::string>& args) {
+    try {
+        RenderArgs r = parseRenderArgs(args);
+        if (r.plot == "lobe") return lobePlotCommand(r);
+        if (r.plot == "ndf") return ndfPlotCommand(r);
+        return renderSphereCommand(r);
+    } catch (const RenderUsageError& e) {
+        std::fprintf(stderr, "facet: render: %s\n%s", e.message.c_str(), kRenderUsage);
+        return kExitUsage;
+    }
+}
+
+}  // namespace facet

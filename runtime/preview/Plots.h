@@ -1,0 +1,70 @@
+// Plots: the two diagnostic plots of `facet render --plot lobe|ndf`.
+//
+// The lobe plot is the BRDF slice in the plane of incidence, evaluated by a
+// compiled kernel (any backend), drawn as a polar plot: one curve per
+// incident angle. The NDF plot draws D(theta_m) curves computed by the
+// reference interpreter's term functions (ResolvedMaterial::D), either one
+// NDF at several roughnesses or several NDFs at matched roughness. Both are
+// drawn with OpenImageIO's ImageBufAlgo (lines, boxes, TrueType text through
+// PlotCanvas) and written in any format OpenImageIO writes (PNG, EXR, ...).
+#pragma once
+
+#include "Interpreter.h"
+#include "Kernel.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace facet::preview {
+
+struct LobePlotOptions {
+    std::vector<double> incidentDegrees{0, 30, 60, 80};  // theta_i of each curve, in [0, 90)
+    int width = 960, height = 600;
+    std::string title;  // drawn at the top; empty: none
+    // TrueType font for the labels: "" finds one (findPlotFont in
+    // PlotCanvas.h: $FACET_FONT, else DejaVu Sans). Without a usable font the
+    // plot is drawn without text and `warning` says so.
+    std::string fontPath;
+};
+
+struct LobePlotResult {
+    std::string error;                 // "" on success
+    std::vector<double> peakValue;     // per curve: max over theta_o of luminance(f) cos(theta_o)
+    std::vector<double> peakThetaDeg;  // per curve: the signed theta_o of that maximum
+    int64_t invalidLanes = 0;          // kernel lanes reported invalid (should be 0)
+    std::string warning;               // "" or e.g. why the plot has no text (not an error)
+};
+
+// Evaluates `kernel` (default inputs) with wi = (-sin ti, 0, cos ti) and
+// wo = (sin to, 0, cos to) for signed to in [-90, 90] degrees and draws
+// luminance(f) cos(to) in polar form, each curve normalized to its own peak
+// (the legend gives the peak), with the incident directions as dashed rays.
+LobePlotResult writeLobePlot(const Kernel& kernel, const LobePlotOptions& options, const std::string& path);
+
+// One D(theta_m) curve: a resolved NDF (only the NDF fields are used).
+struct NdfCurve {
+    std::string label;
+    ResolvedMaterial<double> ndf;
+};
+
+// The NDF `model` at roughness alpha (isotropic): ggx, beckmann, ward,
+// gaussian, gtr (with `gtrGamma`) use alpha directly; blinn_phong uses the
+// matched exponent 2 / alpha^2 - 2 (Walter et al. 2007).
+ResolvedMaterial<double> ndfAtAlpha(NdfModel model, double alpha, double gtrGamma = 2);
+
+struct NdfPlotOptions {
+    int width = 960, height = 600;
+    std::string title;
+    bool logScale = true;  // D spans decades between alpha = 0.1 and 1
+    std::string fontPath;  // as LobePlotOptions::fontPath
+};
+
+// Draws D(theta_m) for theta_m in [-90, 90] degrees (m in the x-z plane),
+// one curve per entry. Returns "" or an error message (ward has no D(m): an
+// error). A non-fatal problem (no font: no text) goes to *warning, or to
+// stderr when warning is null.
+std::string writeNdfPlot(const std::vector<NdfCurve>& curves, const NdfPlotOptions& options, const std::string& path,
+                         std::string* warning = nullptr);
+
+}  // namespace facet::preview

@@ -1,0 +1,91 @@
+// SphereRender: the lit-sphere preview of `facet render`.
+//
+// A unit sphere seen by an orthographic camera, shaded by a compiled kernel
+// (any backend: the SIMD kernel for speed, the interpreter as reference)
+// under one directional light plus a sky (constant, or an analytic
+// horizon-to-zenith gradient over a darker ground) integrated with a fixed
+// number of samples per pixel. The sky estimator combines cosine-weighted
+// samples with samples of a GGX distribution of the material's roughness
+// (multi-sample balance heuristic), so smooth and rough materials both
+// converge at 64 samples; it stays unbiased whatever the material's NDF,
+// because the sampling density is only a choice of where to look.
+//
+// Every pixel uses the same deterministic sample set (Hammersley points
+// rotated per pixel by a hash), so two renders of the same material with
+// different backends differ only by the kernels' own differences: that is
+// how the tests compare the SIMD kernel with the interpreter.
+//
+// Conventions: world +Y is up (the sky's zenith and the sphere's pole, so an
+// anisotropic material's tangent runs along the latitude lines); directions
+// are given as (theta, phi) in degrees, theta from +Z (the default view
+// axis), phi from +X towards +Y. The BRDF is evaluated with wi = light or
+// sky direction and wo = view direction, both in the local frame
+// (tangent, bitangent, normal).
+#pragma once
+
+#include "Kernel.h"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace facet::preview {
+
+enum class SkyModel { None, Constant, Gradient };
+
+struct SphereScene {
+    int size = 512;                                 // image width = height, pixels
+    double lightThetaDeg = 45, lightPhiDeg = 135;   // towards the light (default: upper left, front)
+    double lightIrradiance = 3;                     // at normal incidence
+    double viewThetaDeg = 0, viewPhiDeg = 0;        // towards the camera
+    SkyModel sky = SkyModel::Gradient;
+    double skyRadiance = 1;                         // scale of the sky's radiance
+    int skySamples = 64;                            // per pixel
+    double exposureEv = 0;                          // PNG tone mapping: radiance * 2^EV
+    int threads = 0;                                // 0: every core
+};
+
+struct RenderStats {
+    double seconds = 0;       // wall time of the shading (sample generation + kernel + accumulation)
+    double kernelSeconds = 0; // time inside the kernel's batch calls, summed over the threads
+    int threads = 1;
+    int64_t pixels = 0;       // pixels covered by the sphere
+    int64_t evaluations = 0;  // kernel lanes evaluated
+    int64_t invalidLanes = 0; // lanes the kernel reported invalid (0 for a valid material)
+};
+
+struct SphereImage {
+    int size = 0;
+    std::vector<float> radiance;  // size*size*3, linear outgoing radiance (0 off the sphere)
+    std::vector<float> coverage;  // size*size, fraction of the pixel the sphere covers
+    RenderStats stats;
+    float& at(int x, int y, int c) { return radiance[(size_t(y) * size + x) * 3 + c]; }
+    float at(int x, int y, int c) const { return radiance[(size_t(y) * size + x) * 3 + c]; }
+};
+
+// Checks the scene's numbers; returns "" or a message naming the bad field.
+std::string validateScene(const SphereScene& scene);
+
+// Renders the sphere with `kernel` at its default inputs. The scene must be
+// valid (validateScene).
+SphereImage renderSphere(const Kernel& kernel, const SphereScene& scene);
+
+// Writes the image. .exr/.hdr: linear RGBA, colour premultiplied by
+// coverage. Other formats (PNG, ...): 8-bit sRGB, radiance * 2^EV through
+// the ACES filmic curve (Narkowicz 2015 fit), over a grey background.
+// Returns "" or an error message.
+std::string writeSphereImage(const SphereImage& image, const SphereScene& scene, const std::string& path);
+
+// The pixel (x, y) (fractional, pixel centres at integers) where the mirror
+// highlight of the light lies: where the normal is the half vector of the
+// light and view directions. None when that point faces away from the camera.
+std::optional<std::array<double, 2>> highlightPixel(const SphereScene& scene);
+
+// The tone curve applied to PNG output (linear in, display-referred out,
+// before sRGB encoding); exposed for the tests.
+double acesFilmic(double x);
+double luminance(const float rgb[3]);
+
+}  // namespace facet::preview

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# The README gallery: one lit sphere per shipped material (256x256, default
+# light and sky, 64 sky samples, SIMD exact kernel), the NDF comparison at
+# matched roughness, and the lobe plots of two materials, all written by
+# `facet render` into OUTDIR (default docs/gallery, the committed images).
+# Expects a built tree (scripts/build.sh); run from anywhere.
+# usage: scripts/gallery.sh [OUTDIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-docs/gallery}
+facet=build/compiler/facet
+mkdir -p "$out"
+for m in materials/*.mat; do
+  name=$(basename "$m" .mat)
+  $facet render "$m" -o "$out/$name.png" --size 256 --samples 64 | grep -E "^rendered"
+done
+$facet render --plot ndf --compare ggx,beckmann,blinn_phong --alpha 0.2,0.5 -o "$out/ndf_compare.png"
+$facet render materials/plastic.mat --plot lobe -o "$out/lobe_plastic.png"
+$facet render materials/gold.mat --plot lobe -o "$out/lobe_gold.png"
+echo "gallery written to $out"
