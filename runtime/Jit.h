@@ -6,8 +6,11 @@
 // symbol clashes) and is released by removing that dylib.
 #pragma once
 
+#include <llvm/ADT/SmallVector.h>
 #include <llvm/ExecutionEngine/Orc/LLJIT.h>
+#include <llvm/IR/LegacyPassManager.h>
 #include <llvm/IR/Module.h>
+#include <llvm/IR/OptBisect.h>
 #include <llvm/Support/MemoryBuffer.h>
 #include <llvm/Target/TargetMachine.h>
 
@@ -47,6 +50,22 @@ private:
     FacetJit() = default;
     std::unique_ptr<llvm::orc::LLJIT> jit_;
     std::unique_ptr<llvm::TargetMachine> tm_;
+    // The codegen pipeline, built on the first emitObject() and run on every
+    // module after it (building it is ~1 ms of a compile), and the stream it
+    // writes objects to.
+    struct Codegen {
+        llvm::SmallVector<char, 0> object;
+        std::unique_ptr<llvm::raw_svector_ostream> stream;
+        llvm::legacy::PassManager passes;
+    };
+    std::unique_ptr<Codegen> codegen_;
+    // Skips the codegen passes that have nothing to do in a kernel (see
+    // Jit.cpp); set on the module's own LLVMContext only while it is emitted.
+    struct SkipPasses : llvm::OptPassGate {
+        bool isEnabled() const override { return true; }
+        bool shouldRunPass(llvm::StringRef pass, llvm::StringRef) override;
+    };
+    SkipPasses skipPasses_;
     std::string cpu_, features_;
     std::mutex mutex_;  // LLJIT linking and TargetMachine emission are not re-entrant
     uint64_t dylibCounter_ = 0;
