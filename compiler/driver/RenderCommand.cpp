@@ -80,26 +80,8 @@ std::pair<double, double> parseAngles(const std::string& option, const std::stri
     return {v[0], v[1]};
 }
 
-std::optional<NdfModel> ndfByName(const std::string& name) {
-    if (name == "ggx") return NdfModel::Ggx;
-    if (name == "beckmann") return NdfModel::Beckmann;
-    if (name == "blinn_phong") return NdfModel::BlinnPhong;
-    if (name == "gtr") return NdfModel::Gtr;
-    if (name == "gaussian") return NdfModel::Gaussian;
-    return std::nullopt;
-}
-
-const char* ndfName(NdfModel m) {
-    switch (m) {
-        case NdfModel::Ggx: return "ggx";
-        case NdfModel::Beckmann: return "beckmann";
-        case NdfModel::BlinnPhong: return "blinn_phong";
-        case NdfModel::Gtr: return "gtr";
-        case NdfModel::Gaussian: return "gaussian";
-        case NdfModel::Ward: return "ward";
-    }
-    return "?";
-}
+// An NDF's name in the language, from the builtin model table.
+const char* ndfName(NdfModel m) { return modelInfo(ModelSlot::Ndf, int(m)).name; }
 
 struct RenderArgs {
     std::string file, material, out, plot, compare;
@@ -184,10 +166,10 @@ int renderSphereCommand(const RenderArgs& r) {
     std::printf("material %s: %s %s kernel (%s, %d lanes), compiled in %.1f ms (%s)\n", kernel->material().name.c_str(),
                 backendName(kernel->backend()), kernel->variant().c_str(), r.math.c_str(), kernel->width(),
                 kernel->compileMillis(), kernel->origin().c_str());
+    int skySamples = r.scene.sky == preview::SkyModel::None ? 0 : r.scene.skySamples;
     std::printf("rendered %dx%d: %lld pixels x %d evaluations (1 light + %d sky samples) = %.2fM evaluations in "
                 "%.3f s on %d threads (%.1fM evaluations/s; %.3f s of thread time in the kernel)\n",
-                r.scene.size, r.scene.size, (long long)s.pixels, r.scene.sky == preview::SkyModel::None ? 1 : 1 + r.scene.skySamples,
-                r.scene.sky == preview::SkyModel::None ? 0 : r.scene.skySamples, s.evaluations / 1e6, s.seconds,
+                r.scene.size, r.scene.size, (long long)s.pixels, 1 + skySamples, skySamples, s.evaluations / 1e6, s.seconds,
                 s.threads, s.evaluations / 1e6 / std::max(s.seconds, 1e-9), s.kernelSeconds);
     if (std::string err = preview::writeSphereImage(image, r.scene, r.out); !err.empty()) {
         std::fprintf(stderr, "facet: render: %s\n", err.c_str());
@@ -238,12 +220,12 @@ int ndfPlotCommand(const RenderArgs& r) {
         if (alphas.empty()) alphas = {0.3};
         std::vector<NdfModel> models;
         for (const std::string& name : splitFields(r.compare)) {
-            std::optional<NdfModel> m = ndfByName(name);
-            if (!m)
+            const ModelInfo* ndf = findModel(ModelSlot::Ndf, name);  // names and aliases of the language
+            if (!ndf || NdfModel(ndf->id) == NdfModel::Ward)
                 throw RenderUsageError{fmt::format(
                     "--compare: '{}' is not an NDF with a distribution to plot (ggx, beckmann, blinn_phong, gtr, gaussian)",
                     name)};
-            models.push_back(*m);
+            models.push_back(NdfModel(ndf->id));
         }
         for (double a : alphas)
             for (NdfModel m : models)

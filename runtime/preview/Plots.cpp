@@ -5,13 +5,14 @@
 // draws it on a PlotCanvas (ImageBufAlgo).
 #include "Plots.h"
 
+#include "Color.h"
 #include "PlotCanvas.h"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <exception>
+#include <fmt/format.h>
 #include <limits>
 #include <numbers>
 
@@ -62,20 +63,7 @@ Stroke curveStroke(size_t i, double fontSize) {
     return s;
 }
 
-// Rec. 709 / sRGB luminance of linear rgb.
-double luminance(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
-
 double thetaAt(int k) { return -90.0 + 180.0 * k / (kSamples - 1); }
-
-std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
-std::string format(const char* fmt, ...) {
-    char buf[256];
-    va_list args;
-    va_start(args, fmt);
-    std::vsnprintf(buf, sizeof buf, fmt, args);
-    va_end(args);
-    return buf;
-}
 
 // Label text size for a canvas: ~15 px at the default 960 x 600, in
 // proportion to the smaller of width and (wide-screen) height.
@@ -91,7 +79,7 @@ void shrinkOrDropText(double& fontSize, bool& text) {
 
 std::string checkSize(int width, int height) {
     if (width < kMinSize || height < kMinSize || width > kMaxSize || height > kMaxSize)
-        return format("plot size %d x %d is outside %d .. %d pixels per side", width, height, kMinSize, kMaxSize);
+        return fmt::format("plot size {} x {} is outside {} .. {} pixels per side", width, height, kMinSize, kMaxSize);
     return "";
 }
 
@@ -111,13 +99,14 @@ void noteUnusableFont(const PlotCanvas& canvas, const std::string& font, std::st
 
 void noteNoRoomForText(const PlotCanvas& canvas, bool textDrawn, std::string& warning) {
     if (canvas.hasFont() && !textDrawn)
-        warning = format("%d x %d pixels is too small for legible labels: the plot is drawn without text",
+        warning = fmt::format("{} x {} pixels is too small for legible labels: the plot is drawn without text",
                          canvas.width(), canvas.height());
 }
 
-// "30°" where the font draws the degree sign, else "30 deg".
-std::string degrees(const PlotCanvas& canvas, double value, const char* fmt = "%.0f") {
-    return format(fmt, value) + (canvas.rendersDegreeSign() ? "\xC2\xB0" : " deg");
+// "30°" where the font draws the degree sign, else "30 deg" (`number` is
+// the formatted angle).
+std::string degrees(const PlotCanvas& canvas, const std::string& number) {
+    return number + (canvas.rendersDegreeSign() ? "\xC2\xB0" : " deg");
 }
 
 // ---- lobe plot --------------------------------------------------------
@@ -133,9 +122,9 @@ std::string checkLobeOptions(const LobePlotOptions& o, const std::string& path) 
     if (path.empty()) return "no output path for the lobe plot";
     if (std::string e = checkSize(o.width, o.height); !e.empty()) return e;
     if (o.incidentDegrees.empty()) return "the lobe plot needs at least one incident angle";
-    if (o.incidentDegrees.size() > kMaxLobes) return format("the lobe plot draws at most %zu incident angles", kMaxLobes);
+    if (o.incidentDegrees.size() > kMaxLobes) return fmt::format("the lobe plot draws at most {} incident angles", kMaxLobes);
     for (double t : o.incidentDegrees)
-        if (!(t >= 0 && t < 90)) return format("incident angle theta_i = %g is outside [0, 90) degrees", t);
+        if (!(t >= 0 && t < 90)) return fmt::format("incident angle theta_i = {:g} is outside [0, 90) degrees", t);
     return "";
 }
 
@@ -179,9 +168,9 @@ LobeCurve evaluateLobe(const Kernel& kernel, double thetaI, int64_t& invalid) {
 constexpr const char* kLobeNote = "radius: luminance(f) cos(theta_o) / peak (f in 1/sr); dashed: incident direction";
 
 std::string lobeLegendText(const PlotCanvas& canvas, const LobeCurve& c) {
-    std::string head = "theta_i = " + degrees(canvas, c.thetaI, "%g");
+    std::string head = "theta_i = " + degrees(canvas, fmt::format("{:g}", c.thetaI));
     if (c.peak <= 0) return head + ": zero";
-    return head + format(": peak %.3g at theta_o = ", c.peak) + degrees(canvas, thetaAt(c.peakIndex), "%g");
+    return head + fmt::format(": peak {:.3g} at theta_o = ", c.peak) + degrees(canvas, fmt::format("{:g}", thetaAt(c.peakIndex)));
 }
 
 // Returns whether the labels fitted (false: drawn without text).
@@ -200,7 +189,7 @@ bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, cons
     for (;;) {
         margin = text ? fs : 4;
         titleH = text && !title.empty() ? 2.4 * fs : 0;
-        angleLabelW = text ? canvas.textWidth(degrees(canvas, -90), 0.9 * fs) + 0.6 * fs : 0;
+        angleLabelW = text ? canvas.textWidth(degrees(canvas, "-90"), 0.9 * fs) + 0.6 * fs : 0;
         angleLabelH = text ? 1.5 * fs : 0;
         radiusLabelH = text ? 1.5 * fs : 0;
         noteH = text ? 1.6 * fs : 0;
@@ -241,7 +230,7 @@ bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, cons
         // theta_o labels every 30 degrees just outside the disk (signed: the
         // incident side is negative), the +-90 ones beside the surface ends.
         for (int a = -90; a <= 90; a += 30) {
-            std::string s = degrees(canvas, a);
+            std::string s = degrees(canvas, fmt::format("{}", a));
             if (std::abs(a) == 90) {
                 Point p{centre.x + (a < 0 ? -1 : 1) * (R + overhang + 0.3 * fs), centre.y};
                 canvas.text(p, s, 0.9 * fs, kMuted, a < 0 ? HAlign::Right : HAlign::Left, VAlign::Center);
@@ -292,7 +281,7 @@ std::string checkNdfInputs(const std::vector<NdfCurve>& curves, const NdfPlotOpt
     if (path.empty()) return "no output path for the NDF plot";
     if (std::string e = checkSize(o.width, o.height); !e.empty()) return e;
     if (curves.empty()) return "the NDF plot needs at least one curve";
-    if (curves.size() > kMaxNdfCurves) return format("the NDF plot draws at most %zu curves", kMaxNdfCurves);
+    if (curves.size() > kMaxNdfCurves) return fmt::format("the NDF plot draws at most {} curves", kMaxNdfCurves);
     for (const NdfCurve& c : curves) {
         if (c.ndf.ndf == NdfModel::Ward)
             return "ward is a whole BRDF lobe without a microfacet distribution D(m) (plot it with --plot lobe)";
@@ -303,8 +292,8 @@ std::string checkNdfInputs(const std::vector<NdfCurve>& curves, const NdfPlotOpt
 
 // "1e-3", "0.01", "0.1", "1", "10", "100", "1e3": plain where short.
 std::string decadeLabel(int k) {
-    if (k >= -2 && k <= 2) return format("%g", std::pow(10.0, k));
-    return format("1e%d", k);
+    if (k >= -2 && k <= 2) return fmt::format("{:g}", std::pow(10.0, k));
+    return fmt::format("1e{}", k);
 }
 
 // A 1-2-5 step that cuts [0, top] into about five intervals.
@@ -355,7 +344,7 @@ bool drawNdfPlot(PlotCanvas& canvas, const std::vector<NdfCurve>& curves,
         for (int k = int(std::lround(std::log10(y.bottom))); k <= int(std::lround(std::log10(y.top))); ++k)
             yTicks.emplace_back(std::pow(10.0, k), decadeLabel(k));
     } else {
-        for (int i = 0; i * y.step <= y.top * (1 + 1e-9); ++i) yTicks.emplace_back(i * y.step, format("%g", i * y.step));
+        for (int i = 0; i * y.step <= y.top * (1 + 1e-9); ++i) yTicks.emplace_back(i * y.step, fmt::format("{:g}", i * y.step));
     }
 
     double x0, x1, y0, y1, swatchW, legendW, legendRowH;
@@ -424,7 +413,7 @@ bool drawNdfPlot(PlotCanvas& canvas, const std::vector<NdfCurve>& curves,
     for (const auto& [v, label] : yTicks)
         canvas.text({x0 - 0.6 * fs, Y(v)}, label, 0.9 * fs, kInk, HAlign::Right, VAlign::Center);
     for (int a = -90; a <= 90; a += 30)
-        canvas.text({X(a), y1 + 0.6 * fs}, format("%d", a), 0.9 * fs, kInk, HAlign::Center, VAlign::Top);
+        canvas.text({X(a), y1 + 0.6 * fs}, fmt::format("{}", a), 0.9 * fs, kInk, HAlign::Center, VAlign::Top);
     canvas.text({(x0 + x1) / 2, y1 + 2.2 * fs}, "theta_m (" + std::string(canvas.rendersDegreeSign() ? "\xC2\xB0" : "degrees") +
                                              ") in the x-z plane",
                 0.9 * fs, kMuted, HAlign::Center, VAlign::Top);
@@ -479,7 +468,9 @@ ResolvedMaterial<double> ndfAtAlpha(NdfModel model, double alpha, double gtrGamm
         case NdfModel::Ggx:
         case NdfModel::Beckmann:
         case NdfModel::Ward: break;
-        case NdfModel::BlinnPhong: r.exponent = std::clamp(2 / (a * a) - 2, 0.0, kMaxPhongExponent); break;
+        case NdfModel::BlinnPhong:  // the language's own beckmann_to_phong(alpha)
+            r.exponent = std::clamp(applyBuiltin<double>(BuiltinFn::BeckmannToPhong, &a), 0.0, kMaxPhongExponent);
+            break;
         case NdfModel::Gtr: r.gamma = std::max(gtrGamma, 0.0); break;
         case NdfModel::Gaussian: r.gaussianNorm = gaussianNdfNorm(a); break;
     }

@@ -176,14 +176,14 @@ struct RowBatch {
 class SphereShader {
 public:
     SphereShader(const Kernel& kernel, const SphereScene& scene)
-        : kernel_(kernel), scene_(scene), camera_(scene), light_(sphericalDirection(scene.lightThetaDeg, scene.lightPhiDeg)),
+        : scene_(scene), camera_(scene), light_(sphericalDirection(scene.lightThetaDeg, scene.lightPhiDeg)),
           alpha_(samplingRoughness(kernel)),
           cosineSamples_(scene.sky == SkyModel::None ? 0 : (scene.skySamples + 1) / 2),
           ggxSamples_(scene.sky == SkyModel::None ? 0 : scene.skySamples / 2) {}
 
     int lanesPerPixel() const { return 1 + cosineSamples_.size() + ggxSamples_.size(); }
 
-    // Fills `batch` with the lanes of row y; returns the covered pixel count.
+    // Fills `batch` with the lanes of the covered pixels of row y.
     void buildRow(int y, RowBatch& batch) const {
         batch.clear();
         double R = camera_.radiusPixels();
@@ -215,8 +215,6 @@ public:
             lane += per;
         }
     }
-
-    const Kernel& kernel() const { return kernel_; }
 
 private:
     void pushPixel(Vec n, uint64_t pixelIndex, RowBatch& batch) const {
@@ -278,7 +276,6 @@ private:
         }
     }
 
-    const Kernel& kernel_;
     const SphereScene& scene_;
     Camera camera_;
     Vec light_;
@@ -297,8 +294,6 @@ double acesFilmic(double x) {
     x = std::max(0.0, x);
     return std::clamp(x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
 }
-
-double luminance(const float rgb[3]) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
 
 std::string validateScene(const SphereScene& s) {
     if (s.size < 8 || s.size > 16384) return fmt::format("image size {} is outside 8 .. 16384", s.size);
@@ -365,21 +360,23 @@ std::string writeSphereImage(const SphereImage& image, const SphereScene& scene,
     OIIO::ImageSpec spec(n, n, linear ? 4 : 3, OIIO::TypeDesc::FLOAT);
     if (linear) spec.alpha_channel = 3;
     spec.attribute("Software", "facet render");
-    OIIO::ImageBuf buf(spec);
     double exposure = std::exp2(scene.exposureEv);
     constexpr double kBackground = 0.22;  // display-referred grey behind the sphere
-    std::vector<float> px(linear ? 4 : 3);
+    int channels = spec.nchannels;
+    // The pixels in one buffer, handed to OpenImageIO at once (not a setpixel per pixel).
+    std::vector<float> pixels(size_t(n) * n * channels);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
             float cov = image.coverage[size_t(y) * n + x];
+            float* px = &pixels[(size_t(y) * n + x) * channels];
             for (int c = 0; c < 3; ++c) {
                 double L = image.at(x, y, c);
                 px[c] = linear ? float(L * cov)
                                : float(srgbEncode(cov * acesFilmic(L * exposure) + (1 - cov) * kBackground));
             }
             if (linear) px[3] = cov;
-            buf.setpixel(x, y, px.data(), int(px.size()));
         }
+    OIIO::ImageBuf buf(spec, pixels.data());  // wraps the buffer; written below, before it goes away
     if (!buf.write(path, linear ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8))
         return fmt::format("cannot write '{}': {}", path, buf.geterror());
     return "";

@@ -23,6 +23,7 @@
 // (tangent, bitangent, normal).
 #pragma once
 
+#include "Color.h"
 #include "Kernel.h"
 
 #include <array>
@@ -86,6 +87,5 @@ std::optional<std::array<double, 2>> highlightPixel(const SphereScene& scene);
 // The tone curve applied to PNG output (linear in, display-referred out,
 // before sRGB encoding); exposed for the tests.
 double acesFilmic(double x);
-double luminance(const float rgb[3]);
 
 }  // namespace facet::preview
