@@ -110,6 +110,7 @@ int main(int argc, char** argv) {
                 lo.energyTable = kernel->energyTable().get();
                 lo.math = options.math;
                 lo.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
+                lo.variant.floatFirst = options.floatFirst;
                 lo.width = options.backend == Backend::Simd ? kernel->width() : 4;
                 lo.emitScalar = options.backend == Backend::Scalar;
                 lo.emitBatch = options.backend == Backend::Simd;

@@ -223,6 +223,10 @@ std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) 
         } else if (key == "width") {
             if (value == "4" || value == "8" || value == "16") out.width = std::stoi(value);
             else return fmt::format("width '{}' is not 4, 8 or 16", value);
+        } else if (key == "float_first") {
+            if (value == "on") out.floatFirst = true;
+            else if (value == "off") out.floatFirst = false;
+            else return fmt::format("float_first '{}' is not on or off", value);
         } else if (key == "cache") {
             if (value == "on") out.cache = Cache::On;
             else if (value == "off") out.cache = Cache::Off;
@@ -243,7 +247,7 @@ std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) 
                 return fmt::format("{}: expected one value or three (r,g,b)", key);
             out.bindings[key.substr(4)] = values;
         } else {
-            return fmt::format("unknown option '{}' (known: backend, math, tolerance, width, cache, set.NAME)", key);
+            return fmt::format("unknown option '{}' (known: backend, math, tolerance, width, cache, float_first, set.NAME)", key);
         }
     }
     return "";
@@ -252,6 +256,7 @@ std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) 
 std::string CompileOptions::canonical() const {
     std::string s = fmt::format("backend={};math={};width={}", backendName(backend), mathModeName(math), width);
     if (tolerance) s += fmt::format(";tolerance={}", *tolerance);
+    if (!floatFirst) s += ";float_first=off";
     for (const auto& [name, values] : bindings) {
         s += ";set." + name + "=";
         for (size_t i = 0; i < values.size(); ++i) s += fmt::format("{}{}", i ? "," : "", values[i]);
@@ -365,6 +370,7 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
     lowering.energyTable = kernel->energyTable_.get();
     lowering.math = options.math;
     lowering.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
+    lowering.variant.floatFirst = options.floatFirst;
     lowering.width = options.backend == Backend::Simd ? kernel->width_ : 4;
     lowering.emitScalar = options.backend == Backend::Scalar;
     lowering.emitBatch = options.backend == Backend::Simd;
@@ -437,12 +443,14 @@ void Compiler::link(Kernel& kernel, const std::string& object, const std::string
 
 CachedKernel Compiler::searchVariants(const CheckedMaterial& material, LoweringOptions lowering, double tolerance,
                                       const std::string& prefix) {
+    const bool floatFirst = lowering.variant.floatFirst;
     // Fastest first; the first whose measured error meets the tolerance wins.
     // Exact is always last: if even it does not meet the tolerance, it is
     // returned with its (larger) measured error for the caller to report.
     CachedKernel best;
     for (const MathVariant& v : toleranceCandidates(material)) {
         lowering.variant = v;
+        lowering.variant.floatFirst = floatFirst;
         CachedKernel candidate{compileObject(material, lowering, prefix), v.name(), 0.0};
         Kernel probe;
         probe.material_ = material;
@@ -473,6 +481,7 @@ std::string Compiler::irText(const std::string& path, const std::string& name, c
     lowering.energyTable = table.get();
     lowering.math = options.math;
     lowering.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
+    lowering.variant.floatFirst = options.floatFirst;
     lowering.width = simd ? resolveWidth(options) : 4;
     lowering.emitScalar = !simd;
     lowering.emitBatch = simd;

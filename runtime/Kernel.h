@@ -8,7 +8,7 @@
 // Options (SPEC section 4) are "key=value" pairs separated by ';':
 //   backend=scalar|simd|interp   math=exact|fast   tolerance=X
 //   width=4|8|16                 set.NAME=VALUE (rgb: set.NAME=r,g,b)
-//   cache=on|off|memory
+//   cache=on|off|memory          float_first=on|off
 #pragma once
 
 #include "Lowering.h"
@@ -54,6 +54,11 @@ struct CompileOptions {
     int width = 0;  // 0: the host's natural width
     InputBindings bindings;
     enum class Cache { On, Off, Memory } cache = Cache::On;
+    // math=exact SIMD kernels: evaluate in float where the lane is
+    // well-conditioned and in double elsewhere (MathVariant::floatFirst).
+    // Off: double wherever float rounding could be amplified, as the scalar
+    // kernel (then scalar and SIMD agree within 4 ulp).
+    bool floatFirst = true;
 
     // Parses the ';'-separated option string; returns an error message or "".
     static std::string parse(const std::string& spec, CompileOptions& out);

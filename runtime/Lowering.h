@@ -8,7 +8,9 @@
 // loop over full vectors, then one masked remainder step) and returns the
 // number of invalid lanes. Both entry points are generated from the same
 // per-lane emitter, instantiated once with float and once with <W x float>,
-// so scalar and SIMD compute the same formulas.
+// so scalar and SIMD compute the same formulas -- except that an exact batch
+// kernel may be float-first (MathVariant::floatFirst): a guarded float body
+// for the well-conditioned lanes, the precise body for the others.
 //
 // The per-lane formulas follow SPEC section 3 but are written for float:
 // sin^2 from components, Lambda forms that do not cancel, pow and the GTR
@@ -40,6 +42,11 @@ struct MathVariant {
     bool shortPolynomials = false;  // exp/log/atan2 polynomials for ~1e-6 instead of 1 ulp
     bool walterLambda = false;      // Beckmann / Blinn-Phong Smith Lambda: Walter et al. 2007 rational fit
     bool schlickDielectric = false; // dielectric(eta) evaluated as Schlick with f0 from eta
+    // With `precise`: evaluate each lane first in float (IEEE division and
+    // sqrt, the exact polynomials) and keep that value only where the lane is
+    // well-conditioned (guards below); every other lane is recomputed in the
+    // precise body. Applies to the materials floatFirstApplies() accepts.
+    bool floatFirst = true;
 
     static MathVariant exact() { return {}; }
     static MathVariant fast() { return {false, true, true, false, false}; }
@@ -48,6 +55,13 @@ struct MathVariant {
 };
 
 class EnergyTable;
+
+// Whether a kernel of `variant` for `material` is built float-first: GGX
+// (isotropic or anisotropic) with any masking, no Fresnel, Schlick with f0,
+// or a dielectric/conductor with well-conditioned constant parameters, and
+// no energy compensation. (The material's expressions are evaluated in
+// double in both bodies.)
+bool floatFirstApplies(const CheckedMaterial& material, const MathVariant& variant);
 
 struct LoweringOptions {
     // energy = kulla_conty: the E table of the material's NDF x masking,

@@ -19,7 +19,9 @@ typedef struct facet_kernel facet_kernel;
 
 /* options: "key=value" pairs separated by ';' -- backend=scalar|simd|interp,
    math=exact|fast, tolerance=1e-4, width=4|8|16, set.NAME=VALUE (rgb:
-   set.NAME=r,g,b), cache=on|off|memory. NULL or "" = defaults (simd, exact,
+   set.NAME=r,g,b), cache=on|off|memory, float_first=on|off (exact SIMD:
+   float where the lane is well-conditioned, double elsewhere; default on).
+   NULL or "" = defaults (simd, exact,
    the host's width). NULL material = the first in the file. On failure
    returns NULL and writes the diagnostic ("file:line:col: error: ...") into
    err (truncated to err_len, always NUL-terminated when err_len > 0). */
