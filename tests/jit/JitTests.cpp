@@ -186,8 +186,10 @@ TEST_CASE("cache keys separate options and bound values") {
     auto k1 = compile(c, kGold, "backend=simd;cache=memory;set.roughness=0.2");
     auto k2 = compile(c, kGold, "backend=simd;cache=memory;set.roughness=0.3");
     auto k3 = compile(c, kGold, "backend=simd;cache=memory;width=8");
+    auto k4 = compile(c, kGold, "backend=simd;cache=memory;set.roughness=0.2;float_first=off");
     CHECK(k2->origin() == "compiled");
     CHECK(k3->origin() == "compiled");
+    CHECK(k4->origin() == "compiled");
     CHECK(k3->width() == 8);
     float n[3] = {0, 0, 1}, a[3], b[3];
     k1->eval(n, n, nullptr, a);
@@ -253,6 +255,9 @@ TEST_CASE("option strings are validated") {
     CHECK(CompileOptions::parse("tolerance=-1", o) == "tolerance '-1' is not a positive number");
     CHECK(CompileOptions::parse("set.x=nan", o) == "set.x: 'nan' is not a finite number");
     CHECK(CompileOptions::parse("colour=red", o).find("unknown option 'colour'") == 0);
+    CHECK(CompileOptions::parse("float_first=off", o) == "");
+    CHECK_FALSE(o.floatFirst);
+    CHECK(CompileOptions::parse("float_first=maybe", o) == "float_first 'maybe' is not on or off");
     Compiler c;
     DiagnosticEngine d;
     CHECK(c.compileText(kGold, "t.mat", "", opts("set.shine=1"), d) == nullptr);
