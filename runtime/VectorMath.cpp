@@ -45,6 +45,12 @@ Value* MathEmitter::ge(Value* a, Value* x) { return b.CreateFCmpOGE(a, x); }
 Value* MathEmitter::eq(Value* a, Value* x) { return b.CreateFCmpOEQ(a, x); }
 Value* MathEmitter::isNan(Value* a) { return b.CreateFCmpUNO(a, a); }
 Value* MathEmitter::isFinite(Value* a) { return b.CreateFCmpOLT(abs(a), c(INFINITY)); }
+Value* MathEmitter::isNanInfOrNegative(Value* a) {
+    // Two compares: unordered a < 0 (NaN, -inf, negatives) or a = +inf.
+    // (llvm.is.fpclass would say it in one, but LLVM 19 expands it into
+    // integer operations instead of vfpclassps.)
+    return b.CreateOr(b.CreateFCmpULT(a, c(0.0)), b.CreateFCmpOEQ(a, c(INFINITY)));
+}
 
 Value* MathEmitter::intrinsic(llvm::Intrinsic::ID id, Value* a) { return b.CreateIntrinsic(id, {type_}, {a}); }
 Value* MathEmitter::intrinsic(llvm::Intrinsic::ID id, Value* a, Value* x) {

@@ -48,6 +48,8 @@ public:
     llvm::Value* eq(llvm::Value* a, llvm::Value* b);
     llvm::Value* isNan(llvm::Value* a);
     llvm::Value* isFinite(llvm::Value* a);
+    // NaN, +-inf or below zero (-0 is not).
+    llvm::Value* isNanInfOrNegative(llvm::Value* a);
     llvm::Value* abs(llvm::Value* a);
     llvm::Value* sqrt(llvm::Value* a);
     // min/max that propagate NaN from either operand.
