@@ -33,12 +33,13 @@ const char* mathModeName(MathMode m);
 
 // Which approximations a kernel uses. `exact` keeps every term at full float
 // accuracy (double where float rounding would be amplified); `fast` computes
-// everything in float with shorter polynomials and reciprocal/rsqrt
-// estimates refined by one Newton step. The two model substitutions change
-// the model the user named, so only a tolerance may enable them.
+// everything in float with shorter polynomials and lets the backend use
+// estimates refined by one Newton step where it can (see `estimates`). The
+// two model substitutions change the model the user named, so only a
+// tolerance may enable them.
 struct MathVariant {
     bool precise = true;            // geometry, exponents, exact Fresnel, parameters in double
-    bool estimates = false;         // division and sqrt by rcp/rsqrt estimate + 1 Newton step
+    bool estimates = false;         // x/sqrt(y) by an rsqrt estimate + 1 Newton step (Lowering.cpp)
     bool shortPolynomials = false;  // exp/log/atan2 polynomials for ~1e-6 instead of 1 ulp
     bool walterLambda = false;      // Beckmann / Blinn-Phong Smith Lambda: Walter et al. 2007 rational fit
     bool schlickDielectric = false; // dielectric(eta) evaluated as Schlick with f0 from eta
