@@ -54,10 +54,13 @@ struct CompileOptions {
     int width = 0;  // 0: the host's natural width
     InputBindings bindings;
     enum class Cache { On, Off, Memory } cache = Cache::On;
-    // math=exact SIMD kernels: evaluate in float where the lane is
-    // well-conditioned and in double elsewhere (MathVariant::floatFirst).
-    // Off: double wherever float rounding could be amplified, as the scalar
-    // kernel (then scalar and SIMD agree within 4 ulp).
+    // SIMD kernels with two bodies (MathVariant::floatFirst). math=exact:
+    // evaluate in float where the lane is well-conditioned and in double
+    // elsewhere; off: double wherever float rounding could be amplified, as
+    // the scalar kernel (then scalar and SIMD agree within 4 ulp).
+    // math=fast, isotropic GGX: the unscaled Smith forms where range guards
+    // allow them, the scaled forms elsewhere; off: the scaled forms, as the
+    // scalar kernel.
     bool floatFirst = true;
 
     // Parses the ';'-separated option string; returns an error message or "".

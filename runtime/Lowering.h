@@ -47,6 +47,12 @@ struct MathVariant {
     // sqrt, the exact polynomials) and keep that value only where the lane is
     // well-conditioned (guards below); every other lane is recomputed in the
     // precise body. Applies to the materials floatFirstApplies() accepts.
+    // Without `precise` (fast): evaluate each lane first with the unscaled
+    // Smith forms and D G / (4 ci co) as one fraction (two divisions
+    // instead of six), keep that value where the range guards show that no
+    // intermediate left float's normal range, and recompute the other lanes
+    // in the plain fast body, whose Smith forms are scaled. Applies to the
+    // materials guardedFastApplies() accepts.
     bool floatFirst = true;
 
     static MathVariant exact() { return {}; }
@@ -63,6 +69,9 @@ class EnergyTable;
 // no energy compensation. (The material's expressions are evaluated in
 // double in both bodies.)
 bool floatFirstApplies(const CheckedMaterial& material, const MathVariant& variant);
+// Whether a fast SIMD kernel of `variant` is built with the guarded fast
+// body (MathVariant::floatFirst): isotropic GGX, no energy compensation.
+bool guardedFastApplies(const CheckedMaterial& material, const MathVariant& variant);
 
 struct LoweringOptions {
     // energy = kulla_conty: the E table of the material's NDF x masking,

@@ -74,6 +74,36 @@ std::unique_ptr<Kernel> compile(Compiler& c, const std::string& text, const std:
     return k;
 }
 
+// A two-body SIMD kernel and its float_first=off twin on one random batch
+// (directions over the hemisphere, roughness from 0 to 1, both without
+// invalid lanes): the two-body kernel's worst relative error against the
+// interpreter, and how many channel values differ between the two kernels.
+struct TwoBodyRun {
+    double worst = 0;
+    size_t differing = 0, lanes = 0;
+};
+TwoBodyRun runTwoBodies(const Kernel& twoBody, const Kernel& oneBody, const char* text) {
+    DiagnosticEngine d;
+    CheckedProgram program = loadProgramText(text, "t.mat", d);
+    REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+    Interpreter<double> interp(program.materials[0], nullptr);
+    Batch a(1 << 14, 11), b(1 << 14, 11);
+    CHECK(a.run(twoBody) == 0);
+    CHECK(b.run(oneBody) == 0);
+    TwoBodyRun r;
+    r.lanes = a.n;
+    for (size_t i = 0; i < a.n; ++i) {
+        double wi[3] = {a.dir[0][i], a.dir[1][i], a.dir[2][i]}, wo[3] = {a.dir[3][i], a.dir[4][i], a.dir[5][i]};
+        double in[1] = {a.rough[i]};
+        EvalResult<double> ref = interp.eval(wi, wo, in);
+        for (int ch = 0; ch < 3; ++ch) {
+            r.differing += a.out[ch][i] != b.out[ch][i];
+            if (ref.rgb[ch] > 1e-30) r.worst = std::max(r.worst, std::fabs(a.out[ch][i] - ref.rgb[ch]) / ref.rgb[ch]);
+        }
+    }
+    return r;
+}
+
 // Instructions of the optimized module's kernel functions.
 size_t optimizedInstructionCount(const std::string& text, const InputBindings& bindings, bool simd) {
     DiagnosticEngine d;
@@ -331,6 +361,60 @@ TEST_CASE("exact Fresnel near a critical angle or N = 1 keeps exact-mode accurac
     MESSAGE("worst relative error near critical angles and N = 1: " << worst);
 }
 
+TEST_CASE("guarded fast SIMD: unscaled Smith forms where the range guards allow, the plain fast body elsewhere") {
+    const char* ggx = R"(material m {
+        input roughness = 0.4 in 0 .. 1;
+        let alpha = roughness * roughness;
+        ndf = ggx(alpha); masking = smith_height_correlated; fresnel = schlick(f0 = rgb(0.95, 0.64, 0.54)); })";
+    auto applies = [](const char* text, MathVariant variant = MathVariant::fast()) {
+        DiagnosticEngine d;
+        CheckedProgram p = loadProgramText(text, "t.mat", d);
+        REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+        return guardedFastApplies(p.materials[0], variant);
+    };
+    CHECK(applies(ggx));
+    CHECK(applies(kGold));  // fast mode computes the conductor in float anyway
+    CHECK_FALSE(applies(ggx, MathVariant::exact()));
+    CHECK_FALSE(applies("material m { input r = 0.5; ndf = beckmann(r); }"));
+    CHECK_FALSE(applies("material m { input r = 0.5; ndf = ggx(r, r * 0.5); }"));  // anisotropic
+    CHECK(applies("material m { ndf = ggx(0.3, 0.3); }"));                          // equal constants
+
+    Compiler c;
+    c.setCacheDir("");
+    auto guarded = compile(c, ggx, "backend=simd;width=16;math=fast;cache=off");
+    auto plain = compile(c, ggx, "backend=simd;width=16;math=fast;cache=off;float_first=off");
+
+    // The guarded body ran (its values differ from the plain body's in many
+    // lanes) and is within fast mode's accuracy (the plain body's worst is
+    // ~1e-5 here).
+    TwoBodyRun run = runTwoBodies(*guarded, *plain, ggx);
+    MESSAGE("guarded fast vs interpreter: worst relative error " << run.worst << "; " << run.differing
+                                                                 << " channel values differ from float_first=off");
+    CHECK(run.worst < 1e-4);
+    CHECK(run.differing > run.lanes / 4);
+
+    // Lanes the guards reject come from the plain body, bit for bit, and do
+    // not change their neighbours: a grazing lane (n.wi = 1e-8 < 1e-6) and
+    // an invalid one (NaN); a lane below the horizon is 0 in both bodies.
+    Batch g(16, 5);
+    g.run(*guarded);
+    std::vector<float> before[3] = {g.out[0], g.out[1], g.out[2]};
+    g.dir[0][5] = 1.0f, g.dir[1][5] = 0.0f, g.dir[2][5] = 1e-8f;
+    g.dir[4][9] = std::nanf("");
+    g.dir[2][12] = -g.dir[2][12];
+    CHECK(g.run(*guarded) == 1);
+    Batch h = g;
+    CHECK(h.run(*plain) == 1);
+    for (int ch = 0; ch < 3; ++ch) {
+        CHECK(g.out[ch][5] == h.out[ch][5]);
+        CHECK(g.out[ch][5] > 0.0f);
+        CHECK(g.out[ch][9] == 0.0f);
+        CHECK(g.out[ch][12] == 0.0f);
+        for (int lane = 0; lane < 16; ++lane)
+            if (lane != 5 && lane != 9 && lane != 12) CHECK(g.out[ch][lane] == before[ch][lane]);
+    }
+}
+
 TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the precise body elsewhere") {
     const char* ggx = R"(material m {
         input roughness = 0.4 in 0 .. 1;
@@ -353,30 +437,14 @@ TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the p
     auto floatFirst = compile(c, ggx, "backend=simd;width=16;cache=off");
     auto precise = compile(c, ggx, "backend=simd;width=16;cache=off;float_first=off");
     DiagnosticEngine d;
-    CheckedProgram program = loadProgramText(ggx, "t.mat", d);
-    Interpreter<double> interp(program.materials[0], nullptr);
 
-    // Random directions over the hemisphere, alpha from 0 to 1: the float
-    // values differ from the precise ones in many lanes (so the float body
-    // ran) and both stay within exact-mode accuracy of the interpreter.
-    Batch a(1 << 14, 11), b(1 << 14, 11);
-    CHECK(a.run(*floatFirst) == 0);
-    CHECK(b.run(*precise) == 0);
-    size_t differing = 0;
-    double worst = 0;
-    for (size_t i = 0; i < a.n; ++i) {
-        double wi[3] = {a.dir[0][i], a.dir[1][i], a.dir[2][i]}, wo[3] = {a.dir[3][i], a.dir[4][i], a.dir[5][i]};
-        double in[1] = {a.rough[i]};
-        EvalResult<double> ref = interp.eval(wi, wo, in);
-        for (int ch = 0; ch < 3; ++ch) {
-            differing += a.out[ch][i] != b.out[ch][i];
-            if (ref.rgb[ch] > 1e-30) worst = std::max(worst, std::fabs(a.out[ch][i] - ref.rgb[ch]) / ref.rgb[ch]);
-        }
-    }
-    MESSAGE("float-first vs interpreter: worst relative error " << worst << "; " << differing
+    // The float values differ from the precise ones in many lanes (so the
+    // float body ran) and stay within exact-mode accuracy of the interpreter.
+    TwoBodyRun run = runTwoBodies(*floatFirst, *precise, ggx);
+    MESSAGE("float-first vs interpreter: worst relative error " << run.worst << "; " << run.differing
                                                                 << " channel values differ from float_first=off");
-    CHECK(worst < 2e-6);
-    CHECK(differing > a.n / 4);
+    CHECK(run.worst < 2e-6);
+    CHECK(run.differing > run.lanes / 4);
 
     // The material's own arithmetic is evaluated in double in the float
     // body too: alpha = 0.5 - x^2 cancels at x = 0.707 (float: 1.3e-4 error).
