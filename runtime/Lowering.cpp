@@ -117,11 +117,17 @@ bool ndfIsIsotropic(const CheckedMaterial& mat) {
 
 class LaneEmitter {
 public:
-    // `guarded`: the float body of a float-first kernel (see
-    // emitLanes). It computes in float with IEEE division and sqrt and
+    // `guarded`: the first body of a two-body kernel (see emitLanes). It
     // reports, per lane, whether the value is untrusted: an invalid lane, or
-    // one outside the region where float rounding is known not to be
-    // amplified (the guards below, each next to the quantity it bounds).
+    // one outside the region its guards accept (each guard is next to the
+    // quantity it bounds); those lanes are recomputed by the other body.
+    // Two kinds, told apart by the variant:
+    //   - the float body of a float-first exact kernel (floatFirst_): IEEE
+    //     division and sqrt, double-corrected directions, and guards for
+    //     both accuracy and range;
+    //   - the guarded body of a fast kernel: the fast body's operations with
+    //     the unscaled Smith forms and one division for the lobe, which the
+    //     range guards make safe.
     LaneEmitter(const CheckedMaterial& m, const LoweringOptions& opt, llvm::IRBuilder<>& b, llvm::Type* F,
                 llvm::Module& module, bool guarded = false)
         : mat_(m), opt_(opt), b_(b), f_(b, F, opt.variant.shortPolynomials),
