@@ -162,7 +162,7 @@ public:
     struct Result {
         std::array<Value*, 3> rgb;
         Value* invalid;
-        Value* untrusted;  // guarded body: lanes to recompute in the precise body (includes invalid ones)
+        Value* untrusted;  // guarded body: lanes to recompute in the other body (includes invalid ones)
     };
 
     Result emit(std::array<Value*, 3> wi, std::array<Value*, 3> wo, const std::vector<Value*>& slots) {
@@ -298,10 +298,10 @@ public:
         // and an invalid lane's value is 0. The guarded body needs neither:
         // its invalid lanes are untrusted, so their value and status come
         // from the precise body, and where its guards bound the value of
-        // every trusted lane (outputBoundedByGuards_) no trusted lane can be
+        // every trusted lane (outputBoundedByGuards()) no trusted lane can be
         // NaN, Inf or negative. (4 compares, ors and selects per channel
         // fewer on the hot path.)
-        if (!outputBoundedByGuards_)
+        if (!outputBoundedByGuards())
             for (Value*& x : r.rgb) markInvalid(m.isNanInfOrNegative(x));
         if (!guarded_)
             for (Value*& x : r.rgb) x = m.select(invalid_, m.c(0.0), x);
@@ -322,7 +322,10 @@ private:
         return b_.getInt1Ty();
     }
     void markInvalid(Value* cond) { invalid_ = b_.CreateOr(invalid_, cond); }
-    // Guarded body only: the lanes where `cond` holds are recomputed in the precise body.
+    // Guarded body: every trusted lane's value is finite and >= 0, by the
+    // guards on the lobe and F in brdf(), when no diffuse term is added.
+    bool outputBoundedByGuards() const { return guarded_ && mat_.diffuseModel() != DiffuseModel::Lambert; }
+    // Guarded body only: the lanes where `cond` holds are recomputed in the kernel's other body.
     void distrust(Value* cond) {
         if (guarded_) untrusted_ = b_.CreateOr(untrusted_, cond);
     }
@@ -678,9 +681,9 @@ private:
                     Value* a2 = m.mul(n.ax, n.ax);
                     Value* t = m.fma(a2, m.mul(h[2], h[2]), m.fma(h[0], h[0], m.mul(h[1], h[1])));
                     Value* D = m.div(m.mul(a2, m.c(1.0 / kPi)), m.mul(t, t));
-                    // Guarded float body: D/4 also as a fraction, so that the
-                    // lobe divides once (see quarterDOver). a^2 = Inf there
-                    // gives a non-finite lobe: invalid, so recomputed.
+                    // Guarded body: D/4 also as a fraction, so that the lobe
+                    // divides once (see quarterDOver). a^2 = Inf there gives a
+                    // NaN lobe, which the lobe range guard rejects (brdf).
                     if (guarded_) quarterD_ = {nullptr, m.mul(a2, m.c(0.25 / kPi)), m.mul(t, t)};
                     // a^2 beyond float (alpha > 1.8e19): D < 1e-38 / mz^4 is 0, not Inf/Inf.
                     return d_.convert(m.select(m.isFinite(a2), D, m.c(0.0)), d_.type());
@@ -833,10 +836,11 @@ private:
     Value* gOverCosines(const Ndf& n, const Geometry& geo, Value* D) {
         MathEmitter& m = f_;
         MathEmitter& p = d_;
-        // The guarded float body may use the unscaled forms too: its guards
+        // A guarded body may use the unscaled forms too: its guards
         // (cosines >= 1e-6, lobe within [1e-20, 1e20]) keep ci co and the
         // sums far from float's subnormal range, and a lane where an
-        // intermediate overflowed is not finite and so recomputed.
+        // intermediate overflowed has a lobe outside that range, so it is
+        // recomputed.
         const bool wide = p.isDouble() || guarded_;
         const std::array<Value*, 3>&wi = geo.wi, &wo = geo.wo;
         Value *ci = geo.wiD[2], *co = geo.woD[2];
@@ -917,7 +921,7 @@ private:
     }
 
     // x / y; when x is D/4 known as a fraction num/den (quarterD_), num /
-    // (den y): one IEEE division instead of two in the guarded float body.
+    // (den y): one IEEE division instead of two in a guarded body.
     Value* quarterDOver(Value* x, Value* y) {
         MathEmitter& p = d_;
         if (quarterD_.value && x == quarterD_.value) return p.div(quarterD_.num, p.mul(quarterD_.den, y));
@@ -1286,7 +1290,6 @@ private:
             }
             distrust(b_.CreateAnd(above, bad));
             internal_assert(mat_.energyModel() == EnergyModel::None) << "a guarded body without energy compensation";
-            outputBoundedByGuards_ = !hasDiffuse;
         }
         LVal diffuse = LVal::scalar(d.c(0.0));
         if (hasDiffuse) {
@@ -1321,7 +1324,6 @@ private:
     const bool guarded_;
     const bool floatFirst_;        // guarded_, of a float-first exact kernel
     const bool floatExpressions_;  // guarded body: the material's expressions in float (exprEmitter)
-    bool outputBoundedByGuards_ = false;  // guarded body: every trusted lane's value is finite and >= 0 (brdf)
     struct { Value *value, *num, *den; } quarterD_{nullptr, nullptr, nullptr};  // value = num / den
     Value* invalid_;
     Value* untrusted_;
@@ -1382,11 +1384,13 @@ private:
 };
 
 // The lane body of the batch entry, for lanes of type `laneTy`
-// (<W x float>). A float-first kernel (floatFirstApplies) runs the guarded
-// float body and, only if some lane of the vector is untrusted, calls the
-// precise body and keeps its values for those lanes. Each lane's value is
-// decided by the lane alone, never by its neighbours in the vector, so a
-// direction pair gives the same result in any batch.
+// (<W x float>). A two-body kernel (floatFirstApplies: exact, guarded float
+// body and precise body; guardedFastApplies: fast, guarded body with the
+// unscaled Smith forms and the plain fast body) runs the guarded body and,
+// only if some lane of the vector is untrusted, calls the other body (named
+// .precise in both cases) and keeps its values for those lanes. Each lane's
+// value is decided by the lane alone, never by its neighbours in the vector,
+// so a direction pair gives the same result in any batch.
 LaneEmitter::Result emitLanes(const CheckedMaterial& mat, const LoweringOptions& opt, llvm::IRBuilder<>& b,
                               llvm::Type* laneTy, llvm::Module& module, const std::array<llvm::Value*, 3>& wi,
                               const std::array<llvm::Value*, 3>& wo, const std::vector<llvm::Value*>& slots) {
@@ -1395,7 +1399,7 @@ LaneEmitter::Result emitLanes(const CheckedMaterial& mat, const LoweringOptions&
         return lanes.emit(wi, wo, slots);
     }
     LoweringOptions floatOptions = opt;
-    floatOptions.variant.precise = false;
+    floatOptions.variant.precise = false;  // (a fast variant is not precise already)
     LaneEmitter floatLanes(mat, floatOptions, b, laneTy, module, /*guarded=*/true);
     LaneEmitter::Result fl = floatLanes.emit(wi, wo, slots);
 

@@ -8,9 +8,11 @@
 // loop over full vectors, then one masked remainder step) and returns the
 // number of invalid lanes. Both entry points are generated from the same
 // per-lane emitter, instantiated once with float and once with <W x float>,
-// so scalar and SIMD compute the same formulas -- except that an exact batch
-// kernel may be float-first (MathVariant::floatFirst): a guarded float body
-// for the well-conditioned lanes, the precise body for the others.
+// so scalar and SIMD compute the same formulas -- except that a batch kernel
+// may have two bodies (MathVariant::floatFirst): exact, a guarded float body
+// for the well-conditioned lanes and the precise body for the others; fast
+// (isotropic GGX), a guarded body with unscaled Smith forms and the plain
+// fast body for the lanes its range guards reject.
 //
 // The per-lane formulas follow SPEC section 3 but are written for float:
 // sin^2 from components, Lambda forms that do not cancel, pow and the GTR
@@ -67,7 +69,7 @@ class EnergyTable;
 // (isotropic or anisotropic) with any masking, no Fresnel, Schlick with f0,
 // or a dielectric/conductor with well-conditioned constant parameters, and
 // no energy compensation. (The material's expressions are evaluated in
-// double in both bodies.)
+// double in both bodies, unless they only multiply: see exprEmitter.)
 bool floatFirstApplies(const CheckedMaterial& material, const MathVariant& variant);
 // Whether a fast SIMD kernel of `variant` is built with the guarded fast
 // body (MathVariant::floatFirst): isotropic GGX, no energy compensation.
