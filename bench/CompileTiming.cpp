@@ -1,6 +1,7 @@
 // facet_compile_timing: cold JIT compile time and kernel speed, per material.
 //
-//   facet_compile_timing [--runs N] [--evals N] [--dump DIR] [--no-speed] FILE.mat...
+//   facet_compile_timing [--runs N] [--evals N] [--dump DIR] [--no-speed]
+//                        [--grazing] [--extra OPTIONS] FILE.mat...
 //
 // For every material and each of simd exact, simd fast and scalar exact it
 // prints the median (over --runs, default 11) cold compile time with
@@ -10,7 +11,11 @@
 // regular sample (scalar rows: 8192 lanes one by one through Kernel::eval).
 // With --dump DIR it writes the outputs of the regular and
 // hard-case samples to DIR/<material>.<row>.bin, to compare two builds bit
-// for bit (cmp). Times are CPU time of this thread (see BenchRunner.cpp).
+// for bit (cmp). --grazing puts every lane's wi at n.wi = 1e-7 (azimuth
+// kept), below the 1e-6 guard of the two-body kernels, so that every
+// vector runs both bodies; --extra appends OPTIONS (e.g. float_first=off)
+// to each row's option string. Times are CPU time of this thread (see
+// BenchRunner.cpp).
 #include "BenchSamples.h"
 #include "Checker.h"
 #include "Jit.h"
@@ -20,6 +25,7 @@
 #include <llvm/IR/LLVMContext.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -66,7 +72,8 @@ void dump(const std::string& path, const Kernel& k, const bench::Sample& s) {
 int main(int argc, char** argv) {
     int runs = 11;
     size_t evals = 65536;
-    bool speed = true;
+    bool speed = true, grazing = false;
+    std::string extra;
     std::string dumpDir;
     std::vector<std::string> files;
     for (int i = 1; i < argc; ++i) {
@@ -75,6 +82,8 @@ int main(int argc, char** argv) {
         else if (a == "--evals" && i + 1 < argc) evals = size_t(std::atoll(argv[++i]));
         else if (a == "--dump" && i + 1 < argc) dumpDir = argv[++i];
         else if (a == "--no-speed") speed = false;
+        else if (a == "--grazing") grazing = true;
+        else if (a == "--extra" && i + 1 < argc) extra = std::string(";") + argv[++i];
         else files.push_back(a);
     }
     Compiler compiler;
@@ -90,10 +99,19 @@ int main(int argc, char** argv) {
         }
         for (const CheckedMaterial& m : program.materials) {
             bench::Sample regular = bench::regularSample(m, evals, 1234);
+            if (grazing) {
+                for (size_t i = 0; i < regular.size(); ++i) {
+                    double x = regular.dir[0][i], y = regular.dir[1][i], r = std::hypot(x, y), z = 1e-7;
+                    double s = r > 0 ? std::sqrt(1 - z * z) / r : 0;
+                    regular.dir[0][i] = r > 0 ? float(x * s) : 1.0f;
+                    regular.dir[1][i] = float(y * s);
+                    regular.dir[2][i] = float(z);
+                }
+            }
             bench::Sample hard = bench::hardCaseSample(m);
             for (const Row& row : kRows) {
                 CompileOptions options;
-                std::string err = CompileOptions::parse(row.options, options);
+                std::string err = CompileOptions::parse(row.options + extra, options);
                 if (!err.empty()) return std::fprintf(stderr, "%s\n", err.c_str()), 2;
                 std::unique_ptr<Kernel> kernel = compiler.compileMaterial(m, options, diags);  // untimed warm-up
                 if (!kernel) return std::fprintf(stderr, "%s", diags.str().c_str()), 1;

@@ -1420,8 +1420,9 @@ LaneEmitter::Result emitLanes(const CheckedMaterial& mat, const LoweringOptions&
     // anisotropic GGX 24.3 -> 20.8 ms) and leaves the outputs bit-identical
     // and batches of untrusted lanes as fast as before (all lanes grazing:
     // GGX 9.0 ns/eval, anisotropic 13.6 ns/eval either way). A guarded fast
-    // kernel's plain body runs at -O0 as well: all lanes grazing, GGX fast
-    // takes 4.6 ns/eval for both bodies (plain body alone, float_first=off: 2.8).
+    // kernel's plain body runs at -O0 as well: all lanes grazing
+    // (facet_compile_timing --grazing), GGX fast takes 4.6 ns/eval for both
+    // bodies (plain body alone, --extra float_first=off: 2.7).
     std::vector<llvm::Type*> argTypes(6 + slots.size(), laneTy);
     llvm::Type* maskTy = fl.invalid->getType();
     auto* resultTy = llvm::StructType::get(ctx, {laneTy, laneTy, laneTy, maskTy});
