@@ -1013,6 +1013,8 @@ private:
             case FresnelModel::Conductor: {
                 MathEmitter& d = exactFresnelInFloat(mat_) ? f_ : d_;
                 bool inFloat = &d == &f_;
+                // Bounded constants in float: one division per channel, not three.
+                bool oneDivisionFloat = exactFresnelInFloat(mat_) && !d.isDouble();
                 Value* dOne = d.c(1.0);
                 Value* c = fresnelCos(d, geo);
                 LVal eta = rgbParam(use, param::ConductorEta, kMinEta, maxFresnelIndex(), inFloat);
@@ -1041,28 +1043,53 @@ private:
                     // sqrt((|z| + |zr|)/2), the other as ei / (2 larger).
                     Value* mod = d.sqrt(d.fma(zr, zr, d.mul(ei, ei)));
                     Value* right = d.ge(zr, d.c(0.0));
-                    Value* major = d.sqrt(d.mul(d.c(0.5), d.add(mod, d.abs(zr))));
-                    Value* minor = d.select(d.gt(major, d.c(0.0)), d.div(ei, d.mul(d.c(2.0), major)), d.c(0.0));
-                    Value* gr = d.select(right, major, minor);
-                    Value* gi = d.select(right, minor, major);
-                    Value* cg = d.add(c, gr);
-                    Value* rsDen = d.fma(cg, cg, d.mul(gi, gi));                 // |c + g|^2
+                    Value* majorSq = d.mul(d.c(0.5), d.add(mod, d.abs(zr)));
+                    Value* major = d.sqrt(majorSq);
                     Value* q1r = d.fma(n2k2, c2, d.neg(s2));                     // N^2 c^2 - s2
                     Value* q1i = d.mul(ei, c2);
-                    Value* q2r = d.fma(n2k2, c, gr);                             // N^2 c + g
-                    Value* q2i = d.fma(ei, c, gi);
-                    Value* rpDen = d.fma(q2r, q2r, d.mul(q2i, q2i));
-                    // In double one division serves both: 1/rsDen = rpDen q, 1/rpDen =
-                    // rsDen q (rsDen ~ |N|^2 and rpDen ~ |N|^6 at most: their product
-                    // stays finite). In float (|N| up to 1e9 in fast mode) it would not.
-                    Value *invRs, *invRp;
-                    if (d.isDouble()) {
-                        Value* q = d.div(dOne, d.mul(rsDen, rpDen));
-                        invRs = d.mul(rpDen, q);
-                        invRp = d.mul(rsDen, q);
+                    Value *invRs, *invRp;  // 1/|c + g|^2, 1/|N^2 c + g|^2
+                    if (oneDivisionFloat) {
+                        // Everything scaled by 2 major, G = 2 major g = (2 major^2, ei)
+                        // or (ei, 2 major^2): the minor part needs no division, and
+                        // S = 4 major^2 |c + g|^2, P = 4 major^2 |N^2 c + g|^2 share
+                        // one: 1/|c + g|^2 = 4 major^2 P / (S P). In range because
+                        // exactFresnelInFloat bounds the constants: major^2 >= |g^2|/2
+                        // >= 0.05, |c + g|^2 >= |g|^2 (Re g, c >= 0) and
+                        // |N^2 c + g|^2 >= |g|^2 (Re(conj(N^2) g) >= 0: arg g lies
+                        // between arg N^2 / 2 and pi/2), so S P >= 4e-4; and with
+                        // eta, k <= 1e3, S P <= 6e32 < FLT_MAX.
+                        Value* twoMajorSq = d.add(majorSq, majorSq);
+                        Value* Gr = d.select(right, twoMajorSq, ei);
+                        Value* Gi = d.select(right, ei, twoMajorSq);
+                        Value* cs = d.mul(d.add(major, major), c);
+                        Value* sr = d.add(cs, Gr);
+                        Value* S = d.fma(sr, sr, d.mul(Gi, Gi));
+                        Value* pr = d.fma(n2k2, cs, Gr);
+                        Value* pi = d.fma(ei, cs, Gi);
+                        Value* P = d.fma(pr, pr, d.mul(pi, pi));
+                        Value* q = d.div(d.add(twoMajorSq, twoMajorSq), d.mul(S, P));
+                        invRs = d.mul(P, q);
+                        invRp = d.mul(S, q);
                     } else {
-                        invRs = d.div(dOne, rsDen);
-                        invRp = d.div(dOne, rpDen);
+                        Value* minor = d.select(d.gt(major, d.c(0.0)), d.div(ei, d.mul(d.c(2.0), major)), d.c(0.0));
+                        Value* gr = d.select(right, major, minor);
+                        Value* gi = d.select(right, minor, major);
+                        Value* cg = d.add(c, gr);
+                        Value* rsDen = d.fma(cg, cg, d.mul(gi, gi));                 // |c + g|^2
+                        Value* q2r = d.fma(n2k2, c, gr);                             // N^2 c + g
+                        Value* q2i = d.fma(ei, c, gi);
+                        Value* rpDen = d.fma(q2r, q2r, d.mul(q2i, q2i));
+                        // In double one division serves both: 1/rsDen = rpDen q, 1/rpDen =
+                        // rsDen q (rsDen ~ |N|^2 and rpDen ~ |N|^6 at most: their product
+                        // stays finite). In float (|N| up to 1e9 in fast mode) it would not.
+                        if (d.isDouble()) {
+                            Value* q = d.div(dOne, d.mul(rsDen, rpDen));
+                            invRs = d.mul(rpDen, q);
+                            invRp = d.mul(rsDen, q);
+                        } else {
+                            invRs = d.div(dOne, rsDen);
+                            invRp = d.div(dOne, rpDen);
+                        }
                     }
                     Value* rs = d.mul(d.mul(e2, invRs), invRs);
                     Value* rp = d.mul(d.mul(e2, invRp), d.mul(d.fma(q1r, q1r, d.mul(q1i, q1i)), invRp));
