@@ -2,14 +2,14 @@
 //
 // Every function here is written once against IRBuilder and works for any
 // floating type the builder is given: float or double, scalar or a vector of
-// any width. That is how the SIMD kernels keep exp, log, pow, erfc and atan2
+// any width. That is how the SIMD kernels keep exp, log, pow, erfcx and atan2
 // vectorized (no per-lane calls into scalar libm) and how the scalar kernel
 // gets the very same formulas, so scalar and SIMD agree bit for bit.
 //
 // Accuracy (exact mode), measured against long double in tests/jit/MathTests:
 //   exp, log (float): <= 1 ulp;  log1p (float): <= 2 ulp
 //   pow  (float, computed through double log/exp): <= 1 ulp
-//   erfc (float): <= 5e-7 relative (fit 1.2e-7 + rounding) while erfc(x) is a normal float (x <= 9)
+//   erfcx (float, 0 <= x <= 4): fit 1.0e-9 relative + rounding
 //   atan2 (float): <= 3 ulp
 #pragma once
 
@@ -68,9 +68,8 @@ public:
     // pow with C semantics for the cases a material can reach: negative base
     // with an integer exponent, pow(x, 0) = 1, pow(0, y).
     llvm::Value* pow(llvm::Value* x, llvm::Value* y);
-    llvm::Value* erfc(llvm::Value* x);  // x >= 0
-    // exp(extra - x^2), accurate even where x^2 is large (Gaussian tails).
-    llvm::Value* expNegSquare(llvm::Value* x, llvm::Value* extra);
+    // exp(x^2) erfc(x), the scaled complementary error function, for 0 <= x <= 4.
+    llvm::Value* erfcx(llvm::Value* x);
     // atan2(y, x) for y >= 0, in [0, pi].
     llvm::Value* atan2(llvm::Value* y, llvm::Value* x);
     // 2^n for an integer-valued n in [-126, 127] given in this floating type.
