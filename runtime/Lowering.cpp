@@ -103,6 +103,29 @@ bool exactFresnelInFloat(const CheckedMaterial& mat) {
     return false;
 }
 
+// Whether Schlick's F is at least `bound` in every channel whatever the
+// angle: F = f0 + (1 - f0) q^5 with f0 in [0, 1] and q^5 >= 0 is never below
+// f0 (the fma of non-negative terms rounds to a value >= f0), so a constant
+// f0 >= bound (given, or from a constant eta) settles it at compile time.
+bool schlickFresnelAtLeast(const CheckedMaterial& mat, double bound) {
+    if (mat.fresnelModel() != FresnelModel::Schlick) return false;
+    const ModelUse& use = mat.fresnel;
+    if (use.has(param::F0)) {
+        const Expr& f0 = *use.args[param::F0];
+        if (!isConstantExpr(f0)) return false;
+        for (double v : constantValue(f0))
+            if (!(std::min(v, 1.0) >= bound)) return false;
+        return true;
+    }
+    const Expr& eta = *use.args[param::SchlickEta];
+    if (!isConstantExpr(eta)) return false;
+    for (double v : constantValue(eta)) {
+        double n = std::max(v, kMinEta), r = (n - 1) / (n + 1);
+        if (!(r * r >= bound)) return false;
+    }
+    return true;
+}
+
 // Whether the NDF's two alphas are one: one alpha (the checker's flag;
 // specialization may have copied the shared expression), or equal
 // constants. The isotropic forms save divisions.
@@ -1314,7 +1337,10 @@ private:
             bad = b_.CreateOr(bad, b_.CreateNot(b_.CreateAnd(d.ge(spec, d.c(1e-20)), d.le(spec, d.c(1e20)))));
             const bool fresnelAtMostOne = mat_.fresnelModel() == FresnelModel::Schlick ||
                                           mat_.fresnelModel() == FresnelModel::None;
-            for (int ch = 0; ch < (F.gray() ? 1 : 3); ++ch) {
+            // A Schlick F that cannot go below 1e-6 needs no guard at all
+            // (the saved compares and mask ors run on the loop's busiest port).
+            const bool fresnelGuarded = !schlickFresnelAtLeast(mat_, 1e-6);
+            for (int ch = 0; fresnelGuarded && ch < (F.gray() ? 1 : 3); ++ch) {
                 Value* inRange = d.ge(F.c[ch], d.c(1e-8));
                 if (!fresnelAtMostOne) inRange = b_.CreateAnd(inRange, d.le(F.c[ch], d.c(2.0)));
                 bad = b_.CreateOr(bad, b_.CreateNot(inRange));
