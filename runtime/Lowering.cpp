@@ -1038,10 +1038,10 @@ private:
                 });
             }
             case FresnelModel::Conductor: {
-                MathEmitter& d = exactFresnelInFloat(mat_) ? f_ : d_;
-                bool inFloat = &d == &f_;
-                // Bounded constants in float: one division per channel, not three.
-                bool oneDivisionFloat = exactFresnelInFloat(mat_) && !d.isDouble();
+                // Constants that exactFresnelInFloat bounds: float, and one
+                // division per channel instead of three (below).
+                const bool inFloat = exactFresnelInFloat(mat_);
+                MathEmitter& d = inFloat ? f_ : d_;
                 Value* dOne = d.c(1.0);
                 Value* c = fresnelCos(d, geo);
                 LVal eta = rgbParam(use, param::ConductorEta, kMinEta, maxFresnelIndex(), inFloat);
@@ -1075,7 +1075,7 @@ private:
                     Value* q1r = d.fma(n2k2, c2, d.neg(s2));                     // N^2 c^2 - s2
                     Value* q1i = d.mul(ei, c2);
                     Value *invRs, *invRp;  // 1/|c + g|^2, 1/|N^2 c + g|^2
-                    if (oneDivisionFloat) {
+                    if (inFloat) {
                         // Everything scaled by 2 major, G = 2 major g = (2 major^2, ei)
                         // or (ei, 2 major^2): the minor part needs no division, and
                         // S = 4 major^2 |c + g|^2, P = 4 major^2 |N^2 c + g|^2 share
