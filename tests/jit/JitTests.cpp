@@ -415,6 +415,45 @@ TEST_CASE("guarded fast SIMD: unscaled Smith forms where the range guards allow,
     }
 }
 
+TEST_CASE("guarded fast SIMD: Schlick's 1 - wo.h from |wi + wo| stays within fast accuracy near wi = wo") {
+    // The guarded fast body takes q = 1 - wo.h as 1 - |wi + wo|/2 when F is
+    // Schlick's with f0 >= 1e-6 (Lowering.cpp, cheapHalfVector): q then has
+    // an absolute error ~2e-7, which costs F at most 4 dq/q relative, ~1e-5
+    // at f0 = 1e-6 (q ~ 0.08). f0 = 0 keeps the cancellation-free form, whose
+    // error stays at float rounding as q -> 0 (the cheap form would give
+    // 5 dq/q there, 4e-5 at q = 0.025 where the F >= 1e-8 guard stops).
+    // Mirror directions wi = (s, 0, c), wo = (-s, 0, c): wo.h = c, q = 1 - c
+    // from 1e-7 to 0.4, on lanes 16 at a time.
+    Compiler c;
+    c.setCacheDir("");
+    for (const char* f0 : {"1e-6", "0"}) {
+        std::string text = fmt::format("material m {{ ndf = ggx(0.5); fresnel = schlick(f0 = {}); }}", f0);
+        DiagnosticEngine d;
+        CheckedProgram p = loadProgramText(text, "t.mat", d);
+        REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+        Interpreter<double> interp(p.materials[0]);
+        auto k = compile(c, text, "backend=simd;width=16;math=fast;cache=off");
+        Batch b(4096, 11);
+        for (size_t i = 0; i < b.n; ++i) {
+            double q = 1e-7 * std::pow(4e6, double(i) / double(b.n - 1));
+            double cosT = 1 - q, sinT = std::sqrt(q * (2 - q));
+            b.dir[0][i] = float(sinT), b.dir[1][i] = 0, b.dir[2][i] = float(cosT);
+            b.dir[3][i] = float(-sinT), b.dir[4][i] = 0, b.dir[5][i] = float(cosT);
+        }
+        CHECK(b.run(*k) == 0);
+        double worst = 0;
+        for (size_t i = 0; i < b.n; ++i) {
+            double wi[3] = {b.dir[0][i], b.dir[1][i], b.dir[2][i]}, wo[3] = {b.dir[3][i], b.dir[4][i], b.dir[5][i]};
+            EvalResult<double> want = interp.eval(wi, wo, nullptr);
+            REQUIRE(want.valid);
+            double rel = std::abs(b.out[0][i] - want.rgb[0]) / std::max(std::abs(want.rgb[0]), 1e-30);
+            worst = std::max(worst, rel);
+        }
+        MESSAGE("schlick f0 = " << std::string(f0) << ": worst relative error near wi = wo " << worst);
+        CHECK(worst < (std::string(f0) == "0" ? 5e-6 : 2e-5));
+    }
+}
+
 TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the precise body elsewhere") {
     const char* ggx = R"(material m {
         input roughness = 0.4 in 0 .. 1;
