@@ -454,6 +454,44 @@ TEST_CASE("guarded fast SIMD: Schlick's 1 - wo.h from |wi + wo| stays within fas
     }
 }
 
+TEST_CASE("beckmann with the half angle in float: near-opposite directions below float's |wi + wo|^2 range") {
+    // For beckmann with Schlick, |wi + wo|, wo.h and 1 - wo.h are computed in
+    // float in the double body (Lowering.cpp, halfAngleInFloat), with
+    // |wi + wo|^2 clamped to FLT_MIN; D takes wi + wo in double. Directions
+    // grazing from opposite sides, wi + wo = (0, 0, 2z), reach |wi + wo|^2 =
+    // 4e-74 where float has only 0: the values must still be the
+    // interpreter's, on every exact backend.
+    const char* text =
+        "material m { ndf = beckmann(0.3); masking = smith_separable; fresnel = schlick(f0 = 0.04); }";
+    DiagnosticEngine d;
+    CheckedProgram p = loadProgramText(text, "t.mat", d);
+    REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+    Interpreter<double> interp(p.materials[0]);
+    Compiler c;
+    c.setCacheDir("");
+    const float zs[] = {1e-3f, 1e-10f, 1e-19f, 1e-20f, 1e-25f, 1e-30f, 1e-37f};
+    for (const char* spec :
+         {"backend=scalar;cache=off", "backend=simd;width=16;cache=off", "backend=simd;width=8;cache=off"}) {
+        auto k = compile(c, text, spec);
+        Batch b(16, 5);
+        for (size_t i = 0; i < b.n; ++i) {
+            float z = zs[i % std::size(zs)], phi = 0.4f * float(i);
+            b.dir[0][i] = std::cos(phi), b.dir[1][i] = std::sin(phi), b.dir[2][i] = z;
+            b.dir[3][i] = -std::cos(phi), b.dir[4][i] = -std::sin(phi), b.dir[5][i] = z;
+        }
+        CHECK(b.run(*k) == 0);
+        for (size_t i = 0; i < b.n; ++i) {
+            double wi[3] = {b.dir[0][i], b.dir[1][i], b.dir[2][i]}, wo[3] = {b.dir[3][i], b.dir[4][i], b.dir[5][i]};
+            EvalResult<double> want = interp.eval(wi, wo, nullptr);
+            REQUIRE(want.valid);
+            REQUIRE(want.rgb[0] > 0);
+            double rel = std::abs(b.out[0][i] - want.rgb[0]) / want.rgb[0];
+            INFO(std::string(spec), " n.w = ", b.dir[2][i], " got ", b.out[0][i], " want ", want.rgb[0]);
+            CHECK(rel < 2e-6);
+        }
+    }
+}
+
 TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the precise body elsewhere") {
     const char* ggx = R"(material m {
         input roughness = 0.4 in 0 .. 1;
