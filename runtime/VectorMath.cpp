@@ -93,13 +93,34 @@ Value* MathEmitter::exp2Int(Value* n) {
 }
 
 Value* MathEmitter::exp(Value* x) {
-    // exp(x) = 2^n e^r, n = rint(x / ln 2), |r| <= ln2/2, r computed with a
-    // two-part ln 2 so that n*C1 is exact. e^r by its Taylor series, one
-    // degree past the type's precision (r^8/8! < 2^-28 for float).
     const double hi = isDouble_ ? 709.782712893384 : 88.72283935546875;
     const double lo = isDouble_ ? -745.1332191019412 : -103.97208404541016;
     Value* xc = minnum(maxnum(x, c(lo)), c(hi));
-    Value* n = rint(mul(xc, c(1.4426950408889634)));
+    Value* n;
+    Value* p = expReduced(xc, n);
+    // Scale in two steps so that results in the subnormal range and up to
+    // the largest finite value are both reachable.
+    Value* n1 = intrinsic(llvm::Intrinsic::trunc, mul(n, c(0.5)));
+    Value* n2 = sub(n, n1);
+    Value* result = mul(mul(p, exp2Int(n1)), exp2Int(n2));
+    result = select(gt(x, c(hi)), c(INFINITY), result);
+    result = select(lt(x, c(lo)), c(0.0), result);
+    return select(isNan(x), x, result);
+}
+
+Value* MathEmitter::expNormal(Value* x) {
+    // n in [-1010, 1010] (double) or [-123, 123] (float): 2^n is one
+    // normal number, and p 2^n equals exp()'s p 2^n1 2^n2 exactly.
+    Value* n;
+    Value* p = expReduced(x, n);
+    return mul(p, exp2Int(n));
+}
+
+Value* MathEmitter::expReduced(Value* xc, Value*& n) {
+    // exp(x) = 2^n e^r, n = rint(x / ln 2), |r| <= ln2/2, r computed with a
+    // two-part ln 2 so that n*C1 is exact. e^r by its Taylor series, one
+    // degree past the type's precision (r^8/8! < 2^-28 for float).
+    n = rint(mul(xc, c(1.4426950408889634)));
     Value *r;
     if (isDouble_) {
         r = fma(n, c(-6.93145751953125e-1), xc);
@@ -116,14 +137,7 @@ Value* MathEmitter::exp(Value* x) {
         p = poly(r, {1, 1, 1 / 2.0, 1 / 6.0, 1 / 24.0, 1 / 120.0, 1 / 720.0});
     else
         p = poly(r, {1, 1, 1 / 2.0, 1 / 6.0, 1 / 24.0, 1 / 120.0, 1 / 720.0, 1 / 5040.0, 1 / 40320.0});
-    // Scale in two steps so that results in the subnormal range and up to
-    // the largest finite value are both reachable.
-    Value* n1 = intrinsic(llvm::Intrinsic::trunc, mul(n, c(0.5)));
-    Value* n2 = sub(n, n1);
-    Value* result = mul(mul(p, exp2Int(n1)), exp2Int(n2));
-    result = select(gt(x, c(hi)), c(INFINITY), result);
-    result = select(lt(x, c(lo)), c(0.0), result);
-    return select(isNan(x), x, result);
+    return p;
 }
 
 Value* MathEmitter::log(Value* x) {

@@ -63,6 +63,11 @@ public:
     llvm::Value* poly(llvm::Value* x, std::initializer_list<double> coeffs);
 
     llvm::Value* exp(llvm::Value* x);
+    // exp(x) for x the caller has bounded to [-700, 700] (double) or
+    // [-85, 85] (float), where the result is a normal number: the same
+    // values as exp() there, without its clamping, NaN/overflow selects and
+    // two-step scaling (about 15 operations fewer).
+    llvm::Value* expNormal(llvm::Value* x);
     llvm::Value* log(llvm::Value* x);
     llvm::Value* log1p(llvm::Value* x);
     // pow with C semantics for the cases a material can reach: negative base
@@ -81,6 +86,8 @@ public:
     llvm::IRBuilder<>& b;
 
 private:
+    // e^r for x = n ln 2 + r (sets n): the part exp() and expNormal() share.
+    llvm::Value* expReduced(llvm::Value* x, llvm::Value*& n);
     llvm::Value* intrinsic(llvm::Intrinsic::ID id, llvm::Value* a);
     llvm::Value* intrinsic(llvm::Intrinsic::ID id, llvm::Value* a, llvm::Value* c);
     llvm::Type* type_;

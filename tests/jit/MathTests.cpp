@@ -137,6 +137,28 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
                [](long double x, long double y) { return std::atan2(std::fabs(y), x); }, keep);
     MESSAGE("atan2 max ulp " << u);
     CHECK(u <= 3.0);
+    // expNormal: exp without its range handling, for arguments the caller
+    // bounded to [-85, 85] (float) or [-700, 700] (double). Its values must
+    // be exp()'s bit for bit there: in float directly, and in double as
+    // expNormal(X) / exp(X) == 1 with X = x * 700/85 (a double result would
+    // not fit the float output).
+    for (bool fast : {false, true}) {
+        u = maxUlp(*jit, [](MathEmitter& m, Value* x, Value*) { return m.sub(m.expNormal(x), m.exp(x)); },
+                   sweep(-85, 85), [](long double, long double) { return 0.0L; }, keep, nullptr, fast);
+        CHECK(u == 0.0);
+        u = maxUlp(
+            *jit,
+            [fast](MathEmitter& m, Value* x, Value*) {
+                llvm::Type* dt = x->getType()->isVectorTy()
+                                     ? (llvm::Type*)llvm::FixedVectorType::get(m.b.getDoubleTy(), 16)
+                                     : m.b.getDoubleTy();
+                MathEmitter d(m.b, dt, fast);
+                Value* X = d.mul(d.convert(x, dt), d.c(700.0 / 85.0));
+                return m.convert(d.div(d.expNormal(X), d.exp(X)), m.type());
+            },
+            sweep(-85, 85), [](long double, long double) { return 1.0L; }, keep, nullptr, fast);
+        CHECK(u == 0.0);
+    }
     // Special values.
     Sweep special;
     special.x = {0.0f, -0.0f, INFINITY, -INFINITY, NAN, 1e-45f, -1.0f, 89.0f, -104.0f};
