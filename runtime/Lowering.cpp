@@ -222,13 +222,24 @@ public:
             markInvalid(b_.CreateNot(unit));
             return len2;
         };
-        auto normalize = [&](const std::array<Value*, 3>& w, std::array<Value*, 3>& out) {
+        // With a double d, `unitF` receives the unit w in float too, as
+        // w + w (1/|w| - 1) with one float FMA from the float input and the
+        // correction (exact in double, inv in [0.999, 1.001]) rounded to
+        // float: the same 0.5 ulp as rounding the double unit w, for one
+        // conversion instead of three.
+        auto normalize = [&](const std::array<Value*, 3>& w, std::array<Value*, 3>& out,
+                             std::array<Value*, 3>& unitF) {
             Value* len2 = checkedLength2(d, w, out);
             Value* delta = d.sub(len2, d.c(1.0));
             Value* inv = d.isDouble() ? d.poly(delta, {1.0, -1.0 / 2, 3.0 / 8, -5.0 / 16, 35.0 / 128, -63.0 / 256, 231.0 / 1024})
                                       : d.poly(delta, {1.0, -1.0 / 2, 3.0 / 8});
             for (Value*& x : out) x = d.mul(x, inv);
+            if (d.isDouble()) {
+                Value* corr = m.convert(d.sub(inv, d.c(1.0)), m.type());
+                for (int i = 0; i < 3; ++i) unitF[i] = m.fma(w[i], corr, w[i]);
+            }
         };
+        std::array<Value*, 3> wiF{}, woF{};  // unit directions in float, where normalize() made them
         std::array<Value*, 3> hD, diff;
         if (floatFirst_) {
             // Float body. Rounding the normalized directions to float and then
@@ -256,8 +267,8 @@ public:
                 diff[i] = m.add(m.sub(wi[i], wo[i]), m.fma(wi[i], ci, m.neg(m.mul(wo[i], co))));
             }
         } else {
-            normalize(wi, wiD);
-            normalize(wo, woD);
+            normalize(wi, wiD, wiF);
+            normalize(wo, woD, woF);
             hD = {d.add(wiD[0], woD[0]), d.add(wiD[1], woD[1]), d.add(wiD[2], woD[2])};
             diff = {d.sub(wiD[0], woD[0]), d.sub(wiD[1], woD[1]), d.sub(wiD[2], woD[2])};
         }
@@ -314,8 +325,8 @@ public:
         // Rounded once to the lane type.
         MathEmitter& p = d_;
         for (int i = 0; i < 3; ++i) {
-            g.wi[i] = m.convert(wiD[i], m.type());
-            g.wo[i] = m.convert(woD[i], m.type());
+            g.wi[i] = wiF[i] ? wiF[i] : m.convert(wiD[i], m.type());
+            g.wo[i] = woF[i] ? woF[i] : m.convert(woD[i], m.type());
             g.h[i] = hD[i] ? m.convert(hD[i], m.type()) : nullptr;
             g.hD[i] = hD[i] ? p.convert(hD[i], p.type()) : nullptr;
             g.hU[i] = p.convert(hU[i], p.type());
@@ -742,8 +753,9 @@ private:
         // (beckmann_conductor exact 13.1 -> 10.9 ns/eval together with the
         // Beckmann Lambda below, facet_compile_timing best of 3 rounds). e >= 0
         // up to rounding (blinn_phong's -E ln mz); a NaN e (an invalid lane)
-        // becomes limit.
-        Value* v = d.expNormal(d.neg(d.maxnum(d.minnum(e, d.c(limit)), d.c(-limit))));
+        // becomes limit. The tail only ever multiplies into the float BRDF
+        // value, so in double the shorter series (1e-11) serves.
+        Value* v = d.expNormal(d.neg(d.maxnum(d.minnum(e, d.c(limit)), d.c(-limit))), /*floatResult=*/true);
         return d.select(d.gt(e, d.c(limit)), d.c(0.0), v);
     }
 

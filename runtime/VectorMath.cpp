@@ -108,15 +108,15 @@ Value* MathEmitter::exp(Value* x) {
     return select(isNan(x), x, result);
 }
 
-Value* MathEmitter::expNormal(Value* x) {
+Value* MathEmitter::expNormal(Value* x, bool floatResult) {
     // n in [-1010, 1010] (double) or [-123, 123] (float): 2^n is one
     // normal number, and p 2^n equals exp()'s p 2^n1 2^n2 exactly.
     Value* n;
-    Value* p = expReduced(x, n);
+    Value* p = expReduced(x, n, floatResult);
     return mul(p, exp2Int(n));
 }
 
-Value* MathEmitter::expReduced(Value* xc, Value*& n) {
+Value* MathEmitter::expReduced(Value* xc, Value*& n, bool floatResult) {
     // exp(x) = 2^n e^r, n = rint(x / ln 2), |r| <= ln2/2, r computed with a
     // two-part ln 2 so that n*C1 is exact. e^r by its Taylor series, one
     // degree past the type's precision (r^8/8! < 2^-28 for float).
@@ -130,7 +130,10 @@ Value* MathEmitter::expReduced(Value* xc, Value*& n) {
         r = fma(n, c(2.12194440e-4), r);
     }
     Value* p;
-    if (isDouble_)
+    if (isDouble_ && floatResult)  // remainder ~ |r|^10/10! < 7e-12
+        p = poly(r, {1, 1, 1 / 2.0, 1 / 6.0, 1 / 24.0, 1 / 120.0, 1 / 720.0, 1 / 5040.0, 1 / 40320.0,
+                     1 / 362880.0});
+    else if (isDouble_)
         p = poly(r, {1, 1, 1 / 2.0, 1 / 6.0, 1 / 24.0, 1 / 120.0, 1 / 720.0, 1 / 5040.0, 1 / 40320.0,
                      1 / 362880.0, 1 / 3628800.0, 1 / 39916800.0, 1 / 479001600.0, 1 / 6227020800.0});
     else if (fast_)  // degree 6: r^7/7! < 1.2e-7 relative
