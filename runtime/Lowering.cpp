@@ -797,6 +797,8 @@ private:
     // grazing).
     Value* D(const Ndf& n, const Geometry& geo) {
         const std::array<Value*, 3>&h = geo.h, &hD = geo.hD;
+        internal_assert(h[0] || mat_.ndfModel() == NdfModel::Beckmann || mat_.ndfModel() == NdfModel::Ward)
+            << "the unit h is needed by this NDF but halfAngleInFloat() left it out";
         MathEmitter& m = f_;
         switch (mat_.ndfModel()) {
             case NdfModel::Ggx: {
@@ -984,6 +986,8 @@ private:
         const std::array<Value*, 3>&wi = geo.wi, &wo = geo.wo;
         Value *ci = geo.wiD[2], *co = geo.woD[2];
         Value *oh = geo.cosD, *nh = geo.hD[2];
+        internal_assert(nh || mat_.maskingModel() != MaskingModel::CookTorrance)
+            << "cook_torrance needs the unit h, which halfAngleInFloat() left out";
         Value* one = p.c(1.0);
         auto azimuthWeight = [&] {
             Value* cross = m.abs(m.sub(m.mul(wi[0], wo[1]), m.mul(wi[1], wo[0])));
