@@ -814,6 +814,23 @@ private:
                     // a^2 beyond float (alpha > 1.8e19): D < 1e-38 / mz^4 is 0, not Inf/Inf.
                     return d_.convert(m.select(m.isFinite(a2), D, m.c(0.0)), d_.type());
                 }
+                if (guarded_) {
+                    // Guarded body: D = (ax ay / N)^2 ax ay / pi, N = ay^2 mx^2 +
+                    // ax^2 my^2 + (ax ay)^2 mz^2 (the form below times
+                    // (ax ay)^2): one division instead of three (anisotropic
+                    // GGX + dielectric exact 5.24 -> 4.96 ns/eval,
+                    // facet_compile_timing). N >= min(ax, ay, ax ay)^2 / 3 is
+                    // normal for alpha >= 1e-4; where r = ax ay / N or its square
+                    // over- or underflows (alphas far apart or beyond ~1e9), or
+                    // (ax ay)^2 overflows (NaN), D is Inf, NaN or below 1e-38, and
+                    // the lobe range guard sends the lane to the precise body.
+                    Value* axy = m.mul(n.ax, n.ay);
+                    Value* N = m.fma(m.mul(axy, axy), m.mul(h[2], h[2]),
+                                     m.fma(m.mul(n.ay, n.ay), m.mul(h[0], h[0]),
+                                           m.mul(m.mul(n.ax, n.ax), m.mul(h[1], h[1]))));
+                    Value* r = m.div(axy, N);
+                    return d_.convert(m.mul(m.mul(r, r), m.mul(axy, m.c(1.0 / kPi))), d_.type());
+                }
                 Value* t = m.fma(h[2], h[2], slope2(n, h));
                 return d_.convert(m.div(m.c(1.0 / kPi), m.mul(m.mul(n.ax, n.ay), m.mul(t, t))), d_.type());
             }
