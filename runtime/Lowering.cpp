@@ -417,10 +417,10 @@ private:
     // is none, Schlick's (q = 1 - cos, still free of cancellation, is within
     // a few float roundings, and F relative to it within 5 times that:
     // 5 (1 - f0) q^4 dq <= 5 F dq/q) or an exact one that
-    // exactFresnelInFloat() already evaluates in float. Together with D from wi + wo (best of 3 rounds of
-    // facet_compile_timing --runs 3 against the previous build, ns/eval):
-    // beckmann_conductor exact 13.6 -> 13.1, scalar 102 -> 95; rough_ceramic
-    // exact 17.4 -> 15.6; ward_brushed exact 8.9 -> 7.6.
+    // exactFresnelInFloat() already evaluates in float. Together with D from
+    // wi + wo (best of 3 rounds of facet_compile_timing --runs 3 against the
+    // previous build, ns/eval): beckmann_conductor exact 13.6 -> 13.1, scalar
+    // 102 -> 95; rough_ceramic exact 17.4 -> 15.6; ward_brushed exact 8.9 -> 7.6.
     bool halfAngleInFloat() const {
         if (!d_.isDouble() || floatFirst_) return false;
         if (mat_.ndfModel() != NdfModel::Beckmann && mat_.ndfModel() != NdfModel::Ward) return false;
@@ -779,9 +779,9 @@ private:
     }
 
     // tan^2-weighted slope (mx^2/ax^2 + my^2/ay^2)/mz^2 in double (of h or
-    // of any multiple of it, such as wi + wo): it is
-    // the argument of exp() for beckmann and ward, where its rounding error
-    // is multiplied by its size (tens) in the result.
+    // of any multiple of it, such as wi + wo): it is the argument of exp()
+    // for beckmann and ward, where its rounding error is multiplied by its
+    // size (tens) in the result.
     Value* slopeExponentD(const Ndf& n, const std::array<Value*, 3>& hD) {
         MathEmitter& d = d_;
         Value *ax = n.axD, *ay = n.ayD;
