@@ -276,10 +276,10 @@ public:
         Value* hlen2 = d.fma(hD[0], hD[0], d.fma(hD[1], hD[1], d.mul(hD[2], hD[2])));
         // hlen, cos, 1 - cos and sin^2 are in emitter `x`: the precise type,
         // or float where halfAngleInFloat() says nothing needs more.
-        const bool halfInFloat = halfAngleInFloat();
+        const bool halfInFloat = halfAngleInFloat(), cheapHalf = cheapHalfVector();
         MathEmitter& x = halfInFloat ? m : d;
         Value *hlen, *cosD, *oneMinusCos;
-        if (cheapHalfVector()) {
+        if (cheapHalf) {
             // 1/|h| as one rsqrt estimate + Newton step (the estimates flag
             // turns 1/sqrt into that), |h| = |h|^2/|h|: no square root and
             // no division. 1 - cos then cancels near wi = wo, to an absolute
@@ -318,7 +318,7 @@ public:
         // Guard: |wi + wo| >= 1e-4. h is accurate below that too, but
         // |wi + wo|^2 could underflow in float where it does not in double.
         // (On |wi + wo|^2 where hlen = 0 * Inf = NaN is possible.)
-        distrust(cheapHalfVector() ? d.lt(hlen2, d.c(1e-8)) : x.lt(hlen, x.c(1e-4)));
+        distrust(cheapHalf ? d.lt(hlen2, d.c(1e-8)) : x.lt(hlen, x.c(1e-4)));
         Value* sin2 = x.mul(oneMinusCos, x.add(x.c(1.0), cosD));
         Geometry g;
         g.hNonZero = d.gt(hlen2, d.c(0.0));
@@ -329,11 +329,20 @@ public:
             g.wo[i] = woF[i] ? woF[i] : m.convert(woD[i], m.type());
             g.h[i] = hD[i] ? m.convert(hD[i], m.type()) : nullptr;
             g.hD[i] = hD[i] ? p.convert(hD[i], p.type()) : nullptr;
-            g.hU[i] = p.convert(hU[i], p.type());
             g.wiD[i] = p.convert(wiD[i], p.type());
             g.woD[i] = p.convert(woD[i], p.type());
         }
-        g.hlen2 = p.convert(hlen2, p.type());
+        // The exponent NDFs (beckmann, ward) need h only up to scale: in
+        // double they take u = wi + wo itself, which halfAngleInFloat() relies
+        // on (no unit h there). In float the unit h: a^2 uz^2 of
+        // near-opposite grazing directions would underflow where a^2 mz^2
+        // does not.
+        if (p.isDouble()) {
+            for (int i = 0; i < 3; ++i) g.slopeH[i] = p.convert(hU[i], p.type());
+            g.slopeHLen2 = p.convert(hlen2, p.type());
+        } else {
+            g.slopeH = g.hD;
+        }
         g.cosD = p.convert(cosD, p.type());
         g.oneMinusCosD = p.convert(oneMinusCos, p.type());
         g.sin2D = p.convert(sin2, p.type());
@@ -447,8 +456,11 @@ private:
         std::array<Value*, 3> wi, wo, h;
         std::array<Value*, 3> hD;  // h in double, for NDFs whose exponent amplifies rounding
                                    // (h and hD are null where halfAngleInFloat())
-        std::array<Value*, 3> hU;  // wi + wo, not normalized, precise type
-        Value* hlen2;              // |wi + wo|^2, precise type
+        // h up to scale for the exponent NDFs, precise type: wi + wo (with
+        // its squared length slopeHLen2) in double, the unit h (slopeHLen2
+        // null) in float.
+        std::array<Value*, 3> slopeH;
+        Value* slopeHLen2 = nullptr;
         std::array<Value*, 3> wiD, woD;  // the unit directions in the precise type
         Value* cosD;               // wo.h = wi.h in [0, 1], precise type (exact Fresnel near its critical angle)
         Value* oneMinusCosD;       // 1 - wo.h = |wo - h|^2 / 2, precise type, without cancellation at wi = wo
@@ -745,9 +757,10 @@ private:
     // precise type's normal range: the argument is clamped first, because a
     // subnormal result costs a ~100-cycle microcode assist per operation and
     // random directions with small alpha hit it in most lanes.
+    double expTailLimit() const { return d_.isDouble() ? 700.0 : 85.0; }
     Value* expTail(Value* e) {
         MathEmitter& d = d_;
-        double limit = d.isDouble() ? 700.0 : 85.0;
+        const double limit = expTailLimit();
         // Clamped to [-limit, limit], exp's argument is in expNormal's range,
         // which leaves out exp()'s own clamping, selects and two-step scaling
         // (beckmann_conductor exact 13.1 -> 10.9 ns/eval together with the
@@ -779,7 +792,7 @@ private:
     }
 
     // tan^2-weighted slope (mx^2/ax^2 + my^2/ay^2)/mz^2 in double (of h or
-    // of any multiple of it, such as wi + wo): it is the argument of exp()
+    // of any multiple of it, such as Geometry::slopeH): it is the argument of exp()
     // for beckmann and ward, where its rounding error is multiplied by its
     // size (tens) in the result.
     Value* slopeExponentD(const Ndf& n, const std::array<Value*, 3>& hD) {
@@ -835,32 +848,29 @@ private:
                 return d_.convert(m.div(m.c(1.0 / kPi), m.mul(m.mul(n.ax, n.ay), m.mul(t, t))), d_.type());
             }
             case NdfModel::Beckmann: {
-                // In double from u = wi + wo, not the unit h = u/|u| (which
-                // halfAngleInFloat() does without): e is a ratio of squares of
-                // u's components, and mz^4 = uz^4/|u|^4. In float the unit h:
-                // a^2 uz^2 of near-opposite grazing directions would underflow
-                // where a^2 mz^2 does not.
+                // From u = geo.slopeH, h up to scale: e is a ratio of squares
+                // of u's components, and mz^4 = uz^4/|u|^4.
                 MathEmitter& d = d_;
-                const bool fromSum = d.isDouble();
-                const std::array<Value*, 3>& u = fromSum ? geo.hU : hD;
+                const std::array<Value*, 3>& u = geo.slopeH;
+                Value* l2 = geo.slopeHLen2;  // |u|^2, null for |u| = 1
                 Value* z2d = d.mul(u[2], u[2]);
                 Value *e, *D;
                 if (n.isotropic) {
                     // One division: t = 1/(a^2 uz^2), e = (ux^2 + uy^2) t, and
-                    // 1/(pi a^2 mz^4) = (|u|^2 t)^2 a^2 / pi (|u| = 1 in float).
+                    // 1/(pi a^2 mz^4) = (|u|^2 t)^2 a^2 / pi.
                     Value* a2 = d.mul(n.axD, n.axD);
                     Value* t = d.div(d.c(1.0), d.mul(a2, z2d));
                     e = d.mul(d.fma(u[0], u[0], d.mul(u[1], u[1])), t);
-                    Value* lt = fromSum ? d.mul(geo.hlen2, t) : t;
+                    Value* lt = l2 ? d.mul(l2, t) : t;
                     D = d.mul(expTail(e), d.mul(d.mul(lt, d.mul(lt, a2)), d.c(1.0 / kPi)));
                 } else {
                     e = slopeExponentD(n, u);
                     Value* axy = d.mul(n.axD, n.ayD);
-                    Value* num = fromSum ? d.mul(expTail(e), d.mul(geo.hlen2, geo.hlen2)) : expTail(e);
+                    Value* num = l2 ? d.mul(expTail(e), d.mul(l2, l2)) : expTail(e);
                     D = d.div(num, d.mul(d.mul(d.c(kPi), axy), d.mul(z2d, z2d)));
                 }
                 // exp underflowed: 0, not 0/0 when mz^4 underflows too.
-                return d.select(d.gt(e, d.c(d.isDouble() ? 700.0 : 85.0)), d.c(0.0), D);
+                return d.select(d.gt(e, d.c(expTailLimit())), d.c(0.0), D);
             }
             case NdfModel::BlinnPhong: {
                 // mz^e = exp(e/2 log1p(-(mx^2 + my^2))) in double: mz itself
@@ -1437,8 +1447,7 @@ private:
         Ndf n = ndfParams();
         Value* spec;
         if (mat_.ndfModel() == NdfModel::Ward) {
-            // A ratio, so u = wi + wo serves as h in double (see D for beckmann).
-            Value* e = slopeExponentD(n, d.isDouble() ? geo.hU : geo.hD);
+            Value* e = slopeExponentD(n, geo.slopeH);
             Value* ciD = geo.wiD[2], *coD = geo.woD[2];
             // sqrt(ci) sqrt(co) in float: ci co underflows for float-subnormal cosines.
             Value* root = d.isDouble() ? d.sqrt(d.mul(ciD, coD)) : d.mul(d.sqrt(ciD), d.sqrt(coD));

@@ -81,7 +81,8 @@ public:
     llvm::Value* erfcx(llvm::Value* x);
     // atan2(y, x) for y >= 0, in [0, pi].
     llvm::Value* atan2(llvm::Value* y, llvm::Value* x);
-    // 2^n for an integer-valued n in [-126, 127] given in this floating type.
+    // 2^n for an integer-valued n given in this floating type, with 2^n a
+    // normal number: n in [-126, 127] (float) or [-1022, 1023] (double).
     llvm::Value* exp2Int(llvm::Value* n);
 
     // The same value in another floating type of the same width.
