@@ -58,6 +58,13 @@ struct Batch {
         float* rgb[3] = {&out[0][begin], &out[1][begin], &out[2][begin]};
         return k.evalBatch(int64_t(count), wi, wo, inputs, rgb);
     }
+    // The double interpreter's value for lane i, with the same input slot
+    // as run() (the roughness; unused by a material without inputs).
+    EvalResult<double> reference(const Interpreter<double>& interp, size_t i) const {
+        double wi[3] = {dir[0][i], dir[1][i], dir[2][i]}, wo[3] = {dir[3][i], dir[4][i], dir[5][i]};
+        double in[1] = {rough[i]};
+        return interp.eval(wi, wo, in);
+    }
 };
 
 CompileOptions opts(const std::string& spec) {
@@ -93,9 +100,7 @@ TwoBodyRun runTwoBodies(const Kernel& twoBody, const Kernel& oneBody, const char
     TwoBodyRun r;
     r.lanes = a.n;
     for (size_t i = 0; i < a.n; ++i) {
-        double wi[3] = {a.dir[0][i], a.dir[1][i], a.dir[2][i]}, wo[3] = {a.dir[3][i], a.dir[4][i], a.dir[5][i]};
-        double in[1] = {a.rough[i]};
-        EvalResult<double> ref = interp.eval(wi, wo, in);
+        EvalResult<double> ref = a.reference(interp, i);
         for (int ch = 0; ch < 3; ++ch) {
             r.differing += a.out[ch][i] != b.out[ch][i];
             if (ref.rgb[ch] > 1e-30) r.worst = std::max(r.worst, std::fabs(a.out[ch][i] - ref.rgb[ch]) / ref.rgb[ch]);
@@ -443,8 +448,7 @@ TEST_CASE("guarded fast SIMD: Schlick's 1 - wo.h from |wi + wo| stays within fas
         CHECK(b.run(*k) == 0);
         double worst = 0;
         for (size_t i = 0; i < b.n; ++i) {
-            double wi[3] = {b.dir[0][i], b.dir[1][i], b.dir[2][i]}, wo[3] = {b.dir[3][i], b.dir[4][i], b.dir[5][i]};
-            EvalResult<double> want = interp.eval(wi, wo, nullptr);
+            EvalResult<double> want = b.reference(interp, i);
             REQUIRE(want.valid);
             double rel = std::abs(b.out[0][i] - want.rgb[0]) / std::max(std::abs(want.rgb[0]), 1e-30);
             worst = std::max(worst, rel);
@@ -481,8 +485,7 @@ TEST_CASE("beckmann with the half angle in float: near-opposite directions below
         }
         CHECK(b.run(*k) == 0);
         for (size_t i = 0; i < b.n; ++i) {
-            double wi[3] = {b.dir[0][i], b.dir[1][i], b.dir[2][i]}, wo[3] = {b.dir[3][i], b.dir[4][i], b.dir[5][i]};
-            EvalResult<double> want = interp.eval(wi, wo, nullptr);
+            EvalResult<double> want = b.reference(interp, i);
             REQUIRE(want.valid);
             REQUIRE(want.rgb[0] > 0);
             double rel = std::abs(b.out[0][i] - want.rgb[0]) / want.rgb[0];
@@ -534,9 +537,7 @@ TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the p
     CHECK(x.run(*cancelKernel) == 0);
     double worstCancel = 0;
     for (size_t i = 0; i < x.n; ++i) {
-        double wi[3] = {x.dir[0][i], x.dir[1][i], x.dir[2][i]}, wo[3] = {x.dir[3][i], x.dir[4][i], x.dir[5][i]};
-        double in[1] = {x.rough[i]};
-        EvalResult<double> ref = cancelInterp.eval(wi, wo, in);
+        EvalResult<double> ref = x.reference(cancelInterp, i);
         if (ref.valid && ref.rgb[0] > 1e-30) worstCancel = std::max(worstCancel, std::fabs(x.out[0][i] - ref.rgb[0]) / ref.rgb[0]);
     }
     MESSAGE("alpha = 0.5 - x^2 near x = 0.707: worst relative error " << worstCancel);

@@ -84,13 +84,28 @@ Sweep sweep(double lo, double hi, double ylo = 0, double yhi = 0, size_t n = 1 <
     return s;
 }
 
+// `emit` applied to the sweep by the kernel build() makes.
+std::vector<float> run(FacetJit& jit, const Emit& emit, const Sweep& s, bool vector,
+                       std::vector<llvm::orc::JITDylib*>& keep, bool fast) {
+    ArrayFn f = build(jit, emit, vector, keep, fast);
+    std::vector<float> out(s.x.size());
+    f(s.x.data(), s.y.data(), out.data(), int64_t(s.x.size()));
+    return out;
+}
+
+// A double emitter of x's shape (one value or 16 lanes), for checking double
+// paths through the float harness.
+MathEmitter doubleEmitter(MathEmitter& m, Value* x, bool fast) {
+    llvm::Type* dt = x->getType()->isVectorTy() ? (llvm::Type*)llvm::FixedVectorType::get(m.b.getDoubleTy(), 16)
+                                                : m.b.getDoubleTy();
+    return MathEmitter(m.b, dt, fast);
+}
+
 double maxUlp(FacetJit& jit, const Emit& emit, const Sweep& s, const std::function<long double(long double, long double)>& ref,
               std::vector<llvm::orc::JITDylib*>& keep, double* maxRel = nullptr, bool fast = false) {
     double worst = 0;
     for (bool vector : {false, true}) {
-        ArrayFn f = build(jit, emit, vector, keep, fast);
-        std::vector<float> out(s.x.size());
-        f(s.x.data(), s.y.data(), out.data(), int64_t(s.x.size()));
+        std::vector<float> out = run(jit, emit, s, vector, keep, fast);
         for (size_t i = 0; i < s.x.size(); ++i) {
             long double want = ref(s.x[i], s.y[i]);
             worst = std::max(worst, ulpError(out[i], want));
@@ -149,11 +164,8 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
         u = maxUlp(
             *jit,
             [fast](MathEmitter& m, Value* x, Value*) {
-                llvm::Type* dt = x->getType()->isVectorTy()
-                                     ? (llvm::Type*)llvm::FixedVectorType::get(m.b.getDoubleTy(), 16)
-                                     : m.b.getDoubleTy();
-                MathEmitter d(m.b, dt, fast);
-                Value* X = d.mul(d.convert(x, dt), d.c(700.0 / 85.0));
+                MathEmitter d = doubleEmitter(m, x, fast);
+                Value* X = d.mul(d.convert(x, d.type()), d.c(700.0 / 85.0));
                 return m.convert(d.div(d.expNormal(X), d.exp(X)), m.type());
             },
             sweep(-85, 85), [](long double, long double) { return 1.0L; }, keep, nullptr, fast);
@@ -163,21 +175,15 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
     // of exp (printed and checked as (ratio - 1) * 1e10, within 0.1).
     {
         Emit emit = [](MathEmitter& m, Value* x, Value*) {
-            llvm::Type* dt = x->getType()->isVectorTy() ? (llvm::Type*)llvm::FixedVectorType::get(m.b.getDoubleTy(), 16)
-                                                        : m.b.getDoubleTy();
-            MathEmitter d(m.b, dt, false);
-            Value* X = d.mul(d.convert(x, dt), d.c(700.0 / 85.0));
+            MathEmitter d = doubleEmitter(m, x, false);
+            Value* X = d.mul(d.convert(x, d.type()), d.c(700.0 / 85.0));
             Value* ratio = d.div(d.expNormal(X, /*floatResult=*/true), d.exp(X));
             return m.convert(d.mul(d.sub(ratio, d.c(1.0)), d.c(1e10)), m.type());
         };
         Sweep s = sweep(-85, 85);
         double worst = 0;
-        for (bool vector : {false, true}) {
-            ArrayFn f = build(*jit, emit, vector, keep, false);
-            std::vector<float> out(s.x.size());
-            f(s.x.data(), s.y.data(), out.data(), int64_t(s.x.size()));
-            for (float v : out) worst = std::max(worst, double(std::fabs(v)) * 1e-10);
-        }
+        for (bool vector : {false, true})
+            for (float v : run(*jit, emit, s, vector, keep, false)) worst = std::max(worst, double(std::fabs(v)) * 1e-10);
         MESSAGE("expNormal (float result, double) max relative difference from exp " << worst);
         CHECK(worst <= 2e-11);  // measured 9.4e-12
     }
