@@ -31,6 +31,8 @@ std::vector<std::string> cells(const BenchRow& r) {
             num(r.nsPerEval, "{:.2f}"),
             num(r.evalsPerSecond / 1e6, "{:.1f}"),
             opt(r.coldMs, "{:.2f}"),
+            opt(r.tierUpMs, "{:.2f}"),
+            opt(r.coldOptimizedMs, "{:.2f}"),
             opt(r.memoryHitMs, "{:.3f}"),
             opt(r.diskHitMs, "{:.3f}"),
             opt(r.aotRatio, "{:.2f}"),
@@ -45,7 +47,8 @@ std::vector<std::string> cells(const BenchRow& r) {
 const std::vector<Column>& columns() {
     static const std::vector<Column> c = {
         {"backend", 7, true},       {"mode", 12, true},         {"variant", 12, true},      {"ns/eval", 9, false},
-        {"Meval/s", 8, false},      {"cold ms", 8, false},      {"mem-hit ms", 10, false},  {"disk-hit ms", 11, false},
+        {"Meval/s", 8, false},      {"cold ms", 8, false},      {"tier-up ms", 10, false},  {"cold-opt ms", 11, false},
+        {"mem-hit ms", 10, false},  {"disk-hit ms", 11, false},
         {"JIT/AOT", 7, false},      {"max rel", 9, false},      {"p99.9 rel", 9, false},    {"max ulp", 9, false},
         {"hard max", 9, false},     {"hard p99.9", 10, false},  {"hard ulp", 9, false},
     };
@@ -83,7 +86,8 @@ std::string summaryLine(const MaterialBench& m) {
     std::string s = fmt::format("simd exact {:.2f} ns/eval ({:.0f} M/s)", simd->nsPerEval, simd->evalsPerSecond / 1e6);
     if (scalar) s += fmt::format("; simd/scalar speed-up {:.1f}x", scalar->nsPerEval / simd->nsPerEval);
     if (aot) s += fmt::format("; aot {:.2f} ns/eval, JIT/AOT {:.2f}", aot->nsPerEval, simd->nsPerEval / aot->nsPerEval);
-    s += fmt::format("; compile cold {} ms, memory hit {} ms, disk hit {} ms", opt(simd->coldMs, "{:.2f}"),
+    s += fmt::format("; compile cold {} ms (+ tier-up {} ms; optimized alone {} ms), memory hit {} ms, disk hit {} ms",
+                     opt(simd->coldMs, "{:.2f}"), opt(simd->tierUpMs, "{:.2f}"), opt(simd->coldOptimizedMs, "{:.2f}"),
                      opt(simd->memoryHitMs, "{:.3f}"), opt(simd->diskHitMs, "{:.3f}"));
     return s;
 }
@@ -118,8 +122,11 @@ std::string markdown(const BenchReport& report) {
     md += fmt::format("Host: {} (SIMD width {}). Median of {} warm runs ({} warm-up) of one batch of {} lanes "
                       "(scalar entry and interpreter: median over chunks of 4096 / 256 lanes); the interpreter is "
                       "timed on {} lanes. Compile times are medians of {} cold compiles (cache=off), {} memory-cache "
-                      "hits and {} disk-cache hits (fresh compiler). All times are CPU time of the benchmarking "
-                      "thread.{}\n\n",
+                      "hits and {} disk-cache hits (fresh compiler). Cold compiles are tiered (the default): "
+                      "`cold ms` is the time until the compile returns a kernel with quickly emitted code, "
+                      "`tier-up ms` the time the tier-up thread then takes for the optimized code (timed kernels "
+                      "run it), `cold-opt ms` a compile with codegen=optimized. All times are CPU time of the "
+                      "thread doing the work.{}\n\n",
                       report.cpu, report.hostWidth, s.runs, s.warmup, s.lanes, s.interpLanes, s.compileRuns,
                       s.compileRuns, s.diskRuns, s.quick ? " **Quick mode**: small batches, few runs." : "");
     md += fmt::format("Error is relative to the double-precision interpreter on the same float inputs "
@@ -332,6 +339,8 @@ std::string json(const BenchReport& report) {
             j.field("ns_per_eval_min", r.nsPerEvalMin);
             j.field("evals_per_second", r.evalsPerSecond);
             j.field("compile_cold_ms", r.coldMs);
+            j.field("compile_tier_up_ms", r.tierUpMs);
+            j.field("compile_cold_optimized_ms", r.coldOptimizedMs);
             j.field("compile_memory_hit_ms", r.memoryHitMs);
             j.field("compile_disk_hit_ms", r.diskHitMs);
             j.field("jit_over_aot", r.aotRatio);

@@ -78,7 +78,12 @@ struct BenchRow {
     size_t lanes = 0;
     int runs = 0;
     double nsPerEval = 0, nsPerEvalMin = 0, evalsPerSecond = 0;
-    std::optional<double> coldMs, memoryHitMs, diskHitMs;
+    // coldMs: a cold compile (cache=off) with the row's options, i.e. tiered
+    // unless they say otherwise: the time until compile returns a kernel.
+    // tierUpMs: the tier-up thread's CPU time for the optimized code of
+    // that compile (0 if not tiered). coldOptimizedMs: a cold compile with
+    // codegen=optimized, which returns only once the optimized code is linked.
+    std::optional<double> coldMs, tierUpMs, coldOptimizedMs, memoryHitMs, diskHitMs;
     std::optional<double> aotRatio;  // this row's ns/eval over the AOT row's
     ErrorStats regular, hard;
     std::string label() const { return backend + " " + mode; }

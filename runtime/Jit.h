@@ -31,11 +31,19 @@ public:
     const std::string& cpuFeatures() const { return features_; }
     int hostVectorWidth() const;  // 16 with AVX-512F, 8 with AVX2, else 4
 
+    // How object code is emitted: Optimized is the kernel as it is meant to
+    // run (CodeGenOptLevel::Aggressive); Quick (CodeGenOptLevel::None: fast
+    // register allocation, no machine scheduling) emits in about half the
+    // time, computes the same bits and runs slower. Each level has its own
+    // target machine (LLVM's caches its subtargets unlocked), pipeline and
+    // lock, so a quick compile never waits for an optimized one running on
+    // another thread.
+    enum class Level { Quick, Optimized };
     // optimize() prepares `module` for this target and runs the short
     // function pipeline described in Jit.cpp; emitObject() returns its
-    // object code.
-    void optimize(llvm::Module& module);
-    std::unique_ptr<llvm::MemoryBuffer> emitObject(llvm::Module& module);
+    // object code. Both may be called from several threads.
+    void optimize(llvm::Module& module, Level level = Level::Optimized);
+    std::unique_ptr<llvm::MemoryBuffer> emitObject(llvm::Module& module, Level level = Level::Optimized);
     // Names the pipeline and codegen level: part of the kernel cache key,
     // so that a change to either never serves objects compiled before it.
     static constexpr const char* kPipelineId = "early-cse,reassociate,instcombine;codegen-O3";
@@ -48,17 +56,26 @@ public:
 
 private:
     FacetJit() = default;
+    // Emits a small kernel-like module at both levels. This builds the two
+    // codegen pipelines, and LLVM's codegen constructs its function-local
+    // statics (the SelectionDAG's value-type tables) here, before any
+    // Compiler owning this JIT is constructed. A static Compiler is then
+    // destroyed before them, so its last tier-up, which its destructor
+    // waits for, never runs on destroyed LLVM state.
+    void warmUp();
     std::unique_ptr<llvm::orc::LLJIT> jit_;
-    std::unique_ptr<llvm::TargetMachine> tm_;
-    // The codegen pipeline, built on the first emitObject() and run on every
-    // module after it (building it is ~1 ms of a compile), and the stream it
-    // writes objects to.
+    // One codegen level: its target machine, its pipeline, built on the first
+    // emitObject() at that level and run on every module after it (building
+    // it is ~1 ms of a compile), the stream it writes objects to, and the
+    // lock that makes one optimize() or emitObject() at a time use them.
     struct Codegen {
+        std::unique_ptr<llvm::TargetMachine> tm;
+        std::mutex mutex;
         llvm::SmallVector<char, 0> object;
         std::unique_ptr<llvm::raw_svector_ostream> stream;
-        llvm::legacy::PassManager passes;
+        std::unique_ptr<llvm::legacy::PassManager> passes;
     };
-    std::unique_ptr<Codegen> codegen_;
+    Codegen quick_, optimized_;
     // Skips the codegen passes that have nothing to do in a kernel (see
     // Jit.cpp); set on the module's own LLVMContext only while it is emitted.
     struct SkipPasses : llvm::OptPassGate {
@@ -67,7 +84,7 @@ private:
     };
     SkipPasses skipPasses_;
     std::string cpu_, features_;
-    std::mutex mutex_;  // LLJIT linking and TargetMachine emission are not re-entrant
+    std::mutex mutex_;  // LLJIT linking is not re-entrant
     uint64_t dylibCounter_ = 0;
 };
 

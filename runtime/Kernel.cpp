@@ -16,6 +16,10 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <thread>
 #include <random>
 #include <unistd.h>
 #include <cmath>
@@ -227,6 +231,11 @@ std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) 
             if (value == "on") out.floatFirst = true;
             else if (value == "off") out.floatFirst = false;
             else return fmt::format("float_first '{}' is not on or off", value);
+        } else if (key == "codegen") {
+            if (value == "tiered") out.codegen = Codegen::Tiered;
+            else if (value == "quick") out.codegen = Codegen::Quick;
+            else if (value == "optimized") out.codegen = Codegen::Optimized;
+            else return fmt::format("codegen '{}' is not tiered, quick or optimized", value);
         } else if (key == "cache") {
             if (value == "on") out.cache = Cache::On;
             else if (value == "off") out.cache = Cache::Off;
@@ -247,7 +256,7 @@ std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) 
                 return fmt::format("{}: expected one value or three (r,g,b)", key);
             out.bindings[key.substr(4)] = values;
         } else {
-            return fmt::format("unknown option '{}' (known: backend, math, tolerance, width, cache, float_first, set.NAME)", key);
+            return fmt::format("unknown option '{}' (known: backend, math, tolerance, width, cache, float_first, codegen, set.NAME)", key);
         }
     }
     return "";
@@ -257,6 +266,7 @@ std::string CompileOptions::canonical() const {
     std::string s = fmt::format("backend={};math={};width={}", backendName(backend), mathModeName(math), width);
     if (tolerance) s += fmt::format(";tolerance={}", *tolerance);
     if (!floatFirst) s += ";float_first=off";
+    if (codegen == Codegen::Quick) s += ";codegen=quick";
     for (const auto& [name, values] : bindings) {
         s += ";set." + name + "=";
         for (size_t i = 0; i < values.size(); ++i) s += fmt::format("{}{}", i ? "," : "", values[i]);
@@ -264,13 +274,110 @@ std::string CompileOptions::canonical() const {
     return s;
 }
 
-Kernel::~Kernel() {
-    if (jit_ && dylib_) jit_->release(*dylib_);
+// A compiled kernel's entry points and the dylibs that hold their code. The
+// entry points are atomics because a tier-up replaces them while other
+// threads may be evaluating; every dylib stays loaded until the last owner
+// (the Kernel, or a tier-up still running) lets go.
+struct KernelCode {
+    std::shared_ptr<FacetJit> jit;
+    std::atomic<ScalarKernelFn> scalar{nullptr};
+    std::atomic<ScalarStatusFn> scalarStatus{nullptr};
+    std::atomic<BatchKernelFn> batch{nullptr};
+
+    mutable std::mutex mutex;  // guards the members below
+    mutable std::condition_variable settled;
+    std::vector<llvm::orc::JITDylib*> dylibs;
+    bool optimized = false;
+    bool tierUpPending = false;
+    std::string tierUpError;
+    double tierUpMillis = 0;
+
+    ~KernelCode() {
+        for (llvm::orc::JITDylib* d : dylibs) jit->release(*d);
+    }
+};
+
+// One background thread per Compiler running tier-up jobs in order. A job
+// is called with closing = false normally, and with closing = true when the
+// Compiler is being destroyed: then it does only work whose result outlives
+// the Compiler (see Compiler::tierUp). A Compiler may be a static that
+// exit() destroys; FacetJit::warmUp() keeps LLVM's state alive until then.
+class TierUpWorker {
+public:
+    using Job = std::function<void(bool closing)>;
+    void post(Job job) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        jobs_.push_back(std::move(job));
+        if (!thread_.joinable()) thread_ = std::thread([this] { loop(); });
+        wake_.notify_one();
+    }
+    // Blocks until every job posted so far has finished.
+    void drain() {
+        std::unique_lock<std::mutex> lock(mutex_);
+        idle_.wait(lock, [this] { return jobs_.empty() && !busy_; });
+    }
+    ~TierUpWorker() {
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            closing_ = true;
+            wake_.notify_one();
+        }
+        if (thread_.joinable()) thread_.join();
+    }
+
+private:
+    void loop() {
+        std::unique_lock<std::mutex> lock(mutex_);
+        for (;;) {
+            wake_.wait(lock, [this] { return closing_ || !jobs_.empty(); });
+            if (jobs_.empty()) return;  // closing, and nothing left
+            Job job = std::move(jobs_.front());
+            jobs_.pop_front();
+            busy_ = true;
+            bool closing = closing_;
+            lock.unlock();
+            job(closing);
+            lock.lock();
+            busy_ = false;
+            idle_.notify_all();
+        }
+    }
+    std::mutex mutex_;
+    std::condition_variable wake_, idle_;
+    std::deque<Job> jobs_;
+    bool busy_ = false, closing_ = false;
+    std::thread thread_;
+};
+
+Kernel::~Kernel() = default;
+
+std::string Kernel::codeTier() const {
+    if (!code_) return "interpreter";
+    std::lock_guard<std::mutex> lock(code_->mutex);
+    return code_->optimized ? "optimized" : "quick";
+}
+
+void Kernel::waitOptimized() const {
+    if (!code_) return;
+    std::unique_lock<std::mutex> lock(code_->mutex);
+    code_->settled.wait(lock, [this] { return !code_->tierUpPending; });
+}
+
+std::string Kernel::tierUpError() const {
+    if (!code_) return "";
+    std::lock_guard<std::mutex> lock(code_->mutex);
+    return code_->tierUpError;
+}
+
+double Kernel::tierUpMillis() const {
+    if (!code_) return 0;
+    std::lock_guard<std::mutex> lock(code_->mutex);
+    return code_->tierUpMillis;
 }
 
 void Kernel::eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]) const {
-    if (scalar_) {
-        scalar_(wi, wo, inputs, rgb);
+    if (ScalarKernelFn scalar = code_ ? code_->scalar.load(std::memory_order_acquire) : nullptr) {
+        scalar(wi, wo, inputs, rgb);
         return;
     }
     // A SIMD kernel evaluates one lane through its batch entry.
@@ -286,7 +393,9 @@ void Kernel::eval(const float wi[3], const float wo[3], const float* inputs, flo
 int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
                           float* const rgb[3]) const {
     if (n <= 0) return 0;
-    if (batch_) return batch_(n, wi, wo, inputs, rgb);
+    if (BatchKernelFn batch = code_ ? code_->batch.load(std::memory_order_acquire) : nullptr)
+        return batch(n, wi, wo, inputs, rgb);
+    ScalarStatusFn scalarStatus = code_ ? code_->scalarStatus.load(std::memory_order_acquire) : nullptr;
     // Scalar and interpreter kernels: one lane at a time, same conventions.
     int64_t invalid = 0;
     int slots = inputCount();
@@ -294,15 +403,15 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
     std::vector<float> laneInputs(std::max(1, slots));
     std::vector<double> laneSlots(std::max(1, slots));
     std::optional<Interpreter<double>> interp;
-    if (!scalarStatus_) interp.emplace(material_, energyTable_);
+    if (!scalarStatus) interp.emplace(material_, energyTable_);
     for (int64_t i = 0; i < n; ++i) {
         for (int s = 0; s < slots; ++s) {
             laneSlots[s] = inputs && inputs[s] ? double(inputs[s][i]) : defaults[s];
             laneInputs[s] = float(laneSlots[s]);
         }
         float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, out[3];
-        if (scalarStatus_) {
-            invalid += scalarStatus_(a, b, laneInputs.data(), out);
+        if (scalarStatus) {
+            invalid += scalarStatus(a, b, laneInputs.data(), out);
         } else {
             double da[3] = {a[0], a[1], a[2]}, db[3] = {b[0], b[1], b[2]};
             EvalResult<double> r = interp->eval(da, db, laneSlots.data());
@@ -315,8 +424,15 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
 }
 
 Compiler::Compiler()
-    : jit_(FacetJit::Create()), tables_(std::make_unique<TableCache>()), cacheDir_(defaultCacheDir()) {}
-Compiler::~Compiler() = default;
+    : jit_(FacetJit::Create()),
+      tables_(std::make_unique<TableCache>()),
+      cacheDir_(defaultCacheDir()),
+      tierUpWorker_(std::make_unique<TierUpWorker>()) {}
+Compiler::~Compiler() {
+    tierUpWorker_.reset();  // first: its running job uses the JIT and the caches
+}
+
+void Compiler::finishTierUps() { tierUpWorker_->drain(); }
 
 int Compiler::resolveWidth(const CompileOptions& options) const {
     return options.width ? options.width : jit_->hostVectorWidth();
@@ -400,49 +516,124 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
     }
     if (!cached && options.cache == CompileOptions::Cache::On && !cachePath.empty()) {
         cached = readCacheFile(cachePath, key);
-        if (cached) kernel->origin_ = "disk cache";
+        if (cached) {
+            kernel->origin_ = "disk cache";
+            storeInCaches(key, "", options.cache, *cached);  // memory only
+        }
     }
+    const bool tiered = !cached && options.codegen == CompileOptions::Codegen::Tiered;
+    bool optimized = options.codegen != CompileOptions::Codegen::Quick;
     if (!cached) {
-        cached = options.tolerance ? searchVariants(kernel->material_, lowering, *options.tolerance, prefix)
-                                   : CachedKernel{compileObject(kernel->material_, lowering, prefix),
-                                                  lowering.variant.name(), -1.0};
+        FacetJit::Level level = optimized && !tiered ? FacetJit::Level::Optimized : FacetJit::Level::Quick;
+        MathVariant chosen = lowering.variant;
+        cached = options.tolerance
+                     ? searchVariants(kernel->material_, lowering, *options.tolerance, prefix, level, chosen)
+                     : CachedKernel{compileObject(kernel->material_, lowering, prefix, level), lowering.variant.name(),
+                                    -1.0};
+        lowering.variant = chosen;
         kernel->origin_ = "compiled";
-        if (options.cache == CompileOptions::Cache::On && !cachePath.empty())
-            writeCacheFile(cacheDir_, cachePath, key, *cached);
+        optimized = level == FacetJit::Level::Optimized;
+        // A tiered kernel's caches are filled by its tier-up, with optimized code.
+        if (!tiered) storeInCaches(key, cachePath, options.cache, *cached);
     }
-    if (options.cache != CompileOptions::Cache::Off) {
-        std::lock_guard<std::mutex> lock(cacheMutex_);
-        memoryCache_.emplace(key, *cached);
-    }
-    link(*kernel, cached->object, prefix, lowering);
+    kernel->code_ = std::make_shared<KernelCode>();
+    kernel->code_->jit = jit_;
+    kernel->code_->optimized = optimized;
+    link(*kernel->code_, cached->object, prefix, lowering);
     kernel->variant_ = cached->variant;
     kernel->measuredError_ = cached->measuredError;
+    if (tiered) {
+        kernel->code_->tierUpPending = true;
+        auto job = std::make_shared<TierUpJob>(TierUpJob{kernel->code_, kernel->material_, kernel->energyTable_,
+                                                         lowering, prefix, key, cachePath, options.cache, *cached});
+        job->record.object.clear();  // the quick object; the tier-up stores its own
+        tierUpWorker_->post([this, job](bool closing) { tierUp(*job, closing); });
+    }
     kernel->compileMillis_ = millisSince(start);
     return kernel;
 }
 
-std::string Compiler::compileObject(const CheckedMaterial& material, const LoweringOptions& lowering,
-                                    const std::string& prefix) {
-    llvm::LLVMContext context;
-    LoweredModule lowered = lowerMaterial(material, lowering, context, prefix);
-    jit_->optimize(*lowered.module);
-    return jit_->emitObject(*lowered.module)->getBuffer().str();
+void Compiler::storeInCaches(const std::string& key, const std::string& cachePath, CompileOptions::Cache cache,
+                             const CachedKernel& record) {
+    if (cache == CompileOptions::Cache::On && !cachePath.empty()) writeCacheFile(cacheDir_, cachePath, key, record);
+    if (cache != CompileOptions::Cache::Off) {
+        std::lock_guard<std::mutex> lock(cacheMutex_);
+        memoryCache_.emplace(key, record);
+    }
 }
 
-void Compiler::link(Kernel& kernel, const std::string& object, const std::string& prefix,
+namespace {
+double threadCpuMillis() {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
+}  // namespace
+
+void Compiler::tierUp(const TierUpJob& job, bool closing) {
+    std::shared_ptr<KernelCode> code = job.code.lock();
+    // A released kernel's optimized code is still worth having in a cache;
+    // once the Compiler is closing, only in the disk cache, which outlives it.
+    const bool forDisk = job.cache == CompileOptions::Cache::On && !job.cachePath.empty();
+    const bool wanted = closing ? forDisk : code || job.cache != CompileOptions::Cache::Off;
+    if (!wanted) {
+        if (!code) return;
+        std::lock_guard<std::mutex> lock(code->mutex);
+        code->tierUpError = "not optimized: the compiler was destroyed first";
+        code->tierUpPending = false;
+        code->settled.notify_all();
+        return;
+    }
+    double start = threadCpuMillis();
+    std::string error;
+    try {
+        CachedKernel record = job.record;
+        record.object = compileObject(job.material, job.lowering, job.prefix, FacetJit::Level::Optimized);
+        storeInCaches(job.key, job.cachePath, job.cache, record);
+        if (code) link(*code, record.object, job.prefix, job.lowering);
+    } catch (const std::exception& e) {
+        // Internal (LLVM) failure; the quick code computes the same values.
+        error = e.what();
+    }
+    if (!code) return;
+    std::lock_guard<std::mutex> lock(code->mutex);
+    code->optimized = error.empty();
+    code->tierUpError = error;
+    code->tierUpMillis = threadCpuMillis() - start;
+    code->tierUpPending = false;
+    code->settled.notify_all();
+}
+
+std::string Compiler::compileObject(const CheckedMaterial& material, const LoweringOptions& lowering,
+                                    const std::string& prefix, FacetJit::Level level) {
+    llvm::LLVMContext context;
+    LoweredModule lowered = lowerMaterial(material, lowering, context, prefix);
+    jit_->optimize(*lowered.module, level);
+    return jit_->emitObject(*lowered.module, level)->getBuffer().str();
+}
+
+void Compiler::link(KernelCode& code, const std::string& object, const std::string& prefix,
                     const LoweringOptions& lowering) {
-    kernel.jit_ = jit_;
-    kernel.dylib_ = &jit_->addObject(llvm::MemoryBuffer::getMemBufferCopy(object, prefix));
+    llvm::orc::JITDylib& dylib = jit_->addObject(llvm::MemoryBuffer::getMemBufferCopy(object, prefix));
+    {
+        std::lock_guard<std::mutex> lock(code.mutex);
+        code.dylibs.push_back(&dylib);
+    }
+    // Release order: the status entry before the plain one, so that no
+    // reader pairs a new plain entry with an old status entry's absence.
     if (lowering.emitScalar) {
-        kernel.scalar_ = reinterpret_cast<ScalarKernelFn>(jit_->lookup(*kernel.dylib_, prefix + "_scalar"));
-        kernel.scalarStatus_ = reinterpret_cast<ScalarStatusFn>(jit_->lookup(*kernel.dylib_, prefix + "_scalar_status"));
+        code.scalarStatus.store(reinterpret_cast<ScalarStatusFn>(jit_->lookup(dylib, prefix + "_scalar_status")),
+                                std::memory_order_release);
+        code.scalar.store(reinterpret_cast<ScalarKernelFn>(jit_->lookup(dylib, prefix + "_scalar")),
+                          std::memory_order_release);
     }
     if (lowering.emitBatch)
-        kernel.batch_ = reinterpret_cast<BatchKernelFn>(jit_->lookup(*kernel.dylib_, prefix + "_batch"));
+        code.batch.store(reinterpret_cast<BatchKernelFn>(jit_->lookup(dylib, prefix + "_batch")),
+                         std::memory_order_release);
 }
 
 CachedKernel Compiler::searchVariants(const CheckedMaterial& material, LoweringOptions lowering, double tolerance,
-                                      const std::string& prefix) {
+                                      const std::string& prefix, FacetJit::Level level, MathVariant& chosen) {
     const bool floatFirst = lowering.variant.floatFirst;
     // Fastest first; the first whose measured error meets the tolerance wins.
     // Exact is always last: if even it does not meet the tolerance, it is
@@ -451,14 +642,19 @@ CachedKernel Compiler::searchVariants(const CheckedMaterial& material, LoweringO
     for (const MathVariant& v : toleranceCandidates(material)) {
         lowering.variant = v;
         lowering.variant.floatFirst = floatFirst;
-        CachedKernel candidate{compileObject(material, lowering, prefix), v.name(), 0.0};
+        // Both codegen levels compute the same bits, so a quick candidate
+        // measures the error of its optimized code too.
+        CachedKernel candidate{compileObject(material, lowering, prefix, level), v.name(), 0.0};
         Kernel probe;
         probe.material_ = material;
         if (lowering.energyTable) probe.energyTable_ = tables_->getFor(material);
         probe.backend_ = lowering.emitBatch ? Backend::Simd : Backend::Scalar;
-        link(probe, candidate.object, prefix, lowering);
+        probe.code_ = std::make_shared<KernelCode>();
+        probe.code_->jit = jit_;
+        link(*probe.code_, candidate.object, prefix, lowering);
         candidate.measuredError = measureKernelError(probe, material);
         best = std::move(candidate);
+        chosen = lowering.variant;
         if (best.measuredError <= tolerance) break;
     }
     return best;

@@ -9,8 +9,22 @@
 //   backend=scalar|simd|interp   math=exact|fast   tolerance=X
 //   width=4|8|16                 set.NAME=VALUE (rgb: set.NAME=r,g,b)
 //   cache=on|off|memory          float_first=on|off
+//   codegen=tiered|quick|optimized
+//
+// Tiered compilation (the default): a compile returns a kernel whose code was
+// emitted quickly (FacetJit::Level::Quick, about half the emission time, the
+// same bits, 10-40% slower), and queues the optimized emission of the same
+// IR on the Compiler's tier-up thread, which switches the kernel's entry
+// points to the optimized code when it is linked. Evaluations running at the
+// switch finish on the quick code, which stays loaded as long as the kernel.
+// The caches keep only optimized objects, so a tiered compile fills them
+// when its tier-up is done: with caching on it runs even if the kernel was
+// released first. A Compiler's destructor waits for the tier-up running and
+// of those queued runs only the ones that fill the disk cache; the others'
+// kernels keep the quick code.
 #pragma once
 
+#include "Jit.h"
 #include "Lowering.h"
 #include "Material.h"
 #include "Specialize.h"
@@ -26,8 +40,9 @@ namespace llvm::orc { class JITDylib; }
 
 namespace facet {
 
-class FacetJit;
 class Kernel;
+struct KernelCode;
+class TierUpWorker;
 class EnergyTable;
 class TableCache;
 
@@ -62,6 +77,9 @@ struct CompileOptions {
     // allow them, the scaled forms elsewhere; off: the scaled forms, as the
     // scalar kernel.
     bool floatFirst = true;
+    // How the object code is emitted (FacetJit::Level): quick, optimized, or
+    // tiered: a quick kernel first and the optimized one in the background.
+    enum class Codegen { Tiered, Quick, Optimized } codegen = Codegen::Tiered;
 
     // Parses the ';'-separated option string; returns an error message or "".
     static std::string parse(const std::string& spec, CompileOptions& out);
@@ -92,6 +110,17 @@ public:
     const std::shared_ptr<const EnergyTable>& energyTable() const { return energyTable_; }
     double measuredError() const { return measuredError_; }
     double compileMillis() const { return compileMillis_; }
+    // The code the entry points run now: "quick" or "optimized" (tiered
+    // kernels change from the first to the second once), "interpreter".
+    std::string codeTier() const;
+    // Blocks until a tiered kernel runs its optimized code, or its tier-up
+    // failed (then it keeps the quick code, which computes the same values,
+    // and tierUpError() says why). Returns at once for other kernels.
+    void waitOptimized() const;
+    std::string tierUpError() const;
+    // CPU time the tier-up thread spent on this kernel's optimized code
+    // (lowering, optimization, emission, linking); 0 until it is done.
+    double tierUpMillis() const;
 
     void eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]) const;
     int64_t evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
@@ -104,11 +133,9 @@ private:
     Backend backend_ = Backend::Simd;
     int width_ = 1;
     std::vector<std::string> slotNames_;
-    ScalarKernelFn scalar_ = nullptr;
-    ScalarStatusFn scalarStatus_ = nullptr;
-    BatchKernelFn batch_ = nullptr;
-    std::shared_ptr<FacetJit> jit_;
-    llvm::orc::JITDylib* dylib_ = nullptr;
+    // Entry points and the dylibs behind them; shared with a pending tier-up
+    // (null for interpreter kernels).
+    std::shared_ptr<KernelCode> code_;
     std::string origin_;
     std::string variant_ = "reference";
     std::shared_ptr<const EnergyTable> energyTable_;
@@ -135,6 +162,10 @@ public:
     std::string irText(const std::string& path, const std::string& name, const CompileOptions& options,
                        bool simd, bool stages, DiagnosticEngine& diags);
 
+    // Blocks until every tier-up queued so far is done (its kernel switched,
+    // the caches filled).
+    void finishTierUps();
+
     FacetJit& jit() { return *jit_; }
     int resolveWidth(const CompileOptions& options) const;
     void setCacheDir(std::string dir) { cacheDir_ = std::move(dir); }
@@ -142,16 +173,35 @@ public:
 
 private:
     std::string compileObject(const CheckedMaterial& material, const LoweringOptions& lowering,
-                              const std::string& prefix);
-    void link(Kernel& kernel, const std::string& object, const std::string& prefix, const LoweringOptions& lowering);
+                              const std::string& prefix, FacetJit::Level level);
+    // Links `object` into a fresh dylib and installs its entry points in
+    // `code` (replacing the ones there; the old dylib stays loaded).
+    void link(KernelCode& code, const std::string& object, const std::string& prefix, const LoweringOptions& lowering);
+    // The fastest variant meeting `tolerance`; its MathVariant in `chosen`.
     CachedKernel searchVariants(const CheckedMaterial& material, LoweringOptions lowering, double tolerance,
-                                const std::string& prefix);
+                                const std::string& prefix, FacetJit::Level level, MathVariant& chosen);
+    // What the tier-up thread does for one kernel (see the top of this file).
+    struct TierUpJob {
+        std::weak_ptr<KernelCode> code;
+        CheckedMaterial material;
+        std::shared_ptr<const EnergyTable> energyTable;  // keeps lowering.energyTable alive
+        LoweringOptions lowering;
+        std::string prefix, key, cachePath;
+        CompileOptions::Cache cache;
+        CachedKernel record;  // variant name and measured error, for the caches
+    };
+    void tierUp(const TierUpJob& job, bool closing);
+    void storeInCaches(const std::string& key, const std::string& cachePath, CompileOptions::Cache cache,
+                       const CachedKernel& record);
 
     std::shared_ptr<FacetJit> jit_;
     std::unique_ptr<TableCache> tables_;  // Kulla-Conty E tables (memory + EXR on disk)
     std::string cacheDir_;
     std::mutex cacheMutex_;
     std::map<std::string, CachedKernel> memoryCache_;  // key -> compiled kernel
+    // Its thread starts with the first tiered compile; the destructor stops
+    // it first, because its running job uses everything above.
+    std::unique_ptr<TierUpWorker> tierUpWorker_;
 };
 
 }  // namespace facet

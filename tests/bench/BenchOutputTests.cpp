@@ -283,8 +283,8 @@ TEST_CASE("bench --json output parses and has every field") {
         for (const char* k : {"backend", "mode", "options", "variant"}) checkField(r, k, Kind::String);
         for (const char* k : {"width", "lanes", "runs", "ns_per_eval", "ns_per_eval_min", "evals_per_second"})
             checkField(r, k, Kind::Number);
-        for (const char* k : {"measured_error", "compile_cold_ms", "compile_memory_hit_ms", "compile_disk_hit_ms",
-                              "jit_over_aot"})
+        for (const char* k : {"measured_error", "compile_cold_ms", "compile_tier_up_ms", "compile_cold_optimized_ms",
+                              "compile_memory_hit_ms", "compile_disk_hit_ms", "jit_over_aot"})
             checkField(r, k, Kind::NumberOrNull);
         checkField(r, "error_regular", Kind::Object);
         checkField(r, "error_hard", Kind::Object);
@@ -298,6 +298,9 @@ TEST_CASE("bench --json output parses and has every field") {
         CHECK(r.at("evals_per_second").num() > 0);
         if (backend == "scalar" || backend == "simd") {
             CHECK(r.at("compile_cold_ms").isNumber());
+            // Tiered by default: the optimized code comes from the tier-up.
+            CHECK(r.at("compile_tier_up_ms").num() > 0);
+            CHECK(r.at("compile_cold_optimized_ms").num() > 0);
             CHECK(r.at("compile_memory_hit_ms").isNumber());
             CHECK(r.at("compile_disk_hit_ms").isNumber());
             CHECK(r.at("jit_over_aot").isNumber());

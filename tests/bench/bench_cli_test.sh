@@ -31,7 +31,8 @@ for path in (out + "/stdout.json", out + "/report/bench.json"):
         assert k in m, (path, k)
     assert m["energy_table"] is None, m["energy_table"]  # energy = none
     row_keys = ("backend", "mode", "options", "variant", "measured_error", "width", "lanes", "runs", "ns_per_eval",
-                "ns_per_eval_min", "evals_per_second", "compile_cold_ms", "compile_memory_hit_ms",
+                "ns_per_eval_min", "evals_per_second", "compile_cold_ms", "compile_tier_up_ms",
+                "compile_cold_optimized_ms", "compile_memory_hit_ms",
                 "compile_disk_hit_ms", "jit_over_aot", "error_regular", "error_hard")
     err_keys = ("values", "skipped", "nonfinite", "negative", "invalid_lanes", "reference_invalid_lanes", "max_rel",
                 "p999_rel", "max_ulp", "worst")
