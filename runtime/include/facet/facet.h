@@ -20,7 +20,11 @@ typedef struct facet_kernel facet_kernel;
 /* options: "key=value" pairs separated by ';' -- backend=scalar|simd|interp,
    math=exact|fast, tolerance=1e-4, width=4|8|16, set.NAME=VALUE (rgb:
    set.NAME=r,g,b), cache=on|off|memory, float_first=on|off (exact SIMD:
-   float where the lane is well-conditioned, double elsewhere; default on).
+   float where the lane is well-conditioned, double elsewhere; default on),
+   codegen=tiered|quick|optimized (default tiered: the kernel returned runs
+   quickly emitted code, and a background thread of the library swaps in
+   the optimized code, which computes the same values, about 5-15 ms
+   later; optimized: compile returns only once that code is linked).
    NULL or "" = defaults (simd, exact,
    the host's width). NULL material = the first in the file. On failure
    returns NULL and writes the diagnostic ("file:line:col: error: ...") into
