@@ -223,7 +223,7 @@ bool carriesFastMathFlags(const llvm::Module& module) {
 }  // namespace
 
 void FacetJit::optimize(llvm::Module& module, Level level) {
-    Codegen& codegen = level == Level::Quick ? quick_ : optimized_;
+    Codegen& codegen = codegenAt(level);
     std::lock_guard<std::mutex> lock(codegen.mutex);
     llvm::TargetMachine* tm = codegen.tm.get();
     module.setDataLayout(tm->createDataLayout());
@@ -279,7 +279,7 @@ bool FacetJit::SkipPasses::shouldRunPass(llvm::StringRef pass, llvm::StringRef) 
 }
 
 std::unique_ptr<llvm::MemoryBuffer> FacetJit::emitObject(llvm::Module& module, Level level) {
-    Codegen& codegen = level == Level::Quick ? quick_ : optimized_;
+    Codegen& codegen = codegenAt(level);
     std::lock_guard<std::mutex> lock(codegen.mutex);
     if (!codegen.passes) {
         auto passes = std::make_unique<llvm::legacy::PassManager>();

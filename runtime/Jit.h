@@ -76,6 +76,7 @@ private:
         std::unique_ptr<llvm::legacy::PassManager> passes;
     };
     Codegen quick_, optimized_;
+    Codegen& codegenAt(Level level) { return level == Level::Quick ? quick_ : optimized_; }
     // Skips the codegen passes that have nothing to do in a kernel (see
     // Jit.cpp); set on the module's own LLVMContext only while it is emitted.
     struct SkipPasses : llvm::OptPassGate {

@@ -295,6 +295,15 @@ struct KernelCode {
     ~KernelCode() {
         for (llvm::orc::JITDylib* d : dylibs) jit->release(*d);
     }
+    // Ends a pending tier-up: optimized unless `error` says why not.
+    void settle(std::string error, double millis) {
+        std::lock_guard<std::mutex> lock(mutex);
+        optimized = error.empty();
+        tierUpError = std::move(error);
+        tierUpMillis = millis;
+        tierUpPending = false;
+        settled.notify_all();
+    }
 };
 
 // One background thread per Compiler running tier-up jobs in order. A job
@@ -521,10 +530,12 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
             storeInCaches(key, "", options.cache, *cached);  // memory only
         }
     }
+    // Cached objects are optimized, except under codegen=quick's own key.
     const bool tiered = !cached && options.codegen == CompileOptions::Codegen::Tiered;
-    bool optimized = options.codegen != CompileOptions::Codegen::Quick;
+    const FacetJit::Level level = tiered || options.codegen == CompileOptions::Codegen::Quick
+                                      ? FacetJit::Level::Quick
+                                      : FacetJit::Level::Optimized;
     if (!cached) {
-        FacetJit::Level level = optimized && !tiered ? FacetJit::Level::Optimized : FacetJit::Level::Quick;
         MathVariant chosen = lowering.variant;
         cached = options.tolerance
                      ? searchVariants(kernel->material_, lowering, *options.tolerance, prefix, level, chosen)
@@ -532,21 +543,21 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
                                     -1.0};
         lowering.variant = chosen;
         kernel->origin_ = "compiled";
-        optimized = level == FacetJit::Level::Optimized;
         // A tiered kernel's caches are filled by its tier-up, with optimized code.
         if (!tiered) storeInCaches(key, cachePath, options.cache, *cached);
     }
     kernel->code_ = std::make_shared<KernelCode>();
     kernel->code_->jit = jit_;
-    kernel->code_->optimized = optimized;
+    kernel->code_->optimized = level == FacetJit::Level::Optimized;
     link(*kernel->code_, cached->object, prefix, lowering);
     kernel->variant_ = cached->variant;
     kernel->measuredError_ = cached->measuredError;
     if (tiered) {
         kernel->code_->tierUpPending = true;
+        // The record without the quick object: the tier-up stores its own.
         auto job = std::make_shared<TierUpJob>(TierUpJob{kernel->code_, kernel->material_, kernel->energyTable_,
-                                                         lowering, prefix, key, cachePath, options.cache, *cached});
-        job->record.object.clear();  // the quick object; the tier-up stores its own
+                                                         lowering, prefix, key, cachePath, options.cache,
+                                                         CachedKernel{"", cached->variant, cached->measuredError}});
         tierUpWorker_->post([this, job](bool closing) { tierUp(*job, closing); });
     }
     kernel->compileMillis_ = millisSince(start);
@@ -577,11 +588,7 @@ void Compiler::tierUp(const TierUpJob& job, bool closing) {
     const bool forDisk = job.cache == CompileOptions::Cache::On && !job.cachePath.empty();
     const bool wanted = closing ? forDisk : code || job.cache != CompileOptions::Cache::Off;
     if (!wanted) {
-        if (!code) return;
-        std::lock_guard<std::mutex> lock(code->mutex);
-        code->tierUpError = "not optimized: the compiler was destroyed first";
-        code->tierUpPending = false;
-        code->settled.notify_all();
+        if (code) code->settle("not optimized: the compiler was destroyed first", 0);
         return;
     }
     double start = threadCpuMillis();
@@ -595,13 +602,7 @@ void Compiler::tierUp(const TierUpJob& job, bool closing) {
         // Internal (LLVM) failure; the quick code computes the same values.
         error = e.what();
     }
-    if (!code) return;
-    std::lock_guard<std::mutex> lock(code->mutex);
-    code->optimized = error.empty();
-    code->tierUpError = error;
-    code->tierUpMillis = threadCpuMillis() - start;
-    code->tierUpPending = false;
-    code->settled.notify_all();
+    if (code) code->settle(error, threadCpuMillis() - start);
 }
 
 std::string Compiler::compileObject(const CheckedMaterial& material, const LoweringOptions& lowering,
