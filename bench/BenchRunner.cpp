@@ -510,11 +510,11 @@ std::string aotTagFor(const std::string& source, const std::string& path, const 
 
 std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& m, int loadRuns,
                                                  const std::optional<std::string>& cacheDir) {
-    if (m.energyModel() != EnergyModel::KullaConty || kullaContyUnsupported(m)) return std::nullopt;
+    if (!m.compensatesEnergy() || kullaContyUnsupported(m)) return std::nullopt;
     EnergyTableKey key = energyTableKey(m);
     EnergyTableBench e;
-    e.ndf = modelInfo(ModelSlot::Ndf, int(key.ndf)).name;
-    e.masking = modelInfo(ModelSlot::Masking, int(key.masking)).name;
+    e.ndf = key.ndf->name;
+    e.masking = key.masking->name;
     e.key = key.name();
     // Cold: the quadrature itself, on the threads a cache miss uses.
     std::shared_ptr<EnergyTable> table = buildEnergyTable(key);

@@ -1,13 +1,14 @@
 // Builtins: the one table of built-in functions and models of the language.
 //
-// The checker, the reference interpreter and the JIT lowering all read these
-// tables, so a function or model is declared exactly once: its name, its
-// parameters and their types, and (for functions) its scalar semantics in any
-// real type. Adding a model means adding a row here and its formula in the
-// interpreter and the lowering; the checker needs no change.
+// The checker, the reference interpreter and the JIT lowering all read the
+// function table, so a function is declared exactly once: its name, its
+// parameters and their types, and its scalar semantics in any real type.
+// Models live in the model catalog (models/ModelCatalog.h); the enums and
+// parameter indices below are the lowering's view of them.
 #pragma once
 
 #include "AST.h"
+#include "models/ModelCatalog.h"
 
 #include <cmath>
 #include <string_view>
@@ -101,43 +102,6 @@ constexpr int ConductorEta = 0, ConductorK = 1;
 constexpr int Albedo = 0;
 }  // namespace param
 
-struct ModelParam {
-    const char* name;
-    ValueType type;
-};
-
-// One way of writing a model's arguments, e.g. ggx(alpha) or
-// ggx(alpha_x, alpha_y). Each written parameter fills one or more canonical
-// parameters (ggx(alpha) fills both alpha_x and alpha_y).
-struct ModelForm {
-    struct Param {
-        const char* name;
-        ValueType type;
-        std::vector<int> targets;
-    };
-    std::vector<Param> params;
-};
-
-struct ModelInfo {
-    ModelSlot slot;
-    int id;  // value of the slot's enum (NdfModel, MaskingModel, ...)
-    const char* name;
-    std::vector<const char*> aliases;
-    std::vector<ModelParam> canonical;
-    std::vector<ModelForm> forms;  // at least one (an empty form for no arguments)
-    // masking: needs the NDF's Smith Lambda. ndf: has a closed-form Lambda.
-    bool smith = false;
-    const char* summary;
-};
-
-const std::vector<ModelInfo>& builtinModels();
-const ModelInfo* findModel(ModelSlot slot, std::string_view name);
-const ModelInfo& modelInfo(ModelSlot slot, int id);
-
-// Domain limits shared by every evaluator.
-constexpr double kMinAlpha = 1e-4;        // SPEC 3: smaller alpha is a delta lobe
-constexpr double kMaxPhongExponent = 2e8; // = beckmann_to_phong(kMinAlpha)
-constexpr double kMinEta = 1e-4;
 constexpr double kUnitTolerance = 1e-3;   // SPEC 2: |len(w) - 1| allowed
 
 }  // namespace facet

@@ -132,7 +132,7 @@ public:
             }
         }
         if (seen[int(ModelSlot::Ndf)] && out_.ndf.model) checkCombination(seen);
-        if (out_.energy.model->id == int(EnergyModel::KullaConty) && seen[int(ModelSlot::Ndf)] && out_.ndf.model &&
+        if (out_.compensatesEnergy() && seen[int(ModelSlot::Ndf)] && out_.ndf.model &&
             diags_.diagnostics().size() == errorsBefore && !diags_.full())
             if (auto why = kullaContyUnsupported(out_)) diags_.error(why->loc, why->message);  // KullaConty.h
         return std::move(out_);
@@ -272,10 +272,9 @@ private:
         const ModelInfo* model = findModel(stmt.slot, stmt.model);
         if (!model) {
             std::vector<std::string> candidates;
-            for (const ModelInfo& m : builtinModels()) {
-                if (m.slot != stmt.slot) continue;
-                candidates.push_back(m.name);
-                for (const char* a : m.aliases) candidates.push_back(a);
+            for (const ModelInfo* m : catalogSlot(stmt.slot)) {
+                candidates.push_back(m->name);
+                for (const char* a : m->aliases) candidates.push_back(a);
             }
             std::string hint = suggestion(stmt.model, candidates);
             if (hint.empty()) hint = fmt::format(" (expected {})", joinNames(candidates));
@@ -409,20 +408,22 @@ private:
     }
 
     void checkCombination(const std::array<const ModelStmt*, kModelSlotCount>& seen) {
-        const ModelInfo& ndf = *out_.ndf.model;
+        const NdfEntry& ndf = ndfEntry(*out_.ndf.model);
         const ModelInfo& masking = *out_.masking.model;
         SourceLoc maskingLoc = seen[int(ModelSlot::Masking)] ? out_.masking.loc : out_.ndf.loc;
-        if (ndf.id == int(NdfModel::Ward)) {
-            if (masking.id != int(MaskingModel::None))
-                diags_.error(maskingLoc, fmt::format("ndf 'ward' is a whole BRDF lobe with its own normalization; it "
+        if (ndf.wholeLobe) {
+            if (std::string_view(masking.name) != "none")
+                diags_.error(maskingLoc, fmt::format("ndf '{}' is a whole BRDF lobe with its own normalization; it "
                                                      "requires 'masking = none', not '{}'",
-                                                     masking.name));
+                                                     ndf.name, masking.name));
         } else if (masking.smith && !ndf.smith) {
+            std::vector<std::string> smithNdfs;
+            for (const ModelInfo* m : catalogSlot(ModelSlot::Ndf))
+                if (m->smith) smithNdfs.push_back(m->name);
             diags_.error(maskingLoc,
                          fmt::format("masking '{}' needs the Smith Lambda of the NDF, and ndf '{}' has no closed-form "
-                                     "Lambda; use ggx, beckmann or blinn_phong, or a non-Smith masking such as "
-                                     "cook_torrance or schlick_smith",
-                                     masking.name, ndf.name));
+                                     "Lambda; use {}, or a non-Smith masking such as cook_torrance or schlick_smith",
+                                     masking.name, ndf.name, joinNames(smithNdfs)));
         }
     }
 

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <limits>
+#include <optional>
 #include <numbers>
 #include <set>
 
@@ -352,179 +353,52 @@ std::string describeCase(const CheckedMaterial& material, const HardCase& c) {
 
 namespace {
 
-struct NdfForm {
-    std::string key;      // part of the material name
-    std::string family;   // model name
-    std::string inputs;   // input declarations
-    std::string stmt;     // the ndf statement's right-hand side
-    bool smith;           // has a closed-form Lambda
-};
-
-std::vector<NdfForm> ndfForms() {
-    return {
-        {"ggx", "ggx", "input alpha = 0.3;", "ggx(alpha)", true},
-        {"ggx_aniso", "ggx", "input alpha_x = 0.05; input alpha_y = 0.5;", "ggx(alpha_x = alpha_x, alpha_y = alpha_y)",
-         true},
-        {"beckmann", "beckmann", "input alpha = 0.3;", "beckmann(alpha)", true},
-        {"beckmann_aniso", "beckmann", "input alpha_x = 0.05; input alpha_y = 0.5;",
-         "beckmann(alpha_x = alpha_x, alpha_y = alpha_y)", true},
-        {"blinn_phong", "blinn_phong", "input exponent = 50;", "blinn_phong(exponent)", true},
-        {"gtr", "gtr", "input alpha = 0.3; input gamma = 1.5;", "gtr(alpha, gamma)", false},
-        {"gaussian", "gaussian", "input alpha = 0.3;", "gaussian(alpha)", false},
-        {"ward", "ward", "input alpha = 0.3;", "ward(alpha)", false},
-        {"ward_aniso", "ward", "input alpha_x = 0.05; input alpha_y = 0.5;", "ward(alpha_x = alpha_x, alpha_y = alpha_y)",
-         false},
-    };
-}
-
-struct MaskingForm {
-    std::string name, inputs, stmt;
-    bool smith;
-};
-std::vector<MaskingForm> maskingForms() {
-    std::vector<MaskingForm> out;
-    for (const char* n : {"none", "implicit", "cook_torrance", "kelemen", "neumann"}) out.push_back({n, "", n, false});
-    out.push_back({"schlick_smith", "input k = 0.15;", "schlick_smith(k)", false});
-    for (const char* n : {"smith_separable", "smith_height_correlated", "smith_direction_correlated",
-                          "smith_height_direction_correlated"})
-        out.push_back({n, "", n, true});
-    return out;
-}
-
-struct FresnelForm {
-    std::string key, name, inputs, stmt, extra;
-};
-std::vector<FresnelForm> fresnelForms() {
-    return {
-        {"none", "none", "", "none", ""},
-        // schlick(f0) carries the Lambert base (albedo input) as well.
-        {"schlick_f0", "schlick", "input f0 = rgb(0.04, 0.5, 0.9); input albedo = rgb(0.5, 0.25, 0.1);",
-         "schlick(f0 = f0)", "diffuse = lambert(albedo);"},
-        {"schlick_eta", "schlick", "input eta = rgb(1.5, 1.0, 0.7);", "schlick(eta = eta)", ""},
-        {"dielectric", "dielectric", "input eta = rgb(1.5, 1.0, 0.7);", "dielectric(eta)", ""},
-        // (kc, not k: schlick_smith's input is k)
-        {"conductor", "conductor", "input eta = rgb(0.14, 1.0, 1.38); input kc = rgb(3.7, 0.0, 1.9);",
-         "conductor(eta = eta, k = kc)", ""},
-    };
-}
-
-bool accepted(const std::string& text) {
+// The checked material of a generated text, or null where the checker
+// rejects it (an NDF without a closed-form Lambda under a Smith masking, a
+// whole-lobe NDF with a masking term, ...).
+std::optional<CheckedMaterial> checked(const std::string& text) {
     DiagnosticEngine diags;
-    loadProgramText(text, "hardcase.mat", diags);
-    return !diags.hasErrors();
+    CheckedProgram p = loadProgramText(text, "hardcase.mat", diags);
+    if (diags.hasErrors() || p.materials.empty()) return std::nullopt;
+    return p.materials.front();
 }
 
 }  // namespace
 
 std::vector<HardCaseMaterial> hardCaseMaterials(std::vector<std::string>* rejected) {
     std::vector<HardCaseMaterial> out;
-    auto add = [&](const std::string& name, const std::string& body, const std::string& ndf,
-                   const std::string& masking, const std::string& fresnel) {
+    auto add = [&](const std::string& name, const std::string& body) {
         std::string text = "material " + name + " {\n" + body + "}\n";
-        if (accepted(text)) out.push_back({name, text, ndf, masking, fresnel});
-        else if (rejected) rejected->push_back(text);
+        if (std::optional<CheckedMaterial> m = checked(text))
+            out.push_back({name, text, m->ndf.model->name, m->masking.model->name, m->fresnel.model->name});
+        else if (rejected)
+            rejected->push_back(text);
     };
-    // Every NDF form x masking x Fresnel the checker accepts, parameters as
-    // unranged inputs.
-    for (const NdfForm& n : ndfForms())
-        for (const MaskingForm& g : maskingForms()) {
-            if (g.smith && !n.smith) continue;          // no closed-form Lambda
-            if (n.family == "ward" && g.name != "none") continue;  // ward is a whole lobe
-            for (const FresnelForm& f : fresnelForms()) {
-                // schlick(eta) differs from schlick(f0) only in how f0 is
-                // computed (independent of D and G): a few pairs suffice.
-                if (f.key == "schlick_eta" && g.name != "none" && g.name != "smith_height_correlated") continue;
-                std::string inputs = n.inputs + "\n" + g.inputs + "\n" + f.inputs + "\n";
-                std::string body = inputs + "ndf = " + n.stmt + ";\nmasking = " + g.stmt + ";\nfresnel = " + f.stmt +
-                                   ";\n" + f.extra + "\n";
-                add("hc_" + n.key + "_" + g.name + "_" + f.key, body, n.family, g.name, f.name);
-            }
-        }
-    // Constant extreme parameters (folded by the JIT) and range-clamped inputs.
-    struct Fixed {
-        const char* name;
-        const char* body;
-        const char* ndf;
-        const char* masking;
-        const char* fresnel;
-    };
-    static const Fixed fixed[] = {
-        {"hcc_ggx_alpha_min", "ndf = ggx(1e-4); masking = smith_height_correlated;", "ggx", "smith_height_correlated", "none"},
-        {"hcc_ggx_alpha_below_clamp", "ndf = ggx(1e-6); masking = smith_separable; fresnel = schlick(0.04);", "ggx",
-         "smith_separable", "schlick"},
-        {"hcc_ggx_aniso_1e4", "ndf = ggx(alpha_x = 1e-4, alpha_y = 1); masking = smith_height_correlated; "
-                              "fresnel = conductor(eta = rgb(0.14, 0.43, 1.38), k = rgb(3.697, 2.455, 1.914));",
-         "ggx", "smith_height_correlated", "conductor"},
-        {"hcc_ggx_alpha_2", "ndf = ggx(2); masking = smith_height_direction_correlated;", "ggx",
-         "smith_height_direction_correlated", "none"},
-        {"hcc_beckmann_alpha_min", "ndf = beckmann(1e-4); masking = smith_height_correlated; fresnel = dielectric(1.5);",
-         "beckmann", "smith_height_correlated", "dielectric"},
-        {"hcc_beckmann_aniso_1e4", "ndf = beckmann(alpha_x = 1, alpha_y = 1e-4); masking = smith_direction_correlated;",
-         "beckmann", "smith_direction_correlated", "none"},
-        {"hcc_beckmann_alpha_2", "ndf = beckmann(2); masking = smith_separable;", "beckmann", "smith_separable", "none"},
-        {"hcc_blinn_1e6", "ndf = blinn_phong(1e6); masking = smith_height_correlated;", "blinn_phong",
-         "smith_height_correlated", "none"},
-        {"hcc_blinn_max", "ndf = blinn_phong(2e8); masking = implicit; fresnel = schlick(0.04);", "blinn_phong",
-         "implicit", "schlick"},
-        {"hcc_blinn_0", "ndf = blinn_phong(0); masking = smith_separable;", "blinn_phong", "smith_separable", "none"},
-        {"hcc_blinn_phong_exponent_r0", "ndf = blinn_phong(phong_exponent(0)); masking = cook_torrance;",
-         "blinn_phong", "cook_torrance", "none"},
-        {"hcc_blinn_phong_exponent_input",
-         "input r = 0.5 in 0 .. 1; ndf = blinn_phong(phong_exponent(r)); masking = smith_height_correlated;",
-         "blinn_phong", "smith_height_correlated", "none"},
-        {"hcc_blinn_beckmann_to_phong_input",
-         "input a = 0.5 in 0 .. 2; ndf = blinn_phong(beckmann_to_phong(a)); masking = implicit;", "blinn_phong",
-         "implicit", "none"},
-        {"hcc_gtr_g1_a1", "ndf = gtr(1, 1); masking = cook_torrance;", "gtr", "cook_torrance", "none"},
-        {"hcc_gtr_g1", "ndf = gtr(0.1, 1); masking = schlick_smith(0.125); fresnel = schlick(0.04);", "gtr",
-         "schlick_smith", "schlick"},
-        {"hcc_gtr_a1", "ndf = gtr(1, 2.5); masking = kelemen;", "gtr", "kelemen", "none"},
-        {"hcc_gtr_near_g1", "ndf = gtr(0.3, 1.0000001); masking = neumann;", "gtr", "neumann", "none"},
-        {"hcc_gtr_near_a1", "ndf = gtr(0.9999999, 2); masking = implicit;", "gtr", "implicit", "none"},
-        {"hcc_gtr_g0", "ndf = gtr(0.5, 0); masking = none;", "gtr", "none", "none"},
-        {"hcc_gtr_ranged",
-         "input alpha = 0.5 in 0 .. 2; input gamma = 1 in 0 .. 10; ndf = gtr(alpha, gamma); masking = cook_torrance;",
-         "gtr", "cook_torrance", "none"},
-        {"hcc_gaussian_alpha_min", "ndf = gaussian(1e-4); masking = cook_torrance;", "gaussian", "cook_torrance", "none"},
-        {"hcc_gaussian_alpha_2", "ndf = gaussian(2); masking = schlick_smith(0.5);", "gaussian", "schlick_smith", "none"},
-        {"hcc_ward_aniso_1e4", "ndf = ward(alpha_x = 1e-4, alpha_y = 1);", "ward", "none", "none"},
-        {"hcc_dielectric_eta1", "ndf = ggx(0.3); masking = smith_height_correlated; fresnel = dielectric(1);", "ggx",
-         "smith_height_correlated", "dielectric"},
-        {"hcc_dielectric_tir",
-         "ndf = ggx(0.3); masking = smith_height_correlated; fresnel = dielectric(rgb(0.5, 0.9, 0.6666667));", "ggx",
-         "smith_height_correlated", "dielectric"},
-        {"hcc_dielectric_near1",
-         "ndf = beckmann(0.3); masking = smith_separable; fresnel = dielectric(rgb(1.000001, 0.999999, 1));",
-         "beckmann", "smith_separable", "dielectric"},
-        {"hcc_conductor_k0",
-         "ndf = ggx(0.3); masking = smith_height_correlated; fresnel = conductor(eta = rgb(0.2, 1, 1.5), k = 0);",
-         "ggx", "smith_height_correlated", "conductor"},
-        {"hcc_conductor_eta1_k0", "ndf = ggx(0.3); masking = smith_separable; fresnel = conductor(eta = 1, k = 0);",
-         "ggx", "smith_separable", "conductor"},
-        {"hcc_schlick_eta1", "ndf = ggx(0.3); masking = smith_separable; fresnel = schlick(eta = 1);", "ggx",
-         "smith_separable", "schlick"},
-        {"hcc_schlick_smith_k0", "ndf = beckmann(0.3); masking = schlick_smith(0);", "beckmann", "schlick_smith", "none"},
-        {"hcc_schlick_smith_k1", "ndf = ggx(0.3); masking = schlick_smith(1);", "ggx", "schlick_smith", "none"},
-        // energy = kulla_conty (its tables need constant gamma / k): f_ms on the hard cases.
-        {"hcc_kc_ggx_conductor",
-         "input alpha = 0.3; ndf = ggx(alpha); masking = smith_height_correlated; "
-         "fresnel = conductor(eta = rgb(0.14, 1, 1.38), k = rgb(3.7, 0, 1.9)); energy = kulla_conty;",
-         "ggx", "smith_height_correlated", "conductor"},
-        {"hcc_kc_beckmann_dielectric",
-         "input alpha = 0.3; input eta = rgb(1.5, 1, 0.7); ndf = beckmann(alpha); masking = smith_separable; "
-         "fresnel = dielectric(eta); energy = kulla_conty;",
-         "beckmann", "smith_separable", "dielectric"},
-        {"hcc_kc_ggx_aniso_schlick",
-         "input alpha_x = 0.05; input alpha_y = 0.5; input f0 = rgb(0.04, 0.5, 0.9); "
-         "ndf = ggx(alpha_x = alpha_x, alpha_y = alpha_y); masking = smith_height_direction_correlated; "
-         "fresnel = schlick(f0 = f0); energy = kulla_conty;",
-         "ggx", "smith_height_direction_correlated", "schlick"},
-        {"hcc_ranged_roughness",
-         "input roughness = 0.5 in 0 .. 1; input tint = rgb(1, 0.5, 0.25) in 0 .. 1; let alpha = roughness * roughness; "
-         "ndf = ggx(alpha); masking = smith_height_correlated; fresnel = schlick(f0 = tint); diffuse = lambert(tint);",
-         "ggx", "smith_height_correlated", "schlick"},
-    };
-    for (const Fixed& f : fixed) add(f.name, std::string(f.body) + "\n", f.ndf, f.masking, f.fresnel);
+    // Every example of every NDF x masking x Fresnel model the checker
+    // accepts, parameters as unranged inputs. A sparse example is combined
+    // only with the representative masking and Fresnel models.
+    std::vector<const ModelInfo*> ndfs = catalogSlot(ModelSlot::Ndf), maskings = catalogSlot(ModelSlot::Masking),
+                                  fresnels = catalogSlot(ModelSlot::Fresnel);
+    for (const ModelInfo* n : ndfs)
+        for (const ModelExample& ne : n->examples)
+            for (const ModelInfo* g : maskings)
+                for (const ModelExample& ge : g->examples)
+                    for (const ModelInfo* f : fresnels)
+                        for (const ModelExample& fe : f->examples) {
+                            if (g->smith && !n->smith) continue;
+                            if (ndfEntry(*n).wholeLobe && std::string_view(g->name) != "none") continue;
+                            bool sparse = ne.sparse || ge.sparse || fe.sparse;
+                            if (sparse && (!g->representative && !ge.sparse)) continue;
+                            if (sparse && (!f->representative && !fe.sparse)) continue;
+                            std::string body = ne.inputs + "\n" + ge.inputs + "\n" + fe.inputs + "\nndf = " + ne.stmt +
+                                               ";\nmasking = " + ge.stmt + ";\nfresnel = " + fe.stmt + ";\n" + ne.extra +
+                                               ge.extra + fe.extra + "\n";
+                            add("hc_" + ne.key + "_" + ge.key + "_" + fe.key, body);
+                        }
+    // Each model's own extremes: constant parameters at the edges of its
+    // domain (folded by the JIT) and range-clamped inputs.
+    for (const ModelInfo* m : catalog())
+        for (const ModelHardCase& c : m->hardCases) add(c.name, c.body + "\n");
     return out;
 }
 
@@ -538,7 +412,7 @@ struct QuadReference::Impl {
     Interpreter<double> d;
     Interpreter<Quad> q;
     static std::shared_ptr<const EnergyTable> tableFor(const CheckedMaterial& m) {
-        if (m.energy.model && m.energyModel() == EnergyModel::KullaConty) return buildEnergyTable(energyTableKey(m));
+        if (m.compensatesEnergy()) return buildEnergyTable(energyTableKey(m));
         return nullptr;
     }
     explicit Impl(const CheckedMaterial& m) : material(m), table(tableFor(m)), d(m, table), q(m, table) {}

@@ -69,14 +69,12 @@ struct HardCaseMaterial {
     std::string ndf, masking, fresnel;  // model names, for grouping reports
 };
 
-// Every NDF form x masking x Fresnel combination the checker accepts
-// (`none`, the Smith variants only with an NDF that has a Smith Lambda, ward
-// only with masking = none; the schlick(eta) form only with masking none and
-// smith_height_correlated, as it differs from schlick(f0) only in how f0 is
-// computed), model parameters as unranged inputs, a Lambert base on the
-// schlick(f0) variants; then constant-parameter and
-// range-clamped materials for the model-parameter hard cases. Only texts
-// the checker accepts are returned; `rejected` (if given) receives the
+// Every example (ModelExample) of every NDF x masking x Fresnel model of
+// the catalog that can be combined (a Smith masking only with an NDF that
+// has a Smith Lambda, a whole-lobe NDF only with masking = none, a sparse
+// example only with the representative models), model parameters as
+// unranged inputs; then every model's own hard cases (ModelHardCase). Only
+// texts the checker accepts are returned; `rejected` (if given) receives the
 // generated texts it refused, which should be none.
 std::vector<HardCaseMaterial> hardCaseMaterials(std::vector<std::string>* rejected = nullptr);
 

@@ -24,14 +24,6 @@ Real sq(Real x) { return x * x; }
 template <typename Real>
 bool finite(Real x) { using std::isfinite; return isfinite(x); }
 
-// expm1(y)/y, continuous through y = 0 (where it is 1).
-template <typename Real>
-Real expm1OverX(Real y) {
-    using std::expm1;
-    if (y == 0) return 1;
-    return expm1(y) / y;
-}
-
 // cos of the half angle, wi.h = wo.h = |wi + wo| / 2 for unit vectors (at most 1).
 template <typename Real>
 Real halfAngleCos(const Vec3<Real>& wi, const Vec3<Real>& wo) {
@@ -47,16 +39,6 @@ template <typename Real>
 Real halfAngleSin2(const Vec3<Real>& wi, const Vec3<Real>& wo) {
     Real s2 = (sq(wi.x - wo.x) + sq(wi.y - wo.y) + sq(wi.z - wo.z)) / 4;
     return s2 < 1 ? s2 : Real(1);
-}
-
-// log(expm1(y)/y) without overflow for large y (the GTR normalization at
-// large gamma: expm1((1 - gamma) ln a^2) overflows long before the
-// normalized D does).
-template <typename Real>
-Real logExpm1OverX(Real y) {
-    using std::expm1; using std::log;
-    if (y > 1) return y + log(-expm1(-y)) - log(y);
-    return log(expm1OverX(y));
 }
 
 // ---- double-Real arithmetic for the directions ----
@@ -126,90 +108,40 @@ void normalizedPair(const Real wi[3], const Real wo[3], Vec3<Real>& ui, Vec3<Rea
 }  // namespace
 
 template <typename Real>
-Real gaussianNdfNorm(Real alpha) {
-    using std::cos; using std::exp; using std::min; using std::sin;
-    // A small memo per thread: resolve() runs for every evaluation and a
-    // sample mostly shares a few alphas, while the quadrature costs 512
-    // exp/cos/sin (milliseconds in __float128).
-    constexpr int kMemo = 4;
-    thread_local Real memoAlpha[kMemo] = {-1, -1, -1, -1}, memoNorm[kMemo] = {};
-    thread_local int memoNext = 0;
-    for (int i = 0; i < kMemo; ++i)
-        if (memoAlpha[i] == alpha) return memoNorm[i];
-    // The integrand is negligible beyond 8 alpha (exp(-64)).
-    Real upper = min(kPi<Real> / 2, 8 * alpha);
-    auto f = [&](Real t) { return exp(-t * t / (alpha * alpha)) * cos(t) * sin(t); };
-    static const quadrature::GaussLegendre<Real>& gl8 = quadrature::gaussLegendre<Real>(8);
-    Real norm = 2 * kPi<Real> * quadrature::integrateUniform(f, Real(0), upper, 64, gl8);
-    memoAlpha[memoNext] = alpha;
-    memoNorm[memoNext] = norm;
-    memoNext = (memoNext + 1) % kMemo;
-    return norm;
+ResolvedMaterial<Real> ResolvedMaterial<Real>::specularLobe() const {
+    ResolvedMaterial<Real> r = *this;
+    r.fresnel = &fresnelEntry(*findModel(ModelSlot::Fresnel, "none"));
+    r.diffuse = &diffuseEntry(*findModel(ModelSlot::Diffuse, "none"));
+    return r.withoutEnergy();
+}
+
+template <typename Real>
+ResolvedMaterial<Real> ResolvedMaterial<Real>::withoutEnergy() const {
+    ResolvedMaterial<Real> r = *this;
+    r.energy = &energyEntry(*findModel(ModelSlot::Energy, "none"));
+    return r;
+}
+
+ResolvedMaterial<double> lobeAtAlpha(const NdfEntry& ndf, const MaskingEntry& masking, double alpha,
+                                     const std::vector<double>& shape) {
+    ResolvedMaterial<double> r;
+    r.ndf = &ndf;
+    r.masking = &masking;
+    r = r.specularLobe();
+    size_t ndfShapes = ndf.tableShapeParams.size();
+    internal_assert(shape.size() == ndfShapes + masking.tableShapeParams.size())
+        << "lobe of " << ndf.name << " x " << masking.name << " with " << shape.size() << " shape values";
+    r.ndfArgs = ndf.argsAtAlpha(std::max(alpha, kMinAlpha), std::vector<double>(shape.begin(), shape.begin() + ndfShapes));
+    ndf.formulas.get<double>().derive(r.ndfArgs);
+    for (size_t i = 0; i < masking.tableShapeParams.size(); ++i)
+        r.maskingArgs.set(masking.tableShapeParams[i], shape[ndfShapes + i]);
+    return r;
 }
 
 template <typename Real>
 Real ResolvedMaterial<Real>::D(const Vec3<Real>& m) const {
-    using std::atan2; using std::exp; using std::pow; using std::sqrt;
     if (m.z <= 0) return 0;
-    const Real pi = kPi<Real>;
-    Real x2 = m.x * m.x, y2 = m.y * m.y, z2 = m.z * m.z;
-    switch (ndf) {
-        case NdfModel::Ggx: {
-            // 1 / (pi ax ay (mx^2/ax^2 + my^2/ay^2 + mz^2)^2)
-            Real t = x2 / sq(alphaX) + y2 / sq(alphaY) + z2;
-            return 1 / (pi * alphaX * alphaY * t * t);
-        }
-        case NdfModel::Beckmann: {
-            // exp(-(mx^2/ax^2 + my^2/ay^2)/mz^2) / (pi ax ay mz^4)
-            Real e = (x2 / sq(alphaX) + y2 / sq(alphaY)) / z2;
-            Real num = exp(-e);
-            if (num == 0) return 0;  // the tail underflowed (mz^4 may have too: no 0/0)
-            return num / (pi * alphaX * alphaY * z2 * z2);
-        }
-        case NdfModel::BlinnPhong: {
-            // (e + 2)/(2 pi) mz^e. Near mz = 1, mz^e = exp(e/2 log1p(-(mx^2 + my^2))):
-            // pow(mz, e) would carry the rounding of mz (1e-16 absolute)
-            // amplified by e (1e6 and more) where the lobe is; sin^2 from the
-            // components does not. Near mz = 0 (grazing h) 1 - sin^2 cancels
-            // instead and pow(mz, e) is the accurate form.
-            using std::log1p;
-            Real s2 = x2 + y2;
-            Real p = exponent == 0 ? Real(1)
-                     : z2 < Real(0.5) ? pow(m.z, exponent)
-                                      : exp(exponent / 2 * log1p(-s2));
-            return (exponent + 2) / (2 * pi) * p;
-        }
-        case NdfModel::Gtr: {
-            // c / (1 + (a^2 - 1) mz^2)^gamma with c = (g-1)(a^2-1) / (pi (1 - (a^2)^(1-g))),
-            // rewritten as c = phi(L) / (pi phi((1-g) L)), L = ln a^2,
-            // phi(y) = expm1(y)/y, which is exact at the limits g = 1 and a = 1.
-            Real a2 = sq(alphaX);
-            Real L = std::log(a2);
-            // In log form: for large gamma, phi((1-g) L) and t^gamma overflow or
-            // underflow while their ratio is moderate.
-            Real yy = (1 - gamma) * L;
-            Real logD;
-            if (yy > 1) {
-                // log phi(yy) = yy + log(-expm1(-yy)) - log(yy), and yy - gamma log t
-                // = -L - gamma log(t / a^2) with t / a^2 = 1 + s2 (1 - a^2) / a^2:
-                // the two terms of size gamma L cancel analytically, not in rounding
-                // (at the peak the exponent is then exact for any gamma).
-                using std::expm1; using std::log1p;
-                logD = logExpm1OverX(L) - L - std::log(-expm1(-yy)) + std::log(yy) -
-                       gamma * log1p((x2 + y2) * ((1 - a2) / a2));
-            } else {
-                Real t = a2 * z2 + x2 + y2;  // = 1 + (a^2 - 1) mz^2 for a unit m
-                logD = logExpm1OverX(L) - logExpm1OverX(yy) - gamma * std::log(t);
-            }
-            return exp(logD) / pi;
-        }
-        case NdfModel::Gaussian: {
-            Real theta = atan2(sqrt(x2 + y2), m.z);
-            return exp(-theta * theta / sq(alphaX)) / gaussianNorm;
-        }
-        case NdfModel::Ward: break;
-    }
-    internal_error << "D() called for ndf without a microfacet distribution";
+    return ndf->formulas.template get<Real>().D(ndfArgs, m);
 }
 
 template <typename Real>
@@ -220,34 +152,9 @@ Real ResolvedMaterial<Real>::lambda(const Vec3<Real>& v) const {
     return cl == 0 ? Real(0) : cl / v.z;
 }
 
-// (n.v) Lambda(v). Finite for every n.v >= 0 (it tends to alpha(v) sin(theta)
-// times a constant at grazing), so G / ((n.wi)(n.wo)) can be formed from it
-// without overflow or 0/0 (GOverCosines).
 template <typename Real>
 Real ResolvedMaterial<Real>::cosLambda(const Vec3<Real>& v) const {
-    using std::erfc; using std::exp; using std::sqrt;
-    Real ax = alphaX, ay = alphaY;
-    if (ndf == NdfModel::BlinnPhong) ax = ay = sqrt(2 / (exponent + 2));
-    // (vx^2 ax^2 + vy^2 ay^2) = alpha(v)^2 sin^2(theta_v)
-    Real proj = sq(v.x * ax) + sq(v.y * ay);
-    if (proj == 0) return 0;  // v = n: nothing is masked
-    switch (ndf) {
-        case NdfModel::Ggx: {
-            // Lambda = (-1 + sqrt(1 + x)) / 2 = x / (2 (1 + sqrt(1 + x))), x = proj / vz^2
-            // (no cancellation for small x); times vz:
-            return proj / (2 * (v.z + sqrt(sq(v.z) + proj)));
-        }
-        case NdfModel::Beckmann:
-        case NdfModel::BlinnPhong: {
-            // Walter et al. 2007: Lambda = (erf(a) - 1)/2 + exp(-a^2) / (2 a sqrt(pi)),
-            // a = cot(theta_v) / alpha_v = vz / s, s = sqrt(proj), written with erfc so
-            // that it does not cancel for large a; times vz, using vz / a = s:
-            Real s = sqrt(proj), a = v.z / s;
-            return (s * exp(-a * a) / sqrt(kPi<Real>) - v.z * erfc(a)) / 2;
-        }
-        default: break;
-    }
-    internal_error << "Smith Lambda requested for an NDF without a closed form";
+    return ndf->formulas.template get<Real>().cosLambda(ndfArgs, v);
 }
 
 template <typename Real>
@@ -258,100 +165,27 @@ Real ResolvedMaterial<Real>::smithG1(const Vec3<Real>& v, const Vec3<Real>& m) c
 
 template <typename Real>
 Real ResolvedMaterial<Real>::G(const Vec3<Real>& wi, const Vec3<Real>& wo, const Vec3<Real>& h, Real cosHalf) const {
-    using std::atan2; using std::max; using std::min; using std::abs;
-    Real ci = wi.z, co = wo.z, nh = h.z;
     // For the half vector, wi.h = wo.h = |wi + wo| / 2 (cosHalf). Using that
     // one value for both keeps f exactly reciprocal; the two dot products
     // differ by rounding amplified by 1/|wi + wo| when the directions are
     // nearly opposite.
     Real ih = cosHalf >= 0 ? cosHalf : wi.x * h.x + wi.y * h.y + wi.z * h.z;
     Real oh = cosHalf >= 0 ? cosHalf : wo.x * h.x + wo.y * h.y + wo.z * h.z;
-    // lambda(phi) of Heitz 2014 / Ashikhmin et al., phi the azimuth between wi and wo.
-    auto azimuthWeight = [&] {
-        Real phi = atan2(abs(wi.x * wo.y - wi.y * wo.x), wi.x * wo.x + wi.y * wo.y);
-        return Real(4.41) * phi / (Real(4.41) * phi + 1);
-    };
-    switch (masking) {
-        case MaskingModel::None: return 1;
-        case MaskingModel::Implicit: return ci * co;
-        case MaskingModel::CookTorrance: return min(Real(1), min(2 * nh * co / oh, 2 * nh * ci / oh));
-        case MaskingModel::Kelemen: return ci * co / (oh * oh);
-        case MaskingModel::Neumann: return ci * co / max(ci, co);
-        case MaskingModel::SchlickSmith: {
-            auto g1 = [&](Real c) { return c / (c * (1 - schlickK) + schlickK); };
-            return g1(ci) * g1(co);
-        }
-        case MaskingModel::SmithSeparable:
-            if (ih <= 0 || oh <= 0) return 0;
-            return 1 / ((1 + lambda(wi)) * (1 + lambda(wo)));
-        case MaskingModel::SmithHeightCorrelated:
-            if (ih <= 0 || oh <= 0) return 0;
-            return 1 / (1 + lambda(wi) + lambda(wo));
-        case MaskingModel::SmithDirectionCorrelated: {
-            if (ih <= 0 || oh <= 0) return 0;
-            Real g1i = 1 / (1 + lambda(wi)), g1o = 1 / (1 + lambda(wo));
-            Real w = azimuthWeight();
-            return w * g1i * g1o + (1 - w) * min(g1i, g1o);
-        }
-        case MaskingModel::SmithHeightDirectionCorrelated: {
-            if (ih <= 0 || oh <= 0) return 0;
-            Real li = lambda(wi), lo = lambda(wo);
-            return 1 / (1 + max(li, lo) + azimuthWeight() * min(li, lo));
-        }
-    }
-    internal_error << "unknown masking model";
+    if (masking->smith && (ih <= 0 || oh <= 0)) return 0;  // chi+(wi.h) chi+(wo.h)
+    return masking->formulas.template get<Real>().G(*this, {wi, wo, h, ih, oh});
 }
 
 // G / ((n.wi)(n.wo)): the factor of the BRDF, D G / (4 ci co), formed
 // without G and the product of the cosines. At grazing both go to zero
 // together (implicit: G = ci co exactly; Smith: G ~ ci / Lambda-terms), and
-// the quotient of the two underflowed values is 0/0 or 0 * Inf. Each case is
-// the SPEC 3 formula of G divided by ci co and simplified; the Smith forms
-// use cosLambda(v) = (n.v) Lambda(v), which stays finite at grazing.
+// the quotient of the two underflowed values is 0/0 or 0 * Inf; each entry
+// forms its own quotient.
 template <typename Real>
 Real ResolvedMaterial<Real>::GOverCosines(const Vec3<Real>& wi, const Vec3<Real>& wo, const Vec3<Real>& h, Real oh,
                                           Real scale) const {
-    using std::abs; using std::atan2; using std::max; using std::min;
-    Real ci = wi.z, co = wo.z, nh = h.z;
-    auto azimuthWeight = [&] {
-        Real phi = atan2(abs(wi.x * wo.y - wi.y * wo.x), wi.x * wo.x + wi.y * wo.y);
-        return Real(4.41) * phi / (Real(4.41) * phi + 1);
-    };
-    bool smith = masking == MaskingModel::SmithSeparable || masking == MaskingModel::SmithHeightCorrelated ||
-                 masking == MaskingModel::SmithDirectionCorrelated ||
-                 masking == MaskingModel::SmithHeightDirectionCorrelated;
-    if (smith && oh <= 0) return 0;  // chi+(wi.h) chi+(wo.h)
-    if (scale == 0) return 0;        // D underflowed: no 0 * Inf
-    // `scale` (D) enters first and divisions are chained, so that no
-    // intermediate product of small cosines underflows (double-denormal
-    // directions) where the result is representable.
-    switch (masking) {
-        case MaskingModel::None: return scale / ci / co;
-        case MaskingModel::Implicit: return scale;
-        case MaskingModel::CookTorrance: {  // min(1, 2 nh co / oh, 2 nh ci / oh) / (ci co)
-            Real k = scale / oh * (2 * nh);
-            return min(scale / ci / co, min(k / ci, k / co));
-        }
-        case MaskingModel::Kelemen: return scale / oh / oh;
-        case MaskingModel::Neumann: return scale / max(ci, co);
-        case MaskingModel::SchlickSmith:  // G1(c) / c = 1 / (c (1 - k) + k)
-            return scale / (ci * (1 - schlickK) + schlickK) / (co * (1 - schlickK) + schlickK);
-        case MaskingModel::SmithSeparable:  // G1(v) / (n.v) = 1 / ((n.v) + (n.v) Lambda(v))
-            return scale / (ci + cosLambda(wi)) / (co + cosLambda(wo));
-        case MaskingModel::SmithHeightCorrelated:  // 1 / (ci co (1 + Li + Lo))
-            return scale / (ci * co + co * cosLambda(wi) + ci * cosLambda(wo));
-        case MaskingModel::SmithDirectionCorrelated: {
-            // ai = ci (1 + Li): G1i G1o / (ci co) = 1 / (ai ao), min(G1i, G1o) / (ci co) = 1 / max(ai co, ao ci)
-            Real ai = ci + cosLambda(wi), ao = co + cosLambda(wo);
-            Real w = azimuthWeight();
-            return w * scale / ai / ao + (1 - w) * scale / max(ai * co, ao * ci);
-        }
-        case MaskingModel::SmithHeightDirectionCorrelated: {
-            Real li = co * cosLambda(wi), lo = ci * cosLambda(wo);  // ci co Li, ci co Lo
-            return scale / (ci * co + max(li, lo) + azimuthWeight() * min(li, lo));
-        }
-    }
-    internal_error << "unknown masking model";
+    if (masking->smith && oh <= 0) return 0;  // chi+(wi.h) chi+(wo.h)
+    if (scale == 0) return 0;                 // D underflowed: no 0 * Inf
+    return masking->formulas.template get<Real>().GOverCosines(*this, {wi, wo, h, oh, oh}, scale);
 }
 
 template <typename Real>
@@ -360,51 +194,10 @@ Real ResolvedMaterial<Real>::F(Real c, int ch) const {
 }
 
 // Fresnel at c = wi.h, given s2 = 1 - c^2 as well (the BRDF passes it from
-// the directions' difference: accurate where c -> 1). The forms below are
-// the SPEC's exact formulas rearranged so that nothing cancels near eta = 1
-// (F -> 0 exactly there) or at c -> 1.
+// the directions' difference: accurate where c -> 1).
 template <typename Real>
 Real ResolvedMaterial<Real>::fresnelAt(Real c, Real s2, int ch) const {
-    using std::abs; using std::norm; using std::pow; using std::sqrt;
-    switch (fresnel) {
-        case FresnelModel::None: return 1;
-        case FresnelModel::Schlick: {
-            Real r0 = f0[ch];
-            if (schlickFromEta) r0 = sq((eta[ch] - 1) / (eta[ch] + 1));
-            Real q = s2 / (1 + c);  // 1 - c
-            return r0 + (1 - r0) * pow(q, 5);
-        }
-        case FresnelModel::Dielectric: {
-            // g = eta cos(theta_t) = sqrt(eta^2 - sin^2) = sqrt(e + c^2), e = eta^2 - 1.
-            // Snell: past sin^2 = eta^2 (g^2 <= 0) the light is totally reflected.
-            // rs = (c - g)/(c + g) = -e / (c + g)^2          (c^2 - g^2 = -e)
-            // rp = (eta^2 c - g)/(eta^2 c + g) = e ((eta^2 + 1) c^2 - 1) / (eta^2 c + g)^2
-            //    = e (eta^2 c^2 - s2) / (eta^2 c + g)^2   (no cancellation as eta -> 0)
-            // g^2 from whichever form loses less: eta^2 - s2 near normal
-            // incidence (eta -> 0), e + c^2 near grazing and for eta -> 1.
-            Real n = eta[ch];
-            Real e = (n - 1) * (n + 1);
-            Real g2 = n * n + s2 < abs(e) + c * c ? n * n - s2 : e + c * c;
-            if (g2 <= 0) return 1;
-            Real g = sqrt(g2), n2 = n * n;
-            Real rs = -e / sq(c + g);
-            Real rp = e * (n2 * (c * c) - s2) / sq(n2 * c + g);
-            return (rs * rs + rp * rp) / 2;
-        }
-        case FresnelModel::Conductor: {
-            // Complex index N = eta + i k; the dielectric forms with complex
-            // e = N^2 - 1 and g = N cos(theta_t) = sqrt(N^2 - sin^2) = sqrt(e + c^2)
-            // (principal root: the transmitted wave decays into the metal).
-            std::complex<Real> N(eta[ch], k[ch]);
-            std::complex<Real> e = (N - Real(1)) * (N + Real(1));
-            std::complex<Real> N2 = N * N;
-            std::complex<Real> g = sqrt(abs(N2) + s2 < abs(e) + c * c ? N2 - s2 : e + c * c);
-            std::complex<Real> rs = -e / ((c + g) * (c + g));
-            std::complex<Real> rp = e * (N2 * (c * c) - s2) / ((N2 * c + g) * (N2 * c + g));
-            return (norm(rs) + norm(rp)) / 2;
-        }
-    }
-    internal_error << "unknown fresnel model";
+    return fresnel->formulas.template get<Real>().F(fresnelArgs, c, s2, ch);
 }
 
 template <typename Real>
@@ -427,11 +220,8 @@ std::array<Real, 3> ResolvedMaterial<Real>::brdf(const Vec3<Real>& wi, const Vec
     // eval() computes without the rounding of the normalized directions.
     Real c = len / 2 < 1 ? len / 2 : Real(1);
     Real s2 = halfAngleSin2(wi, wo);  // 1 - c^2, accurate near wi = wo
-    const Real pi = kPi<Real>;
-    if (ndf == NdfModel::Ward) {
-        // Ward 1992: exp(-tan^2(theta_h)(cos^2(phi_h)/ax^2 + sin^2(phi_h)/ay^2)) / (4 pi ax ay sqrt(ci co))
-        Real e = (sq(h.x / alphaX) + sq(h.y / alphaY)) / sq(h.z);
-        Real lobe = exp(-e) / (4 * pi * alphaX * alphaY * sqrt(ci) * sqrt(co));
+    if (ndf->wholeLobe) {
+        Real lobe = ndf->formulas.template get<Real>().wholeLobe(ndfArgs, h, ci, co);
         for (int ch = 0; ch < 3; ++ch) out[ch] = fresnelAt(c, s2, ch) * lobe;
     } else {
         // D G / (4 ci co) as D (G / (ci co)) / 4: no 0 * Inf or 0/0 at grazing.
@@ -441,12 +231,12 @@ std::array<Real, 3> ResolvedMaterial<Real>::brdf(const Vec3<Real>& wi, const Vec
             out[ch] = f == 0 ? Real(0) : f * dg;  // F = 0 (eta = 1): no 0 * Inf
         }
     }
-    if (energy == EnergyModel::KullaConty) {
+    if (energy->compensates) {
         std::array<Real, 3> ms = kullaContyBrdf(*this, ci, co);
         for (int ch = 0; ch < 3; ++ch) out[ch] += ms[ch];
     }
-    if (diffuse == DiffuseModel::Lambert)
-        for (int ch = 0; ch < 3; ++ch) out[ch] += albedo[ch] / pi;
+    if (diffuse->present)
+        for (int ch = 0; ch < 3; ++ch) out[ch] += diffuse->formulas.template get<Real>().value(diffuseArgs, ch);
     return out;
 }
 
@@ -455,10 +245,11 @@ ResolvedMaterial<Real> Interpreter<Real>::resolve(const Real* slots) const {
     using std::isnan;
     const CheckedMaterial& m = material_;
     ResolvedMaterial<Real> r;
-    r.ndf = m.ndfModel();
-    r.masking = m.maskingModel();
-    r.fresnel = m.fresnelModel();
-    r.diffuse = m.diffuseModel();
+    r.ndf = &ndfEntry(*m.ndf.model);
+    r.masking = &maskingEntry(*m.masking.model);
+    r.fresnel = &fresnelEntry(*m.fresnel.model);
+    r.energy = &energyEntry(*m.energy.model);
+    r.diffuse = &diffuseEntry(*m.diffuse.model);
 
     // Inputs: given or default, clamped to the declared range.
     std::vector<Value<Real>> inputs(m.inputs.size());
@@ -482,72 +273,35 @@ ResolvedMaterial<Real> Interpreter<Real>::resolve(const Real* slots) const {
     };
     for (const CheckedLet& let : m.lets) lets.push_back(evaluateExpr<Real>(*let.value, lookup));
 
-    // A model argument: NaN is invalid; clamping to the domain happens
-    // before the finiteness test so that e.g. phong_exponent(0) = inf
-    // clamps to the largest exponent instead of failing.
-    auto scalarArg = [&](const ModelUse& use, int p, Real lo, Real hi) {
-        Value<Real> v = evaluateExpr<Real>(*use.args[p], lookup);
-        Real x = v.c[0];
+    // A model argument, clamped to its catalog domain: NaN is invalid;
+    // clamping happens before the finiteness test so that e.g.
+    // phong_exponent(0) = inf clamps to the largest exponent instead of
+    // failing.
+    auto clampedArg = [&](Real x, const ModelParam& p) {
         if (isnan(x)) {
             r.valid = false;
             return Real(0);
         }
-        x = x < lo ? lo : (x > hi ? hi : x);
+        x = x < Real(p.lo) ? Real(p.lo) : (x > Real(p.hi) ? Real(p.hi) : x);
         if (!finite(x)) r.valid = false;
         return x;
     };
-    auto rgbArg = [&](const ModelUse& use, int p, Real lo, Real hi) {
-        Value<Real> v = evaluateExpr<Real>(*use.args[p], lookup);
-        std::array<Real, 3> out;
-        for (int ch = 0; ch < 3; ++ch) {
-            Real x = v.channel(ch);
-            if (isnan(x)) {
-                r.valid = false;
-                x = 0;
-            }
-            x = x < lo ? lo : (x > hi ? hi : x);
-            if (!finite(x)) r.valid = false;
-            out[ch] = x;
+    auto resolveArgs = [&](const ModelUse& use, ModelArgs<Real>& args) {
+        for (size_t p = 0; p < use.model->canonical.size(); ++p) {
+            if (!use.has(int(p))) continue;
+            const ModelParam& param = use.model->canonical[p];
+            Value<Real> v = evaluateExpr<Real>(*use.args[p], lookup);
+            args.given[p] = true;
+            for (int ch = 0; ch < (param.type == ValueType::Rgb ? 3 : 1); ++ch)
+                args.value[p][ch] = clampedArg(param.type == ValueType::Rgb ? v.channel(ch) : v.c[0], param);
+            if (param.type != ValueType::Rgb) args.value[p][1] = args.value[p][2] = args.value[p][0];
         }
-        return out;
     };
-    const Real inf = std::numeric_limits<Real>::infinity();
-    const Real minAlpha = Real(kMinAlpha);
-    switch (r.ndf) {
-        case NdfModel::Ggx:
-        case NdfModel::Beckmann:
-        case NdfModel::Ward:
-            r.alphaX = scalarArg(m.ndf, param::AlphaX, minAlpha, inf);
-            r.alphaY = scalarArg(m.ndf, param::AlphaY, minAlpha, inf);
-            break;
-        case NdfModel::BlinnPhong: r.exponent = scalarArg(m.ndf, param::Exponent, 0, Real(kMaxPhongExponent)); break;
-        case NdfModel::Gtr:
-            r.alphaX = r.alphaY = scalarArg(m.ndf, param::GtrAlpha, minAlpha, inf);
-            r.gamma = scalarArg(m.ndf, param::GtrGamma, 0, inf);
-            break;
-        case NdfModel::Gaussian:
-            r.alphaX = r.alphaY = scalarArg(m.ndf, param::GaussianAlpha, minAlpha, inf);
-            if (r.valid) r.gaussianNorm = gaussianNdfNorm(r.alphaX);
-            break;
-    }
-    if (r.masking == MaskingModel::SchlickSmith) r.schlickK = scalarArg(m.masking, param::SchlickK, 0, 1);
-    switch (r.fresnel) {
-        case FresnelModel::None: break;
-        case FresnelModel::Schlick:
-            if (m.fresnel.has(param::F0)) {
-                r.f0 = rgbArg(m.fresnel, param::F0, 0, 1);
-            } else {
-                r.schlickFromEta = true;
-                r.eta = rgbArg(m.fresnel, param::SchlickEta, Real(kMinEta), inf);
-            }
-            break;
-        case FresnelModel::Dielectric: r.eta = rgbArg(m.fresnel, param::DielectricEta, Real(kMinEta), inf); break;
-        case FresnelModel::Conductor:
-            r.eta = rgbArg(m.fresnel, param::ConductorEta, Real(kMinEta), inf);
-            r.k = rgbArg(m.fresnel, param::ConductorK, 0, inf);
-            break;
-    }
-    if (r.diffuse == DiffuseModel::Lambert) r.albedo = rgbArg(m.diffuse, param::Albedo, 0, inf);
+    resolveArgs(m.ndf, r.ndfArgs);
+    if (r.valid) r.ndf->formulas.template get<Real>().derive(r.ndfArgs);
+    resolveArgs(m.masking, r.maskingArgs);
+    resolveArgs(m.fresnel, r.fresnelArgs);
+    resolveArgs(m.diffuse, r.diffuseArgs);
     if (energy_ && r.valid) resolveKullaConty(r, energy_->get());
     return r;
 }
@@ -595,11 +349,8 @@ template class Interpreter<double>;
 template class Interpreter<long double>;
 template struct ResolvedMaterial<double>;
 template struct ResolvedMaterial<long double>;
-template double gaussianNdfNorm<double>(double);
-template long double gaussianNdfNorm<long double>(long double);
 // __float128: the high-precision reference of the hard-case checks (QuadMath.h).
 template class Interpreter<__float128>;
 template struct ResolvedMaterial<__float128>;
-template __float128 gaussianNdfNorm<__float128>(__float128);
 
 }  // namespace facet

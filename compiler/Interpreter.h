@@ -15,6 +15,7 @@
 #include "ExprEval.h"
 #include "KullaConty.h"
 #include "Material.h"
+#include "models/ndf/GaussianNorm.h"
 
 #include <array>
 #include <memory>
@@ -22,36 +23,33 @@
 
 namespace facet {
 
-template <typename Real>
-struct Vec3 {
-    Real x, y, z;
-};
-
-// One material with its parameters evaluated for one set of input values.
+// One material with its parameters evaluated for one set of input values:
+// each slot's catalog entry and its clamped arguments. The term functions
+// dispatch to the entries' reference formulas.
 template <typename Real>
 struct ResolvedMaterial {
     bool valid = true;  // false when an input or parameter is not finite
-    NdfModel ndf;
-    MaskingModel masking;
-    FresnelModel fresnel;
-    DiffuseModel diffuse;
-    Real alphaX = 1, alphaY = 1;  // ggx, beckmann, ward, gtr (x), gaussian (x)
-    Real exponent = 0;            // blinn_phong
-    Real gamma = 2;               // gtr
-    Real gaussianNorm = 1;        // gaussian: integral of exp(-theta^2/a^2) cos
-    Real schlickK = 0;            // schlick_smith
-    std::array<Real, 3> f0{}, eta{}, k{}, albedo{};
-    bool schlickFromEta = false;
+    const NdfEntry* ndf = nullptr;
+    const MaskingEntry* masking = nullptr;
+    const FresnelEntry* fresnel = nullptr;
+    const EnergyEntry* energy = nullptr;
+    const DiffuseEntry* diffuse = nullptr;
+    ModelArgs<Real> ndfArgs, maskingArgs, fresnelArgs, diffuseArgs;
     // energy = kulla_conty (KullaContyEval.h): the E table, the roughness it
     // is looked up with, 1 - E_avg there, and F_avg per channel.
-    EnergyModel energy = EnergyModel::None;
     std::shared_ptr<const EnergyTable> energyTable;
     Real energyAlpha = 1, ecAvg = 0;
     std::array<Real, 3> favg{};
 
+    // The specular lobe alone: no Fresnel term, no energy compensation, no
+    // diffuse base (the F = 1 albedo of the physics checks).
+    ResolvedMaterial specularLobe() const;
+    // Energy compensation switched off.
+    ResolvedMaterial withoutEnergy() const;
+
     // Microfacet normal distribution D(m), m a unit vector (zero below the horizon).
     Real D(const Vec3<Real>& m) const;
-    // Smith Lambda(v) of the NDF (ggx, beckmann, blinn_phong only).
+    // Smith Lambda(v) of the NDF (NDFs with a closed-form Lambda only).
     Real lambda(const Vec3<Real>& v) const;
     // (n.v) Lambda(v): finite at grazing, where Lambda itself grows like 1/(n.v).
     Real cosLambda(const Vec3<Real>& v) const;
@@ -78,6 +76,13 @@ struct ResolvedMaterial {
     std::array<Real, 3> brdf(const Vec3<Real>& wi, const Vec3<Real>& wo, const Vec3<Real>& sum) const;
 };
 
+// The isotropic specular lobe of `ndf` with roughness alpha (clamped to
+// >= kMinAlpha) and masking `masking`, F = 1, as a reference material; the
+// tables' and previews' lobes. `shape` holds the values of the NDF's
+// tableShapeParams then the masking's.
+ResolvedMaterial<double> lobeAtAlpha(const NdfEntry& ndf, const MaskingEntry& masking, double alpha,
+                                     const std::vector<double>& shape = {});
+
 template <typename Real>
 struct EvalResult {
     std::array<Real, 3> rgb{};
@@ -92,7 +97,7 @@ public:
     // builds its table in memory on first use (~0.5 s).
     explicit Interpreter(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> energyTable = nullptr)
         : material_(material),
-          energy_(material.energy.model && material.energyModel() == EnergyModel::KullaConty
+          energy_(material.compensatesEnergy()
                       ? std::make_shared<EnergyTableSlot>(energyTableKey(material), std::move(energyTable))
                       : nullptr) {}
 
@@ -113,10 +118,6 @@ private:
     const CheckedMaterial& material_;
     std::shared_ptr<EnergyTableSlot> energy_;  // kulla_conty only
 };
-
-// Normalization integral of the Gaussian NDF, 2 pi Int_0^{pi/2} exp(-t^2/a^2) cos t sin t dt.
-template <typename Real>
-Real gaussianNdfNorm(Real alpha);
 
 extern template class Interpreter<double>;
 extern template class Interpreter<long double>;

@@ -24,23 +24,7 @@ using quadrature::integratePanels;
 
 // The specular lobe of a table key at one alpha, F = 1, as a reference material.
 ResolvedMaterial<double> lobeMaterial(const EnergyTableKey& key, double alpha) {
-    ResolvedMaterial<double> r;
-    r.ndf = key.ndf;
-    r.masking = key.masking;
-    r.fresnel = FresnelModel::None;
-    r.diffuse = DiffuseModel::None;
-    alpha = std::max(alpha, kMinAlpha);
-    switch (key.ndf) {
-        case NdfModel::BlinnPhong: r.exponent = std::min(2 / (alpha * alpha) - 2, kMaxPhongExponent); break;
-        case NdfModel::Gaussian:
-            r.alphaX = r.alphaY = alpha;
-            r.gaussianNorm = gaussianNdfNorm(alpha);
-            break;
-        default: r.alphaX = r.alphaY = alpha; break;
-    }
-    r.gamma = key.gamma;
-    r.schlickK = key.schlickK;
-    return r;
+    return lobeAtAlpha(*key.ndf, *key.masking, alpha, key.shape);
 }
 
 // E(mu) = Int f(wi, wo) (n.wi) dwi with F = 1, integrated over the half
@@ -64,14 +48,12 @@ double albedoOf(const ResolvedMaterial<double>& m, double alpha, double mu, cons
     double thetaO = std::atan2(so, mu);
     const double wox = so, woz = mu;
     double thetaFull = (kPi / 2 - thetaO) / 2, thetaEnd = (kPi / 2 + thetaO) / 2;
-    const bool cookTorrance = m.masking == MaskingModel::CookTorrance;
-    const bool azimuthal = m.masking == MaskingModel::SmithDirectionCorrelated ||
-                           m.masking == MaskingModel::SmithHeightDirectionCorrelated;
-    const bool kinkMasking = cookTorrance || azimuthal || m.masking == MaskingModel::Neumann;
+    const AlbedoKinks& kinks = m.masking->albedoKinks;
+    const bool azimuthal = kinks.azimuthal;
+    const bool kinkMasking = kinks.atWoH;
     // Kelemen's G (n.wi)(n.wo)/(wo.h)^2 makes the integrand D (n.wi)/(wo.h), which rises from 0
     // at the cut within a layer of width ~mu in wo.h: more azimuth panels toward the cut.
-    const int kelemenExtra =
-        m.masking == MaskingModel::Kelemen && mu < 0.25 ? std::min(24, int(std::ceil(std::log2(0.25 / mu)))) : 0;
+    const int kelemenExtra = kinks.cutLayer && mu < 0.25 ? std::min(24, int(std::ceil(std::log2(0.25 / mu)))) : 0;
 
     // cos(phi) of the cut at theta_h (phi_max = acos), clamped to [-1, 1].
     auto cutCos = [&](double th) {
@@ -82,9 +64,9 @@ double albedoOf(const ResolvedMaterial<double>& m, double alpha, double mu, cons
     // The values of wo.h at the masking's kinks, at theta_h (NaN: none).
     auto kinkValues = [&](double ct, double out[3]) {
         out[0] = mu / ct;  // n.wi = n.wo: the max / min of the two directions switch
-        out[1] = cookTorrance ? 2 * ct * mu : NAN;  // 2 (n.h)(n.wo)/(wo.h) = 1
+        out[1] = kinks.vCavity ? 2 * ct * mu : NAN;  // 2 (n.h)(n.wo)/(wo.h) = 1
         double d = 2 * ct - 1 / (2 * ct);
-        out[2] = cookTorrance && d > 0 ? mu / d : NAN;  // 2 (n.h)(n.wi)/(wo.h) = 1
+        out[2] = kinks.vCavity && d > 0 ? mu / d : NAN;  // 2 (n.h)(n.wi)/(wo.h) = 1
     };
 
     // The peak's angular width: alpha is the slope scale for ggx, beckmann
@@ -228,67 +210,65 @@ double bilinear(const float* grid, int rowLength, int row, int col, double s, do
 // ---- key ------------------------------------------------------------------
 
 std::string EnergyTableKey::name() const {
-    std::string s = modelInfo(ModelSlot::Ndf, int(ndf)).name;
-    if (ndf == NdfModel::Gtr) s += "_g" + shortNumber(gamma);
-    s += "_";
-    s += modelInfo(ModelSlot::Masking, int(masking)).name;
-    if (masking == MaskingModel::SchlickSmith) s += "_k" + shortNumber(schlickK);
+    std::string s;
+    size_t i = 0;
+    for (const ModelInfo* model : {static_cast<const ModelInfo*>(ndf), static_cast<const ModelInfo*>(masking)}) {
+        s += s.empty() ? "" : "_";
+        s += model->name;
+        for (int p : model->tableShapeParams) s += fmt::format("_{}{}", model->canonical[p].tableTag, shortNumber(shape.at(i++)));
+    }
     return s;
 }
 
 bool EnergyTableKey::operator<(const EnergyTableKey& o) const {
-    if (ndf != o.ndf) return ndf < o.ndf;
-    if (masking != o.masking) return masking < o.masking;
-    if (gamma != o.gamma) return gamma < o.gamma;
-    return schlickK < o.schlickK;
+    if (ndf->id != o.ndf->id) return ndf->id < o.ndf->id;
+    if (masking->id != o.masking->id) return masking->id < o.masking->id;
+    return shape < o.shape;
 }
 
 std::optional<EnergyUnsupported> kullaContyUnsupported(const CheckedMaterial& m) {
     if (!m.ndf.model || !m.masking.model) return std::nullopt;
-    NdfModel ndf = m.ndfModel();
-    if (ndf == NdfModel::Ward)
+    const NdfEntry& ndf = ndfEntry(*m.ndf.model);
+    if (ndf.wholeLobe)
         return EnergyUnsupported{m.energy.loc,
-                                 "energy 'kulla_conty' needs a microfacet NDF with a masking term; ndf 'ward' is a "
-                                 "whole BRDF lobe with its own normalization and no roughness-only albedo table; use "
-                                 "'energy = none', or a microfacet NDF such as ggx or beckmann"};
-    auto needConstant = [&](const ModelUse& use, int p, const char* what, const char* model,
-                            const char* why) -> std::optional<EnergyUnsupported> {
-        if (!use.has(p)) return std::nullopt;
-        const Expr& e = *use.args[p];
-        if (const CheckedInput* in = inputUsed(e, m))
-            return EnergyUnsupported{e.loc, fmt::format("energy 'kulla_conty' with {} needs a constant {} ({}); "
-                                                        "this one depends on input '{}'",
-                                                        model, what, why, in->name)};
-        double v = constantOf(e, m);
-        if (!std::isfinite(v))
-            return EnergyUnsupported{e.loc, fmt::format("energy 'kulla_conty' with {} needs a finite {}, got {}",
-                                                        model, what, v)};
-        return std::nullopt;
-    };
-    if (ndf == NdfModel::Gtr)
-        if (auto u = needConstant(m.ndf, param::GtrGamma, "gamma", "ndf 'gtr'",
-                                  "its albedo table is built for one gamma"))
-            return u;
-    if (m.maskingModel() == MaskingModel::SchlickSmith)
-        if (auto u = needConstant(m.masking, param::SchlickK, "k", "masking 'schlick_smith'",
-                                  "its albedo table is built for one k"))
-            return u;
+                                 fmt::format("energy 'kulla_conty' needs a microfacet NDF with a masking term; ndf '{}' "
+                                             "is a whole BRDF lobe with its own normalization and no roughness-only "
+                                             "albedo table; use 'energy = none', or a microfacet NDF such as ggx or "
+                                             "beckmann",
+                                             ndf.name)};
+    for (const ModelUse* use : {&m.ndf, &m.masking}) {
+        for (int p : use->model->tableShapeParams) {
+            if (!use->has(p)) continue;
+            const Expr& e = *use->args[p];
+            const char* what = use->model->canonical[p].name;
+            std::string model = fmt::format("{} '{}'", modelSlotName(use->model->slot), use->model->name);
+            if (const CheckedInput* in = inputUsed(e, m))
+                return EnergyUnsupported{e.loc, fmt::format("energy 'kulla_conty' with {} needs a constant {} (its "
+                                                            "albedo table is built for one {}); this one depends on "
+                                                            "input '{}'",
+                                                            model, what, what, in->name)};
+            double v = constantOf(e, m);
+            if (!std::isfinite(v))
+                return EnergyUnsupported{e.loc, fmt::format("energy 'kulla_conty' with {} needs a finite {}, got {}",
+                                                            model, what, v)};
+        }
+    }
     return std::nullopt;
 }
 
 EnergyTableKey energyTableKey(const CheckedMaterial& m) {
     EnergyTableKey key;
-    key.ndf = m.ndfModel();
-    key.masking = m.maskingModel();
-    internal_assert(key.ndf != NdfModel::Ward) << "kulla_conty table requested for ndf ward";
-    if (key.ndf == NdfModel::Gtr) {
-        internal_assert(!inputUsed(*m.ndf.args[param::GtrGamma], m)) << "kulla_conty: gtr gamma is not constant";
-        key.gamma = std::max(0.0, constantOf(*m.ndf.args[param::GtrGamma], m));  // resolve() clamps to >= 0
-    }
-    if (key.masking == MaskingModel::SchlickSmith) {
-        internal_assert(!inputUsed(*m.masking.args[param::SchlickK], m)) << "kulla_conty: schlick_smith k is not constant";
-        key.schlickK = std::clamp(constantOf(*m.masking.args[param::SchlickK], m), 0.0, 1.0);
-    }
+    key.ndf = &ndfEntry(*m.ndf.model);
+    key.masking = &maskingEntry(*m.masking.model);
+    internal_assert(!key.ndf->wholeLobe) << "kulla_conty table requested for ndf " << key.ndf->name;
+    for (const ModelUse* use : {&m.ndf, &m.masking})
+        for (int p : use->model->tableShapeParams) {
+            internal_assert(!inputUsed(*use->args[p], m)) << "kulla_conty: " << use->model->name << " "
+                                                           << use->model->canonical[p].name << " is not constant";
+            // Clamped to the domain as resolve() does.
+            const ModelParam& param = use->model->canonical[p];
+            key.shape.push_back(std::clamp(constantOf(*use->args[p], m), param.lo, param.hi));
+        }
     return key;
 }
 
@@ -431,9 +411,14 @@ std::shared_ptr<EnergyTable> buildEnergyTable(const EnergyTableKey& key, const E
 
 namespace {
 
-// 2 Int_0^1 F(mu) mu dmu for the reference Fresnel of `r` (channel 0).
-double fresnelAverageOf(const ResolvedMaterial<double>& r) {
-    std::vector<double> br = fresnelAverageBreaks(r.eta[0], r.k[0]);
+// 2 Int_0^1 F(mu) mu dmu for the reference Fresnel `model` with index
+// eta + i k (channel 0).
+double fresnelAverageOf(const char* model, double eta, double k) {
+    ResolvedMaterial<double> r;
+    r.fresnel = &fresnelEntry(*findModel(ModelSlot::Fresnel, model));
+    r.fresnelArgs.set(0, eta);
+    r.fresnelArgs.set(1, k);
+    std::vector<double> br = fresnelAverageBreaks(eta, k);
     return 2 * integratePanels([&](double mu) { return r.F(mu, 0) * mu; }, br, gaussLegendre<double>(12));
 }
 
@@ -447,20 +432,13 @@ std::vector<double> fresnelAverageBreaks(double eta, double k) {
 }
 
 double fresnelAverageDielectric(double eta) {
-    ResolvedMaterial<double> r;
-    r.fresnel = FresnelModel::Dielectric;
-    r.eta = {std::max(eta, kMinEta), 0, 0};
     if (std::isinf(eta)) return 1;
-    return fresnelAverageOf(r);
+    return fresnelAverageOf("dielectric", std::max(eta, kMinEta), 0);
 }
 
 double fresnelAverageConductor(double eta, double k) {
     if (std::isinf(eta) || std::isinf(k)) return 1;
-    ResolvedMaterial<double> r;
-    r.fresnel = FresnelModel::Conductor;
-    r.eta = {std::max(eta, kMinEta), 0, 0};
-    r.k = {std::max(k, 0.0), 0, 0};
-    return fresnelAverageOf(r);
+    return fresnelAverageOf("conductor", std::max(eta, kMinEta), std::max(k, 0.0));
 }
 
 double conductorSchlickAverage(double eta, double k) {

@@ -75,19 +75,19 @@ namespace facet {
 
 // Bumped whenever the table contents would change (grid, quadrature,
 // formulas): cached EXR files of another version are rebuilt.
-constexpr int kEnergyTableVersion = 2;
+constexpr int kEnergyTableVersion = 3;
 
-// What an E table depends on besides alpha.
+// What an E table depends on besides alpha: the NDF, the masking, and the
+// values of their tableShapeParams (the NDF's first).
 struct EnergyTableKey {
-    NdfModel ndf = NdfModel::Ggx;
-    MaskingModel masking = MaskingModel::SmithHeightCorrelated;
-    double gamma = 0;     // gtr only, else 0
-    double schlickK = 0;  // schlick_smith only, else 0
+    const NdfEntry* ndf = nullptr;
+    const MaskingEntry* masking = nullptr;
+    std::vector<double> shape;
 
     // "ggx_smith_height_correlated", "gtr_g1.5_cook_torrance", "ggx_schlick_smith_k0.125".
     std::string name() const;
     bool operator==(const EnergyTableKey& o) const {
-        return ndf == o.ndf && masking == o.masking && gamma == o.gamma && schlickK == o.schlickK;
+        return ndf == o.ndf && masking == o.masking && shape == o.shape;
     }
     bool operator<(const EnergyTableKey& o) const;
 };

@@ -17,16 +17,16 @@
 
 namespace facet {
 
-// The roughness the E table is looked up with (see KullaConty.h).
+// The roughness the E table is looked up with (see KullaConty.h): the
+// NDF's equivalent roughness, the geometric mean of the two for an
+// anisotropic lobe.
 template <typename Real>
 double energyAlpha(const ResolvedMaterial<Real>& r) {
-    using std::sqrt;
-    switch (r.ndf) {
-        case NdfModel::BlinnPhong: return std::sqrt(2 / (double(r.exponent) + 2));
-        case NdfModel::Ggx:
-        case NdfModel::Beckmann: return std::sqrt(double(r.alphaX) * double(r.alphaY));
-        default: return double(r.alphaX);
-    }
+    ModelArgs<double> args;
+    for (int p = 0; p < kMaxModelParams; ++p)
+        for (int ch = 0; ch < 3; ++ch) args.value[p][ch] = double(r.ndfArgs.value[p][ch]);
+    std::array<double, 2> a = r.ndf->equivalentAlphas(args);
+    return a[0] == a[1] ? a[0] : std::sqrt(a[0] * a[1]);
 }
 
 // F_avg = 2 Int_0^1 F(mu) mu dmu of channel ch, by 8-point Gauss-Legendre on
@@ -34,27 +34,17 @@ double energyAlpha(const ResolvedMaterial<Real>& r) {
 // in Real). Schlick in closed form, (20 f0 + 1)/21.
 template <typename Real>
 Real fresnelAverage(const ResolvedMaterial<Real>& r, int ch) {
-    switch (r.fresnel) {
-        case FresnelModel::None: return Real(1);
-        case FresnelModel::Schlick: {
-            Real f0 = r.f0[ch];
-            if (r.schlickFromEta) {
-                Real q = (r.eta[ch] - 1) / (r.eta[ch] + 1);
-                f0 = q * q;
-            }
-            return (20 * f0 + 1) / 21;
-        }
-        case FresnelModel::Dielectric:
-        case FresnelModel::Conductor: break;
-    }
-    // Last result per thread: materials with constant eta / k integrate once.
+    if (std::optional<Real> closed = r.fresnel->formulas.template get<Real>().closedFormAverage(r.fresnelArgs, ch))
+        return *closed;
+    // Last result per thread: materials with constant parameters integrate once.
     struct Memo {
-        FresnelModel model;
+        const FresnelEntry* model;
         Real eta, k, value;
         bool set = false;
     };
     thread_local Memo memo[3];
-    Real eta = r.eta[ch], k = r.fresnel == FresnelModel::Conductor ? r.k[ch] : Real(0);
+    // The exact terms' parameters: eta, and k for a conductor (0 otherwise).
+    Real eta = r.fresnelArgs.channel(0, ch), k = r.fresnelArgs.given[1] ? r.fresnelArgs.channel(1, ch) : Real(0);
     Memo& mm = memo[ch];
     if (mm.set && mm.model == r.fresnel && mm.eta == eta && mm.k == k) return mm.value;
 
@@ -71,7 +61,6 @@ Real fresnelAverage(const ResolvedMaterial<Real>& r, int ch) {
 // roughness, 1 - E_avg, and F_avg per channel.
 template <typename Real>
 void resolveKullaConty(ResolvedMaterial<Real>& r, std::shared_ptr<const EnergyTable> table) {
-    r.energy = EnergyModel::KullaConty;
     r.energyTable = std::move(table);
     r.energyAlpha = Real(energyAlpha(r));
     r.ecAvg = Real(r.energyTable->ecAvgAt(double(r.energyAlpha)));
@@ -82,7 +71,7 @@ void resolveKullaConty(ResolvedMaterial<Real>& r, std::shared_ptr<const EnergyTa
 template <typename Real>
 std::array<Real, 3> kullaContyBrdf(const ResolvedMaterial<Real>& r, Real ci, Real co) {
     std::array<Real, 3> out{};
-    if (r.energy != EnergyModel::KullaConty || !r.energyTable) return out;
+    if (!r.energy->compensates || !r.energyTable) return out;
     double a = double(r.energyAlpha);
     Real ecI = Real(r.energyTable->ecAt(double(ci), a)), ecO = Real(r.energyTable->ecAt(double(co), a));
     Real lobe = kullaContyLobe(ecI, ecO, r.ecAvg);

@@ -56,6 +56,8 @@ struct CheckedMaterial {
     FresnelModel fresnelModel() const { return FresnelModel(fresnel.model->id); }
     EnergyModel energyModel() const { return EnergyModel(energy.model->id); }
     DiffuseModel diffuseModel() const { return DiffuseModel(diffuse.model->id); }
+    // Multiple-scattering compensation from a tabulated albedo (kulla_conty).
+    bool compensatesEnergy() const { return energy.model && energyEntry(*energy.model).compensates; }
 
     const CheckedInput* findInput(std::string_view name) const;
     // Name of a float slot as shown to API users: "roughness", or "tint.r".

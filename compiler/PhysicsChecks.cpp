@@ -54,9 +54,7 @@ struct Lobe {
 };
 Lobe lobeOf(const ResolvedMaterial<double>& r) {
     Lobe l;
-    double ax = r.alphaX, ay = r.alphaY;
-    if (r.ndf == NdfModel::BlinnPhong) ax = ay = std::sqrt(2 / (r.exponent + 2));
-    if (r.ndf == NdfModel::Gtr || r.ndf == NdfModel::Gaussian) ay = ax;
+    auto [ax, ay] = r.ndf->equivalentAlphas(r.ndfArgs);
     l.scale = std::min({ax, ay, 1.0});
     l.ratio = std::min(ax, ay) / std::max(ax, ay);
     return l;
@@ -104,33 +102,19 @@ std::string fmtSlots(const CheckedMaterial& m, const std::vector<double>& slots)
     return out.empty() ? "defaults" : out;
 }
 
-bool smithMasking(MaskingModel g) {
-    return g == MaskingModel::SmithSeparable || g == MaskingModel::SmithHeightCorrelated ||
-           g == MaskingModel::SmithDirectionCorrelated || g == MaskingModel::SmithHeightDirectionCorrelated;
-}
-
 // Why the F = 1 albedo of this pair is not bounded by 1 by construction
 // ("" when it is: Smith with an exact Lambda, or the V-cavity).
-std::string energyNote(NdfModel ndf, MaskingModel g) {
-    if (ndf == NdfModel::Ward)
-        return "ward's lobe has its own approximate normalization, not a microfacet energy bound";
-    if (smithMasking(g)) {
-        if (ndf == NdfModel::BlinnPhong)
-            return "blinn_phong uses the Beckmann Lambda (SPEC 3), an approximation: rough exponents exceed 1";
-        return "";
-    }
-    switch (g) {
-        case MaskingModel::CookTorrance: return "";
-        case MaskingModel::None: return "masking none ignores shadowing: the albedo grows like 1/(2 cos theta_o)";
-        case MaskingModel::Implicit:
-        case MaskingModel::Kelemen:
-        case MaskingModel::Neumann:
-            return "an empirical G with no microsurface behind it: not bounded by construction";
-        case MaskingModel::SchlickSmith:
-            return "Schlick's G1 ignores the NDF: exceeds 1 for heavy-tailed (gtr gamma <= 1.5) and anisotropic lobes";
-        default: break;
-    }
-    return "";
+std::string energyNote(const NdfEntry& ndf, const MaskingEntry& masking) {
+    if (*ndf.energyNote) return ndf.energyNote;
+    if (masking.smith) return *ndf.lambdaNote ? std::string(ndf.lambdaNote) + ", an approximation: rough exponents exceed 1" : "";
+    return masking.energyNote;
+}
+
+// The identity of a resolved model use: its entry and its clamped arguments.
+std::vector<double> argsKey(const ModelInfo& model, const ModelArgs<double>& args) {
+    std::vector<double> key = {double(int(model.slot)), double(model.id)};
+    for (const std::array<double, 3>& p : args.value) key.insert(key.end(), p.begin(), p.end());
+    return key;
 }
 
 struct Worst {
@@ -149,7 +133,7 @@ struct Worst {
 std::vector<PhysicsCheck> physicsChecks(const CheckedMaterial& m, const PhysicsOptions& options) {
     std::vector<PhysicsCheck> out;
     std::shared_ptr<const EnergyTable> table;
-    if (m.energy.model && m.energyModel() == EnergyModel::KullaConty) table = buildEnergyTable(energyTableKey(m));
+    if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
 
     // Input settings: defaults, then each ranged float input at its ends.
@@ -162,7 +146,7 @@ std::vector<PhysicsCheck> physicsChecks(const CheckedMaterial& m, const PhysicsO
             settings.push_back(s);
         }
     }
-    std::set<std::tuple<double, double, double, double, double>> seenNdf, seenEnergy;
+    std::set<std::vector<double>> seenNdf, seenEnergy;
     std::mt19937_64 rng(12345);
     std::uniform_real_distribution<double> uni(0, 1);
 
@@ -176,24 +160,18 @@ std::vector<PhysicsCheck> physicsChecks(const CheckedMaterial& m, const PhysicsO
         Lobe lobe = lobeOf(r);
         bool aniso = lobe.ratio < 1;
         std::vector<double> phis = aniso ? std::vector<double>{0, 45, 120} : std::vector<double>{0};
-        std::string params = r.ndf == NdfModel::BlinnPhong ? fmt::format("exponent={:.6g}", r.exponent)
-                             : r.ndf == NdfModel::Gtr
-                                 ? fmt::format("alpha={:.6g} gamma={:.6g}", r.alphaX, r.gamma)
-                                 : fmt::format("alpha=({:.6g},{:.6g})", r.alphaX, r.alphaY);
-        std::string where = where0 + " (" + params + ")";
-        auto ndfKey = std::make_tuple(double(int(r.ndf)), r.alphaX, r.alphaY, r.exponent, r.gamma);
+        std::string where = where0 + " (" + r.ndf->describe(r.ndfArgs) + ")";
+        std::vector<double> ndfKey = argsKey(*r.ndf, r.ndfArgs);
 
         // ---- NDF identities (not ward) ----
-        if (r.ndf != NdfModel::Ward && seenNdf.insert(ndfKey).second) {
+        if (!r.ndf->wholeLobe && seenNdf.insert(ndfKey).second) {
             Worst norm, area, furnace;
             double n = hemisphere([&](const V& mm) { return r.D(mm) * mm.z; }, [](double) { return kPi; },
                                   ndfGrid(lobe, 0, 0));
             norm.add("ndf normalization", where, n, 1, std::fabs(n - 1), 1e-3, true, "");
-            bool smith = smithMasking(r.masking);
+            bool smith = r.masking->smith;
             std::string furnaceNote =
-                r.ndf == NdfModel::BlinnPhong
-                    ? "blinn_phong uses the Beckmann Lambda (SPEC 3), exact only for large exponents"
-                    : "";
+                *r.ndf->lambdaNote ? std::string(r.ndf->lambdaNote) + ", exact only for large exponents" : "";
             for (double tv : options.thetas)
                 for (double pv : phis) {
                     if (tv == 0 && pv != 0) continue;
@@ -221,20 +199,17 @@ std::vector<PhysicsCheck> physicsChecks(const CheckedMaterial& m, const PhysicsO
         }
 
         // ---- energy <= 1 with F = 1 (and the Kulla-Conty furnace) ----
-        auto energyKey = std::make_tuple(double(int(r.ndf)) + 100 * int(r.masking), r.alphaX, r.alphaY,
-                                         r.exponent + 1e9 * r.gamma, r.schlickK);
+        std::vector<double> energyKey = ndfKey, maskingKey = argsKey(*r.masking, r.maskingArgs);
+        energyKey.insert(energyKey.end(), maskingKey.begin(), maskingKey.end());
         if (seenEnergy.insert(energyKey).second) {
-            ResolvedMaterial<double> white = r;
-            white.fresnel = FresnelModel::None;
-            white.diffuse = DiffuseModel::None;
-            white.energy = EnergyModel::None;
+            ResolvedMaterial<double> white = r.specularLobe();
             ResolvedMaterial<double> kc = white;
-            bool hasKc = r.energy == EnergyModel::KullaConty;
+            bool hasKc = r.energy->compensates;
             if (hasKc) {
-                kc.energy = EnergyModel::KullaConty;
+                kc.energy = r.energy;
                 kc.favg = {1, 1, 1};
             }
-            std::string note = energyNote(r.ndf, r.masking);
+            std::string note = energyNote(*r.ndf, *r.masking);
             Worst energy, furnace;
             for (double to : options.thetas)
                 for (double po : phis) {

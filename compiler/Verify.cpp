@@ -13,9 +13,9 @@ bool beyondFloat(double x) { return std::isfinite(x) && std::fabs(x) > double(FL
 
 bool parametersBeyondFloat(const ResolvedMaterial<double>& r) {
     bool out = false;
-    for (double x : {r.alphaX, r.alphaY, r.exponent, r.gamma, r.schlickK}) out |= beyondFloat(x);
-    for (const auto* a : {&r.f0, &r.eta, &r.k, &r.albedo})
-        for (double x : *a) out |= beyondFloat(x);
+    for (const ModelArgs<double>* args : {&r.ndfArgs, &r.maskingArgs, &r.fresnelArgs, &r.diffuseArgs})
+        for (const std::array<double, 3>& param : args->value)
+            for (double x : param) out |= beyondFloat(x);
     return out;
 }
 

@@ -129,9 +129,8 @@ void writeCacheFile(const std::string& dir, const std::string& path, const std::
 // Candidate variants for a tolerance, fastest first. The model
 // substitutions only appear where they apply to the material.
 std::vector<MathVariant> toleranceCandidates(const CheckedMaterial& m) {
-    bool smithBeckmann = (m.ndfModel() == NdfModel::Beckmann || m.ndfModel() == NdfModel::BlinnPhong) &&
-                         modelInfo(ModelSlot::Masking, int(m.maskingModel())).smith;
-    bool dielectric = m.fresnelModel() == FresnelModel::Dielectric;
+    bool smithBeckmann = walterLambdaApplies(m);
+    bool dielectric = schlickDielectricApplies(m);
     std::vector<MathVariant> out;
     for (bool walter : {true, false})
         for (bool schlick : {true, false}) {
@@ -481,7 +480,7 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
     std::unique_ptr<Kernel> kernel(new Kernel());
     kernel->material_ = std::move(specialized);
     kernel->backend_ = options.backend;
-    if (kernel->material_.energyModel() == EnergyModel::KullaConty)
+    if (kernel->material_.compensatesEnergy())
         kernel->energyTable_ = tables_->getFor(kernel->material_);
     for (int s = 0; s < kernel->material_.slotCount; ++s) kernel->slotNames_.push_back(kernel->material_.slotName(s));
     if (options.backend == Backend::Interp) {
@@ -674,7 +673,7 @@ std::string Compiler::irText(const std::string& path, const std::string& name, c
     if (diags.hasErrors()) return "";
     LoweringOptions lowering;
     std::shared_ptr<const EnergyTable> table;
-    if (specialized.energyModel() == EnergyModel::KullaConty) table = tables_->getFor(specialized);
+    if (specialized.compensatesEnergy()) table = tables_->getFor(specialized);
     lowering.energyTable = table.get();
     lowering.math = options.math;
     lowering.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();

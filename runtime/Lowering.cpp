@@ -1884,6 +1884,12 @@ bool guardedFastApplies(const CheckedMaterial& mat, const MathVariant& variant) 
     return mat.ndfModel() == NdfModel::Ggx && ndfIsIsotropic(mat) && mat.energyModel() == EnergyModel::None;
 }
 
+bool walterLambdaApplies(const CheckedMaterial& mat) {
+    return (mat.ndfModel() == NdfModel::Beckmann || mat.ndfModel() == NdfModel::BlinnPhong) && mat.masking.model->smith;
+}
+
+bool schlickDielectricApplies(const CheckedMaterial& mat) { return mat.fresnelModel() == FresnelModel::Dielectric; }
+
 bool floatFirstApplies(const CheckedMaterial& mat, const MathVariant& variant) {
     if (!variant.precise || !variant.floatFirst || variant.estimates || variant.shortPolynomials) return false;
     if (mat.ndfModel() != NdfModel::Ggx || mat.energyModel() != EnergyModel::None) return false;

@@ -75,6 +75,12 @@ bool floatFirstApplies(const CheckedMaterial& material, const MathVariant& varia
 // body (MathVariant::floatFirst): isotropic GGX, no energy compensation.
 bool guardedFastApplies(const CheckedMaterial& material, const MathVariant& variant);
 
+// Whether the model substitutions of MathVariant can change this material:
+// a Smith masking on a Beckmann-profile Lambda (beckmann, blinn_phong) for
+// walterLambda, a dielectric Fresnel term for schlickDielectric.
+bool walterLambdaApplies(const CheckedMaterial& material);
+bool schlickDielectricApplies(const CheckedMaterial& material);
+
 struct LoweringOptions {
     // energy = kulla_conty: the E table of the material's NDF x masking,
     // embedded in the module as constant arrays (required for such materials).

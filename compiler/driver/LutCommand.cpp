@@ -82,7 +82,7 @@ int cmdLut(const std::vector<std::string>& args) {
     std::printf("  E_avg:");
     for (double a : {0.01, 0.05, 0.1, 0.25, 0.5, 1.0}) std::printf("  alpha %g: %.6f", a, 1 - table->ecAvgAt(a));
     std::printf("\n");
-    if (m->energyModel() != EnergyModel::KullaConty)
+    if (!m->compensatesEnergy())
         std::printf("  (material uses energy = none; the table is the one kulla_conty would use)\n");
     Interpreter<double> interp(*m, table);
     ResolvedMaterial<double> r = interp.resolve(nullptr);

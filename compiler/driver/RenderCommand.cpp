@@ -27,6 +27,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <optional>
 
 namespace facet {
@@ -79,9 +80,6 @@ std::pair<double, double> parseAngles(const std::string& option, const std::stri
     if (v[0] < 0 || v[0] > 180) throw RenderUsageError{fmt::format("{}: theta {} is outside 0 .. 180", option, v[0])};
     return {v[0], v[1]};
 }
-
-// An NDF's name in the language, from the builtin model table.
-const char* ndfName(NdfModel m) { return modelInfo(ModelSlot::Ndf, int(m)).name; }
 
 struct RenderArgs {
     std::string file, material, out, plot, compare;
@@ -218,18 +216,21 @@ int ndfPlotCommand(const RenderArgs& r) {
     if (!r.compare.empty()) {
         // Several NDFs at matched roughness.
         if (alphas.empty()) alphas = {0.3};
-        std::vector<NdfModel> models;
+        std::vector<const NdfEntry*> models;
         for (const std::string& name : splitFields(r.compare)) {
             const ModelInfo* ndf = findModel(ModelSlot::Ndf, name);  // names and aliases of the language
-            if (!ndf || NdfModel(ndf->id) == NdfModel::Ward)
-                throw RenderUsageError{fmt::format(
-                    "--compare: '{}' is not an NDF with a distribution to plot (ggx, beckmann, blinn_phong, gtr, gaussian)",
-                    name)};
-            models.push_back(NdfModel(ndf->id));
+            if (!ndf || ndfEntry(*ndf).wholeLobe) {
+                std::vector<std::string> plottable;
+                for (const ModelInfo* m : catalogSlot(ModelSlot::Ndf))
+                    if (!ndfEntry(*m).wholeLobe) plottable.push_back(m->name);
+                throw RenderUsageError{fmt::format("--compare: '{}' is not an NDF with a distribution to plot ({})",
+                                                   name, fmt::join(plottable, ", "))};
+            }
+            models.push_back(&ndfEntry(*ndf));
         }
         for (double a : alphas)
-            for (NdfModel m : models)
-                curves.push_back({fmt::format("{}, alpha = {:g}", ndfName(m), a), preview::ndfAtAlpha(m, a)});
+            for (const NdfEntry* m : models)
+                curves.push_back({fmt::format("{}, alpha = {:g}", m->name, a), preview::ndfAtAlpha(*m, a)});
         opt.title = alphas.size() == 1 ? fmt::format("D(theta_m) at matched roughness alpha = {:g}", alphas[0])
                                        : std::string("D(theta_m) at matched roughness");
     } else {
@@ -241,20 +242,25 @@ int ndfPlotCommand(const RenderArgs& r) {
         }
         const CheckedMaterial* m = program.find(r.material);
         if (!m) throw RenderUsageError{fmt::format("no material named '{}' in {}", r.material, r.file)};
-        NdfModel model = m->ndfModel();
-        if (model == NdfModel::Ward) {
-            std::fprintf(stderr, "%s: error: material '%s': the ward model has no microfacet distribution D to plot\n",
-                         m->loc.str().c_str(), m->name.c_str());
+        const NdfEntry& model = ndfEntry(*m->ndf.model);
+        if (model.wholeLobe) {
+            std::fprintf(stderr, "%s: error: material '%s': the %s model has no microfacet distribution D to plot\n",
+                         m->loc.str().c_str(), m->name.c_str(), model.name);
             return kExitCheckFailed;
         }
         Interpreter<double> interp(*m);
         ResolvedMaterial<double> resolved = interp.resolve(nullptr);
-        double gamma = model == NdfModel::Gtr && resolved.valid ? resolved.gamma : 2;
+        // The material's own shape parameters (gtr's gamma), else the typical ones.
+        std::vector<double> shape;
+        std::string shapeText;
+        for (int p : model.tableShapeParams) {
+            shape.push_back(resolved.valid ? resolved.ndfArgs[p] : model.canonical[p].typical);
+            shapeText += fmt::format(", {} = {:g}", model.canonical[p].name, shape.back());
+        }
         if (alphas.empty()) alphas = {0.1, 0.2, 0.3, 0.5, 0.8};
         for (double a : alphas)
-            curves.push_back({fmt::format("alpha = {:g}", a), preview::ndfAtAlpha(model, a, gamma)});
-        opt.title = model == NdfModel::Gtr ? fmt::format("{}: gtr D(theta_m), gamma = {:g}", m->name, gamma)
-                                           : fmt::format("{}: {} D(theta_m)", m->name, ndfName(model));
+            curves.push_back({fmt::format("alpha = {:g}", a), preview::ndfAtAlpha(model, a, shape)});
+        opt.title = fmt::format("{}: {} D(theta_m){}", m->name, model.name, shapeText);
     }
     if (std::string err = preview::writeNdfPlot(curves, opt, r.out); !err.empty()) {
         std::fprintf(stderr, "facet: render: %s\n", err.c_str());

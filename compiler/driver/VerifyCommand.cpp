@@ -77,15 +77,18 @@ void printSample(const SampleStats& s, const CheckedMaterial& m, const std::vect
 bool verifyMaterial(const CheckedMaterial& m, const std::string& path, Compiler& compiler, const VerifyOptions& opt) {
     auto start = std::chrono::steady_clock::now();
     bool ok = true;
-    std::printf("material %s (%s): ndf %s, masking %s, fresnel %s%s%s\n", m.name.c_str(), path.c_str(), m.ndf.model->name,
-                m.masking.model->name, m.fresnel.model->name,
-                m.energyModel() == EnergyModel::KullaConty ? ", energy kulla_conty" : "",
-                m.diffuseModel() == DiffuseModel::Lambert ? ", diffuse lambert" : "");
+    // energy and diffuse only where the material has one.
+    std::string optional;
+    for (const ModelUse* use : {&m.energy, &m.diffuse})
+        if (std::string_view(use->model->name) != "none")
+            optional += fmt::format(", {} {}", modelSlotName(use->model->slot), use->model->name);
+    std::printf("material %s (%s): ndf %s, masking %s, fresnel %s%s\n", m.name.c_str(), path.c_str(), m.ndf.model->name,
+                m.masking.model->name, m.fresnel.model->name, optional.c_str());
 
     // ---- 1. hard cases on the interpreter and the kernels ----
     std::vector<HardCase> cases = hardCases(m);
     std::shared_ptr<const EnergyTable> table;
-    if (m.energyModel() == EnergyModel::KullaConty) table = buildEnergyTable(energyTableKey(m));
+    if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
     Reference ref = evaluateReference(interp, cases);
     size_t byInput = 0;

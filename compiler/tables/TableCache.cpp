@@ -76,10 +76,11 @@ std::string writeEnergyTableExr(const EnergyTable& t, const std::string& path) {
     spec.attribute("facet:table", kTableKind);
     spec.attribute("facet:version", kEnergyTableVersion);
     spec.attribute("facet:key", t.key.name());
-    spec.attribute("facet:ndf", modelInfo(ModelSlot::Ndf, int(t.key.ndf)).name);
-    spec.attribute("facet:masking", modelInfo(ModelSlot::Masking, int(t.key.masking)).name);
-    spec.attribute("facet:gamma", exact(t.key.gamma));
-    spec.attribute("facet:schlick_k", exact(t.key.schlickK));
+    spec.attribute("facet:ndf", t.key.ndf->name);
+    spec.attribute("facet:masking", t.key.masking->name);
+    std::string shape;
+    for (double v : t.key.shape) shape += (shape.empty() ? "" : ",") + exact(v);
+    spec.attribute("facet:shape", shape);
     spec.attribute("facet:mu_count", t.muCount);
     spec.attribute("facet:alpha_count", t.alphaCount);
     spec.attribute("facet:alpha_min", exact(t.alphaMin));
@@ -148,10 +149,14 @@ TableFileResult readEnergyTableExr(const std::string& path, const EnergyTableKey
     const ModelInfo* maskInfo = findModel(ModelSlot::Masking, masking);
     if (!ndfInfo || !maskInfo)
         return fail(TableFileStatus::Stale, fmt::format("{}: unknown ndf '{}' or masking '{}'", path, ndf, masking));
-    t->key.ndf = NdfModel(ndfInfo->id);
-    t->key.masking = MaskingModel(maskInfo->id);
-    t->key.gamma = std::strtod(std::string(spec.get_string_attribute("facet:gamma")).c_str(), nullptr);
-    t->key.schlickK = std::strtod(std::string(spec.get_string_attribute("facet:schlick_k")).c_str(), nullptr);
+    t->key.ndf = &ndfEntry(*ndfInfo);
+    t->key.masking = &maskingEntry(*maskInfo);
+    std::string shape(spec.get_string_attribute("facet:shape"));
+    for (size_t pos = 0; pos < shape.size();) {
+        size_t end = std::min(shape.find(',', pos), shape.size());
+        t->key.shape.push_back(std::strtod(shape.substr(pos, end - pos).c_str(), nullptr));
+        pos = end + 1;
+    }
     t->quadrature = quadrature;
     std::string quad(spec.get_string_attribute("facet:quadrature"));
     if (expected) {

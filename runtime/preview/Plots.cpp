@@ -283,8 +283,9 @@ std::string checkNdfInputs(const std::vector<NdfCurve>& curves, const NdfPlotOpt
     if (curves.empty()) return "the NDF plot needs at least one curve";
     if (curves.size() > kMaxNdfCurves) return fmt::format("the NDF plot draws at most {} curves", kMaxNdfCurves);
     for (const NdfCurve& c : curves) {
-        if (c.ndf.ndf == NdfModel::Ward)
-            return "ward is a whole BRDF lobe without a microfacet distribution D(m) (plot it with --plot lobe)";
+        if (c.ndf.ndf->wholeLobe)
+            return fmt::format("{} is a whole BRDF lobe without a microfacet distribution D(m) (plot it with --plot lobe)",
+                               c.ndf.ndf->name);
         if (!c.ndf.valid) return "NDF curve '" + c.label + "' has a non-finite parameter";
     }
     return "";
@@ -451,29 +452,19 @@ LobePlotResult writeLobePlot(const Kernel& kernel, const LobePlotOptions& option
     return result;
 }
 
-ResolvedMaterial<double> ndfAtAlpha(NdfModel model, double alpha, double gtrGamma) {
-    ResolvedMaterial<double> r{};
-    r.ndf = model;
-    r.masking = MaskingModel::None;
-    r.fresnel = FresnelModel::None;
-    r.diffuse = DiffuseModel::None;
-    if (!std::isfinite(alpha) || !std::isfinite(gtrGamma)) {
-        r.valid = false;
-        return r;
+ResolvedMaterial<double> ndfAtAlpha(const NdfEntry& ndf, double alpha, std::vector<double> shape) {
+    for (size_t i = shape.size(); i < ndf.tableShapeParams.size(); ++i)
+        shape.push_back(ndf.canonical[ndf.tableShapeParams[i]].typical);
+    bool finite = std::isfinite(alpha);
+    for (size_t i = 0; i < shape.size(); ++i) {
+        finite &= std::isfinite(shape[i]);
+        // The same domain clamps as Interpreter::resolve applies to arguments.
+        const ModelParam& p = ndf.canonical[ndf.tableShapeParams.at(i)];
+        shape[i] = std::clamp(shape[i], p.lo, p.hi);
     }
-    // The same domain clamps as Interpreter::resolve applies to arguments.
-    double a = std::max(alpha, kMinAlpha);
-    r.alphaX = r.alphaY = a;
-    switch (model) {
-        case NdfModel::Ggx:
-        case NdfModel::Beckmann:
-        case NdfModel::Ward: break;
-        case NdfModel::BlinnPhong:  // the language's own beckmann_to_phong(alpha)
-            r.exponent = std::clamp(applyBuiltin<double>(BuiltinFn::BeckmannToPhong, &a), 0.0, kMaxPhongExponent);
-            break;
-        case NdfModel::Gtr: r.gamma = std::max(gtrGamma, 0.0); break;
-        case NdfModel::Gaussian: r.gaussianNorm = gaussianNdfNorm(a); break;
-    }
+    ResolvedMaterial<double> r = lobeAtAlpha(ndf, maskingEntry(*findModel(ModelSlot::Masking, "none")),
+                                             finite ? alpha : 1.0, shape);
+    r.valid = finite;
     return r;
 }
 

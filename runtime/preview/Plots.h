@@ -48,10 +48,12 @@ struct NdfCurve {
     ResolvedMaterial<double> ndf;
 };
 
-// The NDF `model` at roughness alpha (isotropic): ggx, beckmann, ward,
-// gaussian, gtr (with `gtrGamma`) use alpha directly; blinn_phong uses the
-// matched exponent 2 / alpha^2 - 2 (Walter et al. 2007).
-ResolvedMaterial<double> ndfAtAlpha(NdfModel model, double alpha, double gtrGamma = 2);
+// The NDF `ndf` at equivalent roughness alpha (isotropic; the entry's
+// argsAtAlpha: blinn_phong takes the matched exponent 2 / alpha^2 - 2 of
+// Walter et al. 2007), with the given values of its shape parameters (gtr's
+// gamma), each defaulting to the parameter's typical value. Invalid when
+// alpha or a shape value is not finite.
+ResolvedMaterial<double> ndfAtAlpha(const NdfEntry& ndf, double alpha, std::vector<double> shape = {});
 
 struct NdfPlotOptions {
     int width = 960, height = 600;

@@ -96,14 +96,8 @@ std::array<double, 2> samplingRoughness(const Kernel& kernel) {
     ResolvedMaterial<double> r = interp.resolve(nullptr);
     double ax = 1, ay = 1;
     if (r.valid) {
-        switch (r.ndf) {
-            case NdfModel::Ggx:
-            case NdfModel::Beckmann:
-            case NdfModel::Ward: ax = r.alphaX, ay = r.alphaY; break;
-            case NdfModel::Gtr:
-            case NdfModel::Gaussian: ax = ay = r.alphaX; break;
-            case NdfModel::BlinnPhong: ax = ay = std::sqrt(2 / (r.exponent + 2)); break;
-        }
+        std::array<double, 2> alphas = r.ndf->equivalentAlphas(r.ndfArgs);
+        ax = alphas[0], ay = alphas[1];
     }
     auto clampAlpha = [](double a) { return std::isfinite(a) ? std::clamp(a, 1e-3, 1.0) : 1.0; };
     return {clampAlpha(ax), clampAlpha(ay)};

@@ -57,15 +57,15 @@ void editPixels(const std::string& path, const Edit& edit) {
 
 EnergyTableKey ggx() {
     EnergyTableKey k;
-    k.ndf = facet::NdfModel::Ggx;
-    k.masking = facet::MaskingModel::SmithHeightCorrelated;
+    k.ndf = &facet::ndfEntry(facet::modelNamed(facet::ModelSlot::Ndf, "ggx"));
+    k.masking = &facet::maskingEntry(facet::modelNamed(facet::ModelSlot::Masking, "smith_height_correlated"));
     return k;
 }
 
 EnergyTableKey beckmann() {
     EnergyTableKey k;
-    k.ndf = facet::NdfModel::Beckmann;
-    k.masking = facet::MaskingModel::SmithSeparable;
+    k.ndf = &facet::ndfEntry(facet::modelNamed(facet::ModelSlot::Ndf, "beckmann"));
+    k.masking = &facet::maskingEntry(facet::modelNamed(facet::ModelSlot::Masking, "smith_separable"));
     return k;
 }
 
@@ -110,10 +110,9 @@ TEST_CASE("EXR round trip keeps every value and the metadata") {
     CHECK(!std::string(spec.get_string_attribute("facet:alpha_axis")).empty());
     // A gtr / schlick_smith key keeps its constants.
     EnergyTableKey g;
-    g.ndf = facet::NdfModel::Gtr;
-    g.gamma = 1.5;
-    g.masking = facet::MaskingModel::SchlickSmith;
-    g.schlickK = 0.125;
+    g.ndf = &facet::ndfEntry(facet::modelNamed(facet::ModelSlot::Ndf, "gtr"));
+    g.masking = &facet::maskingEntry(facet::modelNamed(facet::ModelSlot::Masking, "schlick_smith"));
+    g.shape = {1.5, 0.125};
     auto tg = std::make_shared<facet::EnergyTable>(*t);
     tg->key = g;
     REQUIRE(facet::writeEnergyTableExr(*tg, path) == "");

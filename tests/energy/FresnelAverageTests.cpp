@@ -12,12 +12,16 @@ using namespace energy;
 
 namespace {
 
-facet::ResolvedMaterial<double> fresnelOnly(facet::FresnelModel model, double eta, double k = 0, double f0 = 0) {
-    facet::ResolvedMaterial<double> r;
-    r.fresnel = model;
-    r.eta = {eta, eta, eta};
-    r.k = {k, k, k};
-    r.f0 = {f0, f0, f0};
+// A material with only the Fresnel term `model` and the named parameters.
+template <typename Real = double>
+facet::ResolvedMaterial<Real> fresnelOnly(const char* model, std::initializer_list<std::pair<const char*, Real>> args) {
+    facet::ResolvedMaterial<Real> r;
+    r.fresnel = &facet::fresnelEntry(facet::modelNamed(facet::ModelSlot::Fresnel, model));
+    for (auto [name, value] : args) {
+        int p = facet::paramIndex(*r.fresnel, name);
+        REQUIRE(p >= 0);
+        r.fresnelArgs.set(p, value);
+    }
     return r;
 }
 
@@ -32,7 +36,7 @@ double simpson(const std::function<double(double)>& f, double a, double b, int n
 // 2 Int F mu dmu with mu = s^2: 4 Int F(s^2) s^3 ds, split at the critical angle.
 double referenceAverage(const facet::ResolvedMaterial<double>& r) {
     auto f = [&](double s) { return s == 0 ? 0.0 : r.F(s * s, 0) * 4 * s * s * s; };
-    double n = r.eta[0];
+    double n = r.fresnelArgs[facet::paramIndex(*r.fresnel, "eta")];
     if (n < 1) {
         double sc = std::sqrt(std::sqrt((1 - n) * (1 + n)));
         return simpson(f, 0, sc, 100000) + simpson(f, sc, 1, 100000);
@@ -46,20 +50,19 @@ TEST_SUITE("fresnel_average") {
 
 TEST_CASE("Schlick: (20 f0 + 1) / 21") {
     for (double f0 : {0.0, 0.04, 0.5, 0.95, 1.0}) {
-        auto r = fresnelOnly(facet::FresnelModel::Schlick, 1, 0, f0);
+        auto r = fresnelOnly("schlick", {{"f0", f0}});
         CHECK(facet::fresnelAverage(r, 0) == doctest::Approx((20 * f0 + 1) / 21).epsilon(1e-15));
         CHECK(referenceAverage(r) == doctest::Approx((20 * f0 + 1) / 21).epsilon(1e-9));
     }
     // From eta: f0 = ((eta - 1)/(eta + 1))^2.
-    auto r = fresnelOnly(facet::FresnelModel::Schlick, 1.5);
-    r.schlickFromEta = true;
+    auto r = fresnelOnly("schlick", {{"eta", 1.5}});
     CHECK(facet::fresnelAverage(r, 1) == doctest::Approx((20 * 0.04 + 1) / 21).epsilon(1e-12));
 }
 
 TEST_CASE("dielectric and conductor quadrature against Simpson") {
     double worst = 0;
     for (double eta : {1e-4, 0.05, 0.3, 0.667, 0.95, 1.0, 1.0001, 1.33, 1.5, 2.4, 10.0, 68.0, 1e4}) {
-        auto r = fresnelOnly(facet::FresnelModel::Dielectric, eta);
+        auto r = fresnelOnly("dielectric", {{"eta", eta}});
         double ref = referenceAverage(r);
         INFO("dielectric eta=", eta, " reference ", ref);
         CHECK(facet::fresnelAverageDielectric(eta) == doctest::Approx(ref).epsilon(1e-7).scale(1));
@@ -68,7 +71,7 @@ TEST_CASE("dielectric and conductor quadrature against Simpson") {
     }
     for (double eta : {0.05, 0.14, 0.43, 1.0, 1.38, 3.0, 20.0})
         for (double k : {0.0, 0.01, 0.5, 1.914, 3.697, 10.0, 100.0}) {
-            auto r = fresnelOnly(facet::FresnelModel::Conductor, eta, k);
+            auto r = fresnelOnly("conductor", {{"eta", eta}, {"k", k}});
             double ref = referenceAverage(r);
             INFO("conductor eta=", eta, " k=", k, " reference ", ref);
             CHECK(facet::fresnelAverageConductor(eta, k) == doctest::Approx(ref).epsilon(1e-7).scale(1));
@@ -81,10 +84,10 @@ TEST_CASE("dielectric and conductor quadrature against Simpson") {
     // k = 0 conductor = dielectric.
     CHECK(facet::fresnelAverageConductor(1.5, 0) == doctest::Approx(facet::fresnelAverageDielectric(1.5)).epsilon(1e-12));
     // Long double interpreter agrees.
-    facet::ResolvedMaterial<long double> rl;
-    rl.fresnel = facet::FresnelModel::Conductor;
-    rl.eta = {0.14L, 0.43L, 1.38L};
-    rl.k = {3.697L, 2.455L, 1.914L};
+    facet::ResolvedMaterial<long double> rl = fresnelOnly<long double>("conductor", {});
+    rl.fresnelArgs.value[0] = {0.14L, 0.43L, 1.38L};
+    rl.fresnelArgs.value[1] = {3.697L, 2.455L, 1.914L};
+    rl.fresnelArgs.given = {true, true};
     CHECK(double(facet::fresnelAverage(rl, 2)) == doctest::Approx(facet::fresnelAverageConductor(1.38, 1.914)).epsilon(1e-12));
 }
 

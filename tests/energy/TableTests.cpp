@@ -13,17 +13,16 @@
 using namespace energy;
 using facet::EnergyTable;
 using facet::EnergyTableKey;
-using facet::MaskingModel;
-using facet::NdfModel;
 
 namespace {
 
-EnergyTableKey key(NdfModel n, MaskingModel m, double gamma = 0, double k = 0) {
+// The table key of an NDF and a masking (names in the language) with the
+// values of their shape parameters.
+EnergyTableKey key(const char* ndf, const char* masking, std::vector<double> shape = {}) {
     EnergyTableKey key;
-    key.ndf = n;
-    key.masking = m;
-    key.gamma = gamma;
-    key.schlickK = k;
+    key.ndf = &facet::ndfEntry(facet::modelNamed(facet::ModelSlot::Ndf, ndf));
+    key.masking = &facet::maskingEntry(facet::modelNamed(facet::ModelSlot::Masking, masking));
+    key.shape = std::move(shape);
     return key;
 }
 
@@ -34,13 +33,13 @@ TEST_SUITE("tables") {
 TEST_CASE("closed forms: GGX alpha = 1 at normal incidence, E = 1 - ln 2") {
     // D = 1/pi for GGX alpha = 1; at mu_o = 1, Lambda_o = 0 and G = 2 mu_i / (1 + mu_i):
     // E = 1/(4 pi) Int G dwi = Int_0^1 2 mu/(1 + mu) dmu = 2 (1 - ln 2) / 2 ... = 1 - ln 2.
-    for (MaskingModel m : {MaskingModel::SmithHeightCorrelated, MaskingModel::SmithSeparable}) {
-        auto t = memoryTables().get(key(NdfModel::Ggx, m));
+    for (const char* m : {"smith_height_correlated", "smith_separable"}) {
+        auto t = memoryTables().get(key("ggx", m));
         CHECK(t->ecAt(1, 1) == doctest::Approx(std::log(2.0)).epsilon(1e-6));
         CHECK(facet::directionalAlbedo(t->key, 1, 1) == doctest::Approx(1 - std::log(2.0)).epsilon(1e-9));
     }
     // Lookups clamp: alpha beyond the grid uses the end rows, mu outside [0, 1] the end columns.
-    auto t = memoryTables().get(key(NdfModel::Ggx, MaskingModel::SmithHeightCorrelated));
+    auto t = memoryTables().get(key("ggx", "smith_height_correlated"));
     CHECK(t->ecAt(0.5, 3.0) == t->ecAt(0.5, 1.0));
     CHECK(t->ecAt(0.5, 1e-7) == t->ecAt(0.5, 1e-4));
     CHECK(t->ecAt(1.5, 0.3) == t->ecAt(1.0, 0.3));
@@ -59,7 +58,7 @@ TEST_CASE("closed forms: GGX alpha = 1 at normal incidence, E = 1 - ln 2") {
 }
 
 TEST_CASE("EcAvg equals the integral of the interpolated Ec at every alpha (exact consistency)") {
-    auto t = memoryTables().get(key(NdfModel::Beckmann, MaskingModel::SmithSeparable));
+    auto t = memoryTables().get(key("beckmann", "smith_separable"));
     const physics::GaussLegendre g(4);
     double worst = 0;
     for (double alpha : {1e-4, 3e-4, 0.0123, 0.05, 0.0777, 0.31, 0.5, 0.999, 1.0}) {
@@ -83,13 +82,13 @@ TEST_CASE("EcAvg equals the integral of the interpolated Ec at every alpha (exac
 // bilinear interpolation), against the quadrature at the same point.
 TEST_CASE("interpolation error at cell centres") {
     struct Pair {
-        NdfModel ndf;
-        MaskingModel masking;
+        const char* ndf;
+        const char* masking;
     };
-    const Pair pairs[] = {{NdfModel::Ggx, MaskingModel::SmithHeightCorrelated},
-                          {NdfModel::Ggx, MaskingModel::SmithSeparable},
-                          {NdfModel::Beckmann, MaskingModel::SmithHeightCorrelated},
-                          {NdfModel::Beckmann, MaskingModel::SmithSeparable}};
+    const Pair pairs[] = {{"ggx", "smith_height_correlated"},
+                          {"ggx", "smith_separable"},
+                          {"beckmann", "smith_height_correlated"},
+                          {"beckmann", "smith_separable"}};
     for (const Pair& p : pairs) {
         auto t = memoryTables().get(key(p.ndf, p.masking));
         struct Pt {
@@ -183,14 +182,14 @@ TEST_CASE("quadrature convergence for every accepted pair") {
 
 TEST_CASE("table build time per pair") {
     const EnergyTableKey keys[] = {
-        key(NdfModel::Ggx, MaskingModel::SmithHeightCorrelated),
-        key(NdfModel::Ggx, MaskingModel::SmithSeparable),
-        key(NdfModel::Beckmann, MaskingModel::SmithHeightCorrelated),
-        key(NdfModel::Beckmann, MaskingModel::SmithSeparable),
-        key(NdfModel::Ggx, MaskingModel::SmithHeightDirectionCorrelated),
-        key(NdfModel::BlinnPhong, MaskingModel::SmithHeightCorrelated),
-        key(NdfModel::Gaussian, MaskingModel::Neumann),
-        key(NdfModel::Gtr, MaskingModel::SchlickSmith, 1.0, 0.125),
+        key("ggx", "smith_height_correlated"),
+        key("ggx", "smith_separable"),
+        key("beckmann", "smith_height_correlated"),
+        key("beckmann", "smith_separable"),
+        key("ggx", "smith_height_direction_correlated"),
+        key("blinn_phong", "smith_height_correlated"),
+        key("gaussian", "neumann"),
+        key("gtr", "schlick_smith", {1.0, 0.125}),
     };
     unsigned threads = std::max(1u, std::thread::hardware_concurrency());
     for (const EnergyTableKey& k : keys) {

@@ -255,10 +255,10 @@ std::vector<std::string> buildVocabulary() {
         "@", "#", "\"", "$", "`", "\\", "'", "\xff", std::string(1, '\0'), "\t", "\r\n", "/*", "*/", "//",
     };
     for (const BuiltinFunction& f : builtinFunctions()) v.push_back(f.name);
-    for (const ModelInfo& m : builtinModels()) {
-        v.push_back(m.name);
-        for (const char* a : m.aliases) v.push_back(a);
-        for (const ModelForm& f : m.forms)
+    for (const ModelInfo* m : catalog()) {
+        v.push_back(m->name);
+        for (const char* a : m->aliases) v.push_back(a);
+        for (const ModelForm& f : m->forms)
             for (const auto& p : f.params) v.push_back(p.name);
     }
     return v;
@@ -677,7 +677,7 @@ void checkMaterialEval(const CheckedMaterial& m, Rng& rng, Failures& fail, const
             // dielectric's total-internal-reflection cut-off is a step, so a
             // rounding difference in wi.h against wo.h may legitimately
             // jump across it: skip that one.
-            if (r.valid && p.expect == DirPair::Any && m.fresnelModel() != FresnelModel::Dielectric) {
+            if (r.valid && p.expect == DirPair::Any && !fresnelEntry(*m.fresnel.model).reciprocityStep) {
                 EvalResult<double> q = interp.eval(p.wo.data(), p.wi.data(), slots);
                 for (int c = 0; c < 3 && q.valid; ++c) {
                     double a = r.rgb[c], b = q.rgb[c];
@@ -769,7 +769,7 @@ Outcome runOne(const std::string& text, Rng& rng, Failures& fail, const std::str
             // under ASan, per mutant. Evaluate every other term with energy
             // = none instead; the Kulla-Conty term has its own physics tests.
             CheckedMaterial m = prog.materials[i];
-            if (m.energy.model && m.energyModel() != EnergyModel::None) {
+            if (m.compensatesEnergy()) {
                 m.energy.model = findModel(ModelSlot::Energy, "none");
                 ++st.energyReplaced;
             }

@@ -162,7 +162,7 @@ MaterialResult runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& c
 
     // The reference on both samples (float-rounded and with double-only values).
     std::shared_ptr<const EnergyTable> table;
-    if (m.energyModel() == EnergyModel::KullaConty) table = buildEnergyTable(energyTableKey(m));
+    if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
     Reference ref = evaluateReference(interp, cases), refRaw = evaluateReference(interp, raw);
     r.interp = checkReference(cases, ref);
@@ -243,15 +243,11 @@ const Suite& suite() {
 }
 
 // Every NDF x masking x Fresnel model the checker accepts (enumerated from
-// the builtin tables, independently of the generator).
+// the catalog, independently of the generator).
 std::set<std::string> acceptedCombinations() {
     std::set<std::string> out;
-    std::vector<const ModelInfo*> ndfs, maskings, fresnels;
-    for (const ModelInfo& m : builtinModels()) {
-        if (m.slot == ModelSlot::Ndf) ndfs.push_back(&m);
-        if (m.slot == ModelSlot::Masking) maskings.push_back(&m);
-        if (m.slot == ModelSlot::Fresnel) fresnels.push_back(&m);
-    }
+    std::vector<const ModelInfo*> ndfs = catalogSlot(ModelSlot::Ndf), maskings = catalogSlot(ModelSlot::Masking),
+                                  fresnels = catalogSlot(ModelSlot::Fresnel);
     auto args = [](const ModelInfo& m) {
         std::string a;
         for (const ModelForm::Param& p : m.forms.front().params)
@@ -437,7 +433,7 @@ TEST_CASE("QuadMath: __float128 limits, math and complex Fresnel at full precisi
     Interpreter<Q> interp(p.materials.front());
     ResolvedMaterial<Q> m = interp.resolve(nullptr);
     for (Q c : {Q(1), Q(0.9), Q(0.5), Q(0.1), Q(1e-3)}) {
-        Q n = m.eta[0], k = m.k[0], s2 = 1 - c * c;
+        Q n = m.fresnelArgs.channel(0, 0), k = m.fresnelArgs.channel(1, 0), s2 = 1 - c * c;  // eta, k
         Q t0 = n * n - k * k - s2, a2b2 = sqrtq(t0 * t0 + 4 * n * n * k * k), a = sqrtq((a2b2 + t0) / 2);
         Q t1 = a2b2 + c * c, t2 = 2 * c * a;
         Q rs = (t1 - t2) / (t1 + t2);

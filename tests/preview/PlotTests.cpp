@@ -111,43 +111,49 @@ ImageSummary readBack(const std::string& path) {
     return s;
 }
 
+const NdfEntry& ndf(const char* name) { return ndfEntry(modelNamed(ModelSlot::Ndf, name)); }
+
 }  // namespace
 
 TEST_SUITE("plots") {
 
 TEST_CASE("ndfAtAlpha sets the fields each NDF needs") {
-    ResolvedMaterial<double> ggx = ndfAtAlpha(NdfModel::Ggx, 0.3);
+    ResolvedMaterial<double> ggx = ndfAtAlpha(ndf("ggx"), 0.3);
     CHECK(ggx.valid);
-    CHECK(ggx.ndf == NdfModel::Ggx);
-    CHECK(ggx.alphaX == 0.3);
-    CHECK(ggx.alphaY == 0.3);
+    CHECK(ggx.ndf == &ndf("ggx"));
+    CHECK(ggx.ndfArgs[0] == 0.3);  // alpha_x
+    CHECK(ggx.ndfArgs[1] == 0.3);  // alpha_y
     // GGX and Beckmann at the normal: 1 / (pi alpha^2).
     for (double a : {0.1, 0.3, 0.7}) {
-        CHECK(ndfAtAlpha(NdfModel::Ggx, a).D({0, 0, 1}) == doctest::Approx(1 / (kPi * a * a)).epsilon(1e-12));
-        CHECK(ndfAtAlpha(NdfModel::Beckmann, a).D({0, 0, 1}) == doctest::Approx(1 / (kPi * a * a)).epsilon(1e-12));
+        CHECK(ndfAtAlpha(ndf("ggx"), a).D({0, 0, 1}) == doctest::Approx(1 / (kPi * a * a)).epsilon(1e-12));
+        CHECK(ndfAtAlpha(ndf("beckmann"), a).D({0, 0, 1}) == doctest::Approx(1 / (kPi * a * a)).epsilon(1e-12));
     }
     // Blinn-Phong: the Walter et al. 2007 matched exponent 2/alpha^2 - 2.
-    CHECK(ndfAtAlpha(NdfModel::BlinnPhong, 0.3).exponent == doctest::Approx(2 / 0.09 - 2).epsilon(1e-12));
-    CHECK(ndfAtAlpha(NdfModel::Gtr, 0.3, 1.5).gamma == 1.5);
-    CHECK(ndfAtAlpha(NdfModel::Gaussian, 0.3).gaussianNorm == doctest::Approx(gaussianNdfNorm(0.3)));
+    CHECK(ndfAtAlpha(ndf("blinn_phong"), 0.3).ndfArgs[0] == doctest::Approx(2 / 0.09 - 2).epsilon(1e-12));
+    CHECK(ndfAtAlpha(ndf("gtr"), 0.3, {1.5}).ndfArgs[paramIndex(ndf("gtr"), "gamma")] == 1.5);
+    CHECK(ndfAtAlpha(ndf("gtr"), 0.3).ndfArgs[paramIndex(ndf("gtr"), "gamma")] == 2);  // the typical gamma
+    CHECK(ndfAtAlpha(ndf("gaussian"), 0.3).ndfArgs.derived[0] == doctest::Approx(gaussianNdfNorm(0.3)));
     // Outside the domain: alpha clamps like the interpreter's, NaN is invalid.
-    CHECK(ndfAtAlpha(NdfModel::Ggx, 0).alphaX == kMinAlpha);
-    CHECK_FALSE(ndfAtAlpha(NdfModel::Ggx, std::nan("")).valid);
+    CHECK(ndfAtAlpha(ndf("ggx"), 0).ndfArgs[0] == kMinAlpha);
+    CHECK_FALSE(ndfAtAlpha(ndf("ggx"), std::nan("")).valid);
 }
 
 TEST_CASE("ndfAtAlpha gives normalized distributions") {
+    // Every microfacet NDF of the catalog at its typical shape, and gtr at gamma = 1 (Berry).
     struct Case {
-        NdfModel model;
-        double gamma;
-        const char* name;
+        const NdfEntry* model;
+        std::vector<double> shape;
     };
-    for (Case c : {Case{NdfModel::Ggx, 2, "ggx"}, Case{NdfModel::Beckmann, 2, "beckmann"},
-                   Case{NdfModel::BlinnPhong, 2, "blinn_phong"}, Case{NdfModel::Gaussian, 2, "gaussian"},
-                   Case{NdfModel::Gtr, 2, "gtr gamma 2"}, Case{NdfModel::Gtr, 1, "gtr gamma 1"}})
+    std::vector<Case> cases;
+    for (const ModelInfo* m : catalogSlot(ModelSlot::Ndf))
+        if (!ndfEntry(*m).wholeLobe) cases.push_back({&ndfEntry(*m), {}});
+    cases.push_back({&ndf("gtr"), {1.0}});
+    for (const Case& c : cases)
         for (double alpha : {0.1, 0.3, 0.7}) {
-            CAPTURE(c.name);
+            CAPTURE(c.model->name);
+            CAPTURE(c.shape.size());
             CAPTURE(alpha);
-            CHECK(projectedNdfIntegral(ndfAtAlpha(c.model, alpha, c.gamma)) == doctest::Approx(1).epsilon(1e-3));
+            CHECK(projectedNdfIntegral(ndfAtAlpha(*c.model, alpha, c.shape)) == doctest::Approx(1).epsilon(1e-3));
         }
 }
 
@@ -272,7 +278,7 @@ TEST_CASE("a plot without a usable font is drawn without text, with a warning") 
     ndfOptions.width = 240, ndfOptions.height = 160;
     ndfOptions.fontPath = options.fontPath;
     std::string warning;
-    CHECK(writeNdfPlot({{"ggx", ndfAtAlpha(NdfModel::Ggx, 0.3)}}, ndfOptions, dir.file("nofont_ndf.png"), &warning)
+    CHECK(writeNdfPlot({{"ggx", ndfAtAlpha(ndf("ggx"), 0.3)}}, ndfOptions, dir.file("nofont_ndf.png"), &warning)
               .empty());
     CHECK_FALSE(warning.empty());
 }
@@ -280,8 +286,8 @@ TEST_CASE("a plot without a usable font is drawn without text, with a warning") 
 TEST_CASE("NDF plot is written at the requested size, log and linear") {
     TempDir dir;
     std::vector<NdfCurve> curves;
-    for (double a : {0.1, 0.3, 0.7}) curves.push_back({"ggx alpha = " + std::to_string(a), ndfAtAlpha(NdfModel::Ggx, a)});
-    curves.push_back({"beckmann alpha = 0.3", ndfAtAlpha(NdfModel::Beckmann, 0.3)});
+    for (double a : {0.1, 0.3, 0.7}) curves.push_back({"ggx alpha = " + std::to_string(a), ndfAtAlpha(ndf("ggx"), a)});
+    curves.push_back({"beckmann alpha = 0.3", ndfAtAlpha(ndf("beckmann"), 0.3)});
     for (bool log : {true, false}) {
         CAPTURE(log);
         NdfPlotOptions options;
@@ -306,12 +312,12 @@ TEST_CASE("NDF plot errors come back as messages") {
     TempDir dir;
     NdfPlotOptions options;
     options.width = 200, options.height = 150;
-    std::vector<NdfCurve> ggx{{"ggx", ndfAtAlpha(NdfModel::Ggx, 0.3)}};
+    std::vector<NdfCurve> ggx{{"ggx", ndfAtAlpha(ndf("ggx"), 0.3)}};
     CHECK_FALSE(writeNdfPlot(ggx, options, dir.file("no/such/dir/ndf.png")).empty());
     CHECK_FALSE(writeNdfPlot({}, options, dir.file("empty.png")).empty());
-    CHECK(writeNdfPlot({{"ward", ndfAtAlpha(NdfModel::Ward, 0.3)}}, options, dir.file("ward.png")).find("ward") !=
+    CHECK(writeNdfPlot({{"ward", ndfAtAlpha(ndf("ward"), 0.3)}}, options, dir.file("ward.png")).find("ward") !=
           std::string::npos);
-    CHECK_FALSE(writeNdfPlot({{"nan", ndfAtAlpha(NdfModel::Ggx, std::nan(""))}}, options, dir.file("nan.png")).empty());
+    CHECK_FALSE(writeNdfPlot({{"nan", ndfAtAlpha(ndf("ggx"), std::nan(""))}}, options, dir.file("nan.png")).empty());
     NdfPlotOptions tiny = options;
     tiny.height = 10;
     CHECK_FALSE(writeNdfPlot(ggx, tiny, dir.file("tiny.png")).empty());

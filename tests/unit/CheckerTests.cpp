@@ -63,7 +63,7 @@ TEST_CASE("expression types: float, rgb, and float promoting to rgb") {
     CHECK(letNamed(m, "k").value->type == ValueType::Rgb);
     CHECK(letNamed(m, "p").value->type == ValueType::Float);
     CHECK(m.inputs[0].type == ValueType::Rgb);
-    CHECK(m.fresnelModel() == FresnelModel::Schlick);
+    CHECK(std::string(m.fresnel.model->name) == "schlick");
     CHECK(m.diffuseModel() == DiffuseModel::Lambert);
 }
 
@@ -126,10 +126,10 @@ TEST_CASE("lets may use earlier lets and inputs; the interpreter sees the right 
     REQUIRE(m.lets.size() == 4);
     Interpreter<double> interp(m);
     ResolvedMaterial<double> r = interp.resolve(nullptr);
-    CHECK(r.alphaX == doctest::Approx(0.375).epsilon(1e-15));
-    CHECK(r.alphaY == doctest::Approx(0.375).epsilon(1e-15));
+    CHECK(r.ndfArgs[0] == doctest::Approx(0.375).epsilon(1e-15));
+    CHECK(r.ndfArgs[1] == doctest::Approx(0.375).epsilon(1e-15));
     double slots[1] = {0.2};  // per-evaluation input: (0.04 + 0.2) / 2
-    CHECK(interp.resolve(slots).alphaX == doctest::Approx(0.12).epsilon(1e-15));
+    CHECK(interp.resolve(slots).ndfArgs[0] == doctest::Approx(0.12).epsilon(1e-15));
 }
 
 TEST_CASE("names: used before definition, undefined with a suggestion, functions as names") {
@@ -207,19 +207,19 @@ TEST_CASE("model arguments: unknown models and arguments, arity, named forms") {
     const CheckedMaterial& m = prog.materials[0];
     CHECK(!m.ndf.isotropic);
     ResolvedMaterial<double> r = Interpreter<double>(m).resolve(nullptr);
-    CHECK(r.alphaX == 0.1);
-    CHECK(r.alphaY == 0.2);
+    CHECK(r.ndfArgs[0] == 0.1);
+    CHECK(r.ndfArgs[1] == 0.2);
     // One alpha fills both and marks the NDF isotropic; the alias resolves to ggx.
     CheckedProgram iso = mustCheck(inMaterial("ndf = trowbridge_reitz(alpha = 0.3);"));
     CHECK(iso.materials[0].ndf.isotropic);
-    CHECK(iso.materials[0].ndfModel() == NdfModel::Ggx);
+    CHECK(std::string(iso.materials[0].ndf.model->name) == "ggx");
 }
 
 TEST_CASE("omitted slots default to none") {
     CheckedProgram prog = mustCheck("material m { ndf = beckmann(0.2); }");
     const CheckedMaterial& m = prog.materials[0];
-    CHECK(m.maskingModel() == MaskingModel::None);
-    CHECK(m.fresnelModel() == FresnelModel::None);
+    CHECK(std::string(m.masking.model->name) == "none");
+    CHECK(std::string(m.fresnel.model->name) == "none");
     CHECK(m.energyModel() == EnergyModel::None);
     CHECK(m.diffuseModel() == DiffuseModel::None);
 }

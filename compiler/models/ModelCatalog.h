@@ -1,0 +1,306 @@
+// ModelCatalog: everything Facet knows about each model, one entry per model.
+//
+// A material names five models (ndf, masking, fresnel, energy, diffuse).
+// Each model is one catalog entry, defined in one file under
+// compiler/models/<slot>/: its names and aliases, its parameters with their
+// domains (the clamps every evaluator applies), the ways of writing its
+// arguments, its traits (what the checker, the tables, the physics checks,
+// the previews and the generators need to know about it), and its reference
+// formulas, evaluated by the interpreter in double, long double and
+// __float128. The LLVM lowering writes its own formulas independently (the
+// differential tests compare the two), so nothing here emits IR.
+//
+// Every other part of Facet asks the catalog ("is this masking a Smith
+// form?", "which roughness does this NDF's table use?") instead of
+// switching on model kinds. The entries register themselves: the build
+// lists every file of compiler/models/<slot>/ in a generated registry, so
+// adding a model means adding its file.
+#pragma once
+
+#include "AST.h"
+
+#include <array>
+#include <limits>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace facet {
+
+// ---- the language side of a model -----------------------------------------
+
+// A canonical parameter of a model: its name and type as the language sees
+// it, and its domain. Every evaluator clamps the argument to [lo, hi] in
+// double before anything else (a NaN stays NaN and invalidates the lane).
+struct ModelParam {
+    const char* name;
+    ValueType type;
+    double lo = -std::numeric_limits<double>::infinity();
+    double hi = std::numeric_limits<double>::infinity();
+    // Short tag in the names of tables keyed by this parameter (gtr's gamma
+    // "g", schlick_smith's k "k"); only for tableShapeParams.
+    const char* tableTag = "";
+    // The value tools use where a material gives none (previews comparing
+    // NDFs at matched roughness); only for tableShapeParams.
+    double typical = 0;
+};
+
+// One way of writing a model's arguments, e.g. ggx(alpha) or
+// ggx(alpha_x, alpha_y). Each written parameter fills one or more canonical
+// parameters (ggx(alpha) fills both alpha_x and alpha_y).
+struct ModelForm {
+    struct Param {
+        const char* name;
+        ValueType type;
+        std::vector<int> targets;
+    };
+    std::vector<Param> params;
+};
+
+constexpr int kMaxModelParams = 4;
+
+// A way of writing a model in a generated test material (the hard-case
+// sample's combinations): a key for the material name, the input
+// declarations its arguments use, the statement's right-hand side, and any
+// other statement it needs.
+struct ModelExample {
+    std::string key, inputs, stmt, extra;
+    // Combined only with the representative models of the other slots (a
+    // variant that differs from another example only in how a parameter is
+    // computed, independently of the other terms).
+    bool sparse = false;
+};
+
+// A whole material body that drives one model to the edges of its domain
+// (extreme constants, clamped inputs), for the hard-case sample.
+struct ModelHardCase {
+    std::string name, body;
+};
+
+// The part of an entry that the checker and every tool read.
+struct ModelInfo {
+    ModelSlot slot;
+    // The model's index in its slot: where it is listed among the slot's
+    // models (help texts, generated test cases). The ids of a slot are 0..n-1.
+    int id = 0;
+    const char* name;
+    std::vector<const char*> aliases;
+    std::vector<ModelParam> canonical;  // at most kMaxModelParams
+    std::vector<ModelForm> forms;       // at least one (an empty form for no arguments)
+    // masking: a Smith form, which needs the NDF's Lambda.
+    // ndf: has a closed-form Smith Lambda.
+    bool smith = false;
+    const char* summary;
+    // Canonical parameters that must be per-material constants when a table
+    // (Kulla-Conty) is built for this model: the table is keyed by them.
+    std::vector<int> tableShapeParams;
+    // Test coverage: how generated materials write the model, whether it is
+    // among the few a sparse example is combined with, and its extremes.
+    std::vector<ModelExample> examples;
+    bool representative = false;
+    std::vector<ModelHardCase> hardCases;
+};
+
+// ---- resolved arguments -----------------------------------------------------
+
+template <typename Real>
+struct Vec3 {
+    Real x, y, z;
+};
+
+// A model's canonical arguments for one evaluation, clamped to their
+// domains, plus up to two values the entry derives from them once (the
+// Gaussian NDF's normalization). Float parameters use channel 0.
+template <typename Real>
+struct ModelArgs {
+    std::array<std::array<Real, 3>, kMaxModelParams> value{};
+    std::array<bool, kMaxModelParams> given{};  // false where the written form left it unset
+    std::array<Real, 2> derived{};
+    Real operator[](int p) const { return value[p][0]; }
+    Real channel(int p, int ch) const { return value[p][ch]; }
+    void set(int p, Real x) { value[p] = {x, x, x}, given[p] = true; }
+};
+
+template <typename Real>
+struct ResolvedMaterial;
+
+// ---- reference formulas, one interface per slot -----------------------------
+
+// An NDF's reference formulas in one real type.
+template <typename Real>
+struct NdfFormulas {
+    virtual ~NdfFormulas() = default;
+    // D(m) for a unit m with m.z > 0.
+    virtual Real D(const ModelArgs<Real>& a, const Vec3<Real>& m) const = 0;
+    // (n.v) Lambda(v), v.z >= 0, for NDFs with a closed-form Lambda (finite
+    // at grazing, where Lambda itself grows like 1/(n.v)).
+    virtual Real cosLambda(const ModelArgs<Real>& a, const Vec3<Real>& v) const;
+    // Whole-lobe NDFs (ward): the lobe without F, f = F lobe, for the unit
+    // half vector h and cosines ci, co > 0.
+    virtual Real wholeLobe(const ModelArgs<Real>& a, const Vec3<Real>& h, Real ci, Real co) const;
+    // Fills a.derived from the clamped parameters (valid ones only).
+    virtual void derive(ModelArgs<Real>& a) const { (void)a; }
+};
+
+// The geometry a masking term sees: the directions, the microfacet normal,
+// and wi.h, wo.h (equal for the half vector, which keeps f reciprocal).
+template <typename Real>
+struct MaskingGeometry {
+    Vec3<Real> wi, wo, h;
+    Real ih, oh;
+};
+
+template <typename Real>
+struct MaskingFormulas {
+    virtual ~MaskingFormulas() = default;
+    // G(wi, wo, h).
+    virtual Real G(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g) const = 0;
+    // scale G / ((n.wi)(n.wo)) formed without G or the product of the
+    // cosines (no 0/0 or 0 * Inf where they underflow together at grazing);
+    // scale > 0, and for Smith forms g.oh > 0.
+    virtual Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const = 0;
+};
+
+template <typename Real>
+struct FresnelFormulas {
+    virtual ~FresnelFormulas() = default;
+    // F of channel ch at c = wi.h, given also s2 = 1 - c^2 (accurate near c = 1).
+    virtual Real F(const ModelArgs<Real>& a, Real c, Real s2, int ch) const = 0;
+    // F_avg = 2 Int_0^1 F(mu) mu dmu in closed form, if the model has one.
+    virtual std::optional<Real> closedFormAverage(const ModelArgs<Real>& a, int ch) const {
+        (void)a, (void)ch;
+        return std::nullopt;
+    }
+};
+
+template <typename Real>
+struct DiffuseFormulas {
+    virtual ~DiffuseFormulas() = default;
+    // The diffuse base of channel ch (no cosine factor).
+    virtual Real value(const ModelArgs<Real>& a, int ch) const = 0;
+};
+
+// The three reference types of every entry, filled by makeFormulas.
+template <template <typename> class Formulas>
+struct FormulaSet {
+    const Formulas<double>* d = nullptr;
+    const Formulas<long double>* ld = nullptr;
+    const Formulas<__float128>* q = nullptr;
+    template <typename Real>
+    const Formulas<Real>& get() const {
+        if constexpr (std::is_same_v<Real, double>) return *d;
+        else if constexpr (std::is_same_v<Real, long double>) return *ld;
+        else return *q;
+    }
+};
+
+// Instantiates an entry's formula template for the three reference types
+// (static instances: the formulas are stateless).
+template <template <typename> class Base, template <typename> class Impl>
+FormulaSet<Base> makeFormulas() {
+    static const Impl<double> d;
+    static const Impl<long double> ld;
+    static const Impl<__float128> q;
+    return {&d, &ld, &q};
+}
+
+// ---- entries -----------------------------------------------------------------
+
+struct NdfEntry : ModelInfo {
+    // A whole BRDF lobe with its own normalization (ward): no D(m), no
+    // masking term, no microfacet energy bound.
+    bool wholeLobe = false;
+    // Shape-invariant (Heitz 2014): D is a stretch of one slope profile, so
+    // its Smith Lambda depends on a = 1 / (alpha(v) tan theta) alone.
+    bool shapeInvariant = false;
+    // Why its Smith Lambda is only an approximation ("" when exact).
+    const char* lambdaNote = "";
+    // Why its F = 1 albedo is not bounded by 1 whatever the masking ("" when
+    // the masking decides).
+    const char* energyNote = "";
+    // The roughnesses (alpha_x, alpha_y) of the lobe, in the GGX/Beckmann
+    // sense: what tables, previews and quadrature grids are sized by.
+    std::array<double, 2> (*equivalentAlphas)(const ModelArgs<double>& a) = nullptr;
+    // Arguments of the isotropic lobe with roughness alpha (the inverse of
+    // equivalentAlphas) and the given values of the tableShapeParams.
+    ModelArgs<double> (*argsAtAlpha)(double alpha, const std::vector<double>& shape) = nullptr;
+    // Short text of the resolved parameters, for reports ("alpha=(0.1,0.2)").
+    std::string (*describe)(const ModelArgs<double>& a) = nullptr;
+    FormulaSet<NdfFormulas> formulas;
+};
+
+// How the albedo quadrature of a masking term must be graded.
+struct AlbedoKinks {
+    bool atWoH = false;      // min/max kinks where n.wi = n.wo (cook_torrance, neumann, direction-correlated)
+    bool vCavity = false;    // and where 2 (n.h)(n.w)/(wo.h) = 1 for w = wi, wo (cook_torrance)
+    bool azimuthal = false;  // depends on the azimuth between wi and wo (direction-correlated)
+    bool cutLayer = false;   // rises from 0 at the azimuth cut within a layer ~mu wide (kelemen)
+};
+
+struct MaskingEntry : ModelInfo {
+    AlbedoKinks albedoKinks;
+    // Why the F = 1 albedo of this masking is not bounded by 1 by
+    // construction ("" when it is).
+    const char* energyNote = "";
+    FormulaSet<MaskingFormulas> formulas;
+};
+
+struct FresnelEntry : ModelInfo {
+    // F jumps at a critical angle (total internal reflection): f(wi, wo) and
+    // f(wo, wi) may differ by that step where a rounding of wi.h against
+    // wo.h falls on either side of it.
+    bool reciprocityStep = false;
+    FormulaSet<FresnelFormulas> formulas;
+};
+
+struct EnergyEntry : ModelInfo {
+    // Multiple-scattering compensation from a tabulated albedo (kulla_conty).
+    bool compensates = false;
+};
+
+struct DiffuseEntry : ModelInfo {
+    FormulaSet<DiffuseFormulas> formulas;  // null for `none`
+    bool present = false;                  // adds a diffuse base
+};
+
+// An entry of `slot` with its identity filled in and one empty form (a
+// model written without arguments); the entry's file adds the rest.
+template <typename Entry>
+Entry makeEntry(ModelSlot slot, int id, const char* name, const char* summary) {
+    Entry e;
+    e.slot = slot;
+    e.id = id;
+    e.name = name;
+    e.summary = summary;
+    e.forms = {ModelForm{}};
+    return e;
+}
+
+// ---- lookups -------------------------------------------------------------------
+
+// Every entry, slot by slot, each slot in catalog order.
+const std::vector<const ModelInfo*>& catalog();
+std::vector<const ModelInfo*> catalogSlot(ModelSlot slot);
+const ModelInfo* findModel(ModelSlot slot, std::string_view name);  // names and aliases
+const ModelInfo& modelInfo(ModelSlot slot, int id);
+
+// The entry of that name (or alias) in its slot; an internal error if there
+// is none (for tools and tests that name a model in code).
+const ModelInfo& modelNamed(ModelSlot slot, std::string_view name);
+
+// The index of the canonical parameter `name` of `m`, or -1.
+int paramIndex(const ModelInfo& m, std::string_view name);
+
+const NdfEntry& ndfEntry(const ModelInfo& m);
+const MaskingEntry& maskingEntry(const ModelInfo& m);
+const FresnelEntry& fresnelEntry(const ModelInfo& m);
+const EnergyEntry& energyEntry(const ModelInfo& m);
+const DiffuseEntry& diffuseEntry(const ModelInfo& m);
+
+// Domain limits shared by the entries.
+constexpr double kMinAlpha = 1e-4;        // SPEC 3: smaller alpha is a delta lobe
+constexpr double kMaxPhongExponent = 2e8; // = beckmann_to_phong(kMinAlpha)
+constexpr double kMinEta = 1e-4;
+
+}  // namespace facet

@@ -1,0 +1,113 @@
+// The Smith masking-shadowing forms of Heitz 2014 built on the NDF's Lambda:
+// separable (uncorrelated), height-correlated, direction-correlated and
+// height-direction-correlated. Each GOverCosines is its G divided by
+// (n.wi)(n.wo), formed from (n.v) Lambda(v), which stays finite at grazing.
+#include "QuadMath.h"
+#include "Interpreter.h"
+#include "models/ModelMath.h"
+
+namespace facet::models {
+namespace {
+
+// lambda(phi) of Heitz 2014 / Ashikhmin et al., phi the azimuth between wi and wo.
+template <typename Real>
+Real azimuthWeight(const MaskingGeometry<Real>& g) {
+    using std::abs; using std::atan2;
+    const Vec3<Real>&wi = g.wi, &wo = g.wo;
+    Real phi = atan2(abs(wi.x * wo.y - wi.y * wo.x), wi.x * wo.x + wi.y * wo.y);
+    return Real(4.41) * phi / (Real(4.41) * phi + 1);
+}
+
+template <typename Real>
+struct SeparableSmith final : MaskingFormulas<Real> {
+    Real G(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g) const override {
+        return 1 / ((1 + r.lambda(g.wi)) * (1 + r.lambda(g.wo)));
+    }
+    // G1(v) / (n.v) = 1 / ((n.v) + (n.v) Lambda(v))
+    Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const override {
+        return scale / (g.wi.z + r.cosLambda(g.wi)) / (g.wo.z + r.cosLambda(g.wo));
+    }
+};
+
+template <typename Real>
+struct HeightCorrelatedSmith final : MaskingFormulas<Real> {
+    Real G(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g) const override {
+        return 1 / (1 + r.lambda(g.wi) + r.lambda(g.wo));
+    }
+    // 1 / (ci co (1 + Li + Lo))
+    Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const override {
+        Real ci = g.wi.z, co = g.wo.z;
+        return scale / (ci * co + co * r.cosLambda(g.wi) + ci * r.cosLambda(g.wo));
+    }
+};
+
+template <typename Real>
+struct DirectionCorrelatedSmith final : MaskingFormulas<Real> {
+    Real G(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g) const override {
+        using std::min;
+        Real g1i = 1 / (1 + r.lambda(g.wi)), g1o = 1 / (1 + r.lambda(g.wo));
+        Real w = azimuthWeight(g);
+        return w * g1i * g1o + (1 - w) * min(g1i, g1o);
+    }
+    // ai = ci (1 + Li): G1i G1o / (ci co) = 1 / (ai ao), min(G1i, G1o) / (ci co) = 1 / max(ai co, ao ci)
+    Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const override {
+        using std::max;
+        Real ci = g.wi.z, co = g.wo.z;
+        Real ai = ci + r.cosLambda(g.wi), ao = co + r.cosLambda(g.wo);
+        Real w = azimuthWeight(g);
+        return w * scale / ai / ao + (1 - w) * scale / max(ai * co, ao * ci);
+    }
+};
+
+template <typename Real>
+struct HeightDirectionCorrelatedSmith final : MaskingFormulas<Real> {
+    Real G(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g) const override {
+        using std::max; using std::min;
+        Real li = r.lambda(g.wi), lo = r.lambda(g.wo);
+        return 1 / (1 + max(li, lo) + azimuthWeight(g) * min(li, lo));
+    }
+    Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const override {
+        using std::max; using std::min;
+        Real ci = g.wi.z, co = g.wo.z;
+        Real li = co * r.cosLambda(g.wi), lo = ci * r.cosLambda(g.wo);  // ci co Li, ci co Lo
+        return scale / (ci * co + max(li, lo) + azimuthWeight(g) * min(li, lo));
+    }
+};
+
+MaskingEntry smith(int id, const char* name, const char* summary) {
+    MaskingEntry e = makeEntry<MaskingEntry>(ModelSlot::Masking, id, name, summary);
+    e.smith = true;
+    e.examples = {{name, "", name}};
+    return e;
+}
+
+}  // namespace
+
+std::vector<const ModelInfo*> facetModels_masking_Smith() {
+    static const MaskingEntry separable = [] {
+        MaskingEntry e = smith(6, "smith_separable", "uncorrelated Smith (Heitz 2014)");
+        e.formulas = makeFormulas<MaskingFormulas, SeparableSmith>();
+        return e;
+    }();
+    static const MaskingEntry height = [] {
+        MaskingEntry e = smith(7, "smith_height_correlated", "height-correlated Smith (Heitz 2014)");
+        e.representative = true;
+        e.formulas = makeFormulas<MaskingFormulas, HeightCorrelatedSmith>();
+        return e;
+    }();
+    static const MaskingEntry direction = [] {
+        MaskingEntry e = smith(8, "smith_direction_correlated", "direction-correlated Smith (Heitz 2014, Ashikhmin et al.)");
+        e.albedoKinks.atWoH = e.albedoKinks.azimuthal = true;
+        e.formulas = makeFormulas<MaskingFormulas, DirectionCorrelatedSmith>();
+        return e;
+    }();
+    static const MaskingEntry heightDirection = [] {
+        MaskingEntry e = smith(9, "smith_height_direction_correlated", "height-direction-correlated Smith (Heitz 2014)");
+        e.albedoKinks.atWoH = e.albedoKinks.azimuthal = true;
+        e.formulas = makeFormulas<MaskingFormulas, HeightDirectionCorrelatedSmith>();
+        return e;
+    }();
+    return {&separable, &height, &direction, &heightDirection};
+}
+
+}  // namespace facet::models

@@ -1,0 +1,37 @@
+// ward: the whole anisotropic Ward (1992) lobe,
+// exp(-tan^2(theta_h)(cos^2(phi_h)/ax^2 + sin^2(phi_h)/ay^2)) / (4 pi ax ay sqrt(ci co)),
+// times F. It carries its own normalization, so it takes no masking term.
+#include "QuadMath.h"
+#include "models/ModelMath.h"
+
+namespace facet::models {
+namespace {
+
+template <typename Real>
+struct WardFormulas final : NdfFormulas<Real> {
+    Real D(const ModelArgs<Real>&, const Vec3<Real>&) const override {
+        internal_error << "D() called for ward, a whole BRDF lobe without a microfacet distribution";
+    }
+    Real wholeLobe(const ModelArgs<Real>& a, const Vec3<Real>& h, Real ci, Real co) const override {
+        using std::exp; using std::sqrt;
+        Real ax = a[kAlphaX], ay = a[kAlphaY];
+        Real e = (sq(h.x / ax) + sq(h.y / ay)) / sq(h.z);
+        return exp(-e) / (4 * kPi<Real> * ax * ay * sqrt(ci) * sqrt(co));
+    }
+};
+
+}  // namespace
+
+std::vector<const ModelInfo*> facetModels_ndf_Ward() {
+    static const NdfEntry entry = [] {
+        NdfEntry e = alphaXYNdf(5, "ward", "whole anisotropic Ward (1992) lobe");
+        e.wholeLobe = true;
+        e.energyNote = "ward's lobe has its own approximate normalization, not a microfacet energy bound";
+        e.hardCases = {{"hcc_ward_aniso_1e4", "ndf = ward(alpha_x = 1e-4, alpha_y = 1);"}};
+        e.formulas = makeFormulas<NdfFormulas, WardFormulas>();
+        return e;
+    }();
+    return {&entry};
+}
+
+}  // namespace facet::models
