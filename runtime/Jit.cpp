@@ -48,12 +48,12 @@
 // costs the same and differs only in late block placement). Level::Quick
 // emits at CodeGenOptLevel::None (fast register allocation, no machine
 // scheduler or peepholes) after EarlyCSE alone: 2.2-2.8x less emission
-// time, for kernels that run 6-26% slower on the bench models. Kernel.h's tiered compile returns quick code
-// first and swaps in optimized code from a background thread. The levels
-// compute the same bits: codegen level does not change floating-point
-// results, and without fast-math flags neither do Reassociate and
-// InstCombine. With flags (fast kernels with estimates) both levels run the
-// full middle end (see carriesFastMathFlags).
+// time, for kernels that run 6-26% slower on the bench models. Kernel.h's
+// tiered compile returns quick code first and swaps in optimized code from
+// a background thread. The levels compute the same bits: codegen level
+// does not change floating-point results, and without fast-math flags
+// neither do Reassociate and InstCombine. With flags (fast kernels with
+// estimates) both levels run the full middle end (see carriesFastMathFlags).
 #include "Jit.h"
 
 #include "Diagnostics.h"
