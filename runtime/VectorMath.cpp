@@ -51,7 +51,7 @@ Value* MathEmitter::isNanInfOrNegative(Value* a) {
     // into integer operations instead of vfpclassps). Scalars: not (|a| <
     // inf and a >= 0), which x86 codegen keeps in vucomiss/setcc; there the
     // two-compare form becomes sign tests through integer registers, which
-    // made the scalar GGX kernel 25% slower, while it makes the SIMD kernels
+    // made the scalar GGX kernel 27% slower, while it makes the SIMD kernels
     // 5-10% faster (docs/perf-log.md, 52c9884).
     if (width() == 1) return b.CreateNot(b.CreateAnd(isFinite(a), ge(a, c(0.0))));
     return b.CreateOr(b.CreateFCmpULT(a, c(0.0)), b.CreateFCmpOEQ(a, c(INFINITY)));
