@@ -75,7 +75,7 @@ Sample regularSample(const CheckedMaterial& material, size_t n, uint64_t seed) {
 
 namespace {
 
-// The shared generator of compiler/HardCases.h (issue 5), as a Sample.
+// The shared generator of compiler/HardCases.h, as a Sample.
 Sample fromHardCases(const CheckedMaterial& m, const std::vector<HardCase>& cases) {
     Sample s;
     s.slots.assign(m.slotCount, {});

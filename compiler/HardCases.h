@@ -1,4 +1,4 @@
-// HardCases: the hard-case sample of SPEC section 7 (issue 5), shared by the
+// HardCases: the hard-case sample of SPEC section 7, shared by the
 // hard-case tests, `facet verify` and `facet bench`.
 //
 // hardCases(material) lists (wi, wo, input slot values, label) for one

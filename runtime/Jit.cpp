@@ -1,120 +1,59 @@
-// Jit: LLJIT setup, optimization pipeline and object emission.
+// Jit: the LLJIT instance, the middle-end pass list and object emission at
+// two codegen levels (quick and optimized). Measurements behind the choices
+// below, and the options tried and rejected, are in docs/perf-log.md.
 //
-// The optimization pipeline (issue 4: cold compile time)
-// ------------------------------------------------------
-// The lowering emits straight-line, explicitly vectorized IR: one function
-// per entry point, <W x float> / <W x double> operations, masked loads,
-// stores and gathers, one loop over lanes plus a masked tail, and no calls
-// but intrinsics. O3 spends most of its time on what such IR does not need
-// (inlining, loop rotation/unswitching/unrolling, loop and SLP vectorization,
-// IPO) and its InstCombine/GVN runs repeat each other. optimize() runs three
-// function passes instead, once each:
+// Middle end. The lowering emits straight-line, explicitly vectorized IR:
+// one function per entry point, <W x float> / <W x double> operations,
+// masked loads, stores and gathers, one loop over lanes plus a masked tail,
+// and no calls but intrinsics. O3 spends most of its time on what such IR
+// does not need (inlining, loop transforms, vectorizers, IPO) and its
+// InstCombine/GVN runs repeat each other. optimize() runs three function
+// passes instead, once each:
 //
 //   early-cse    the lowering emits the same subexpression more than once
-//                (finiteness tests, clamps, fpext of one input per use);
-//                without it beckmann_conductor runs 30% slower.
+//                (finiteness tests, clamps, fpext of one input per use).
 //   reassociate  ranks and regroups integer and i1 chains: the lane-invalid
 //                masks, or-ed together one by one as the lowering finds
 //                them, become one chain at the end of the loop body, which
-//                codegen schedules and allocates better (satin_gaussian
-//                exact: 9% slower than O3 without it, 4% with it). It
-//                rewrites a floating-point operation only if it carries
-//                `reassoc` and `nsz`, which the lowering never sets.
+//                codegen schedules and allocates better. It rewrites a
+//                floating-point operation only if it carries `reassoc` and
+//                `nsz`, which the lowering never sets.
 //   instcombine  folds fpext/fptrunc pairs, mask algebra and the constants
 //                specialization leaves, cleans up after the two above and
 //                deletes dead code; one iteration, as O3 runs it.
 //
-// The kernels' outputs are bit-identical to O3's: all 54 kernels (simd
-// exact, simd fast, scalar exact of materials/*.mat and bench/models/*.mat)
-// on the bench's regular sample and on the hard-case sample
-// (facet_compile_timing --dump, compared with cmp). Not run, on purpose:
+// The kernels' outputs are bit-identical to O3's. Not run, on purpose:
 // SROA/mem2reg (the lowering allocates nothing), GVN (EarlyCSE finds the
 // same redundancies in straight-line code), SimplifyCFG, LICM and the loop
 // passes (the CFG is already entry/loop/tail/exit and codegen hoists the
 // invariants), the vectorizers and the inliner.
 //
-// Object emission stays at CodeGenOptLevel::Aggressive: Default costs the
-// same here and differs only in late block placement. None (fast register
-// allocation, no load folding) halves emission time but makes scalar
-// kernels 10-70% and some SIMD kernels up to 23% slower (clearcoat_gtr).
-//
-// Measured with bench/CompileTiming.cpp (facet_compile_timing: median of 11
-// cold compiles, cache off, thread CPU time, best of 3 interleaved runs) on a
-// 2-core share of a Xeon (Sapphire Rapids, AVX-512: width 16), 54 kernels:
-//                                  O3 (before)          this pipeline
-//   middle end, ms                 3.1-32.7             0.5-5.2
-//   cold compile, ms, median       34.6 (8.5-84.8)      18.1 (5.7-50.9)
-//     simd exact / fast / scalar   42.6 / 36.6 / 13.0   26.2 / 19.5 / 8.5
-//   SIMD ns/eval                   1                    geomean 0.98; bench
-//                                                       models -3.5%..+0.1%;
-//                                                       worst +4.6% (ward_brushed
-//                                                       exact), best -14%
-// The rest is object emission (80-90% of a compile), proportional to the
-// IR's size: the masked tail, a second copy of the loop body, is about 40%
-// of it (beckmann_conductor exact: llc 36 ms, 21 ms without the tail).
-//
-// Object emission (issue 4, continued)
-// ------------------------------------
-// Emission costs 25-40 us per IR instruction of the kernel, about linearly
-// (fit over the 54 kernels: time ~ n^1.1): instruction selection ~35% (half
-// of it the DAG combiner), greedy register allocation ~20%, the machine
-// scheduler ~9%, the remaining third spread over ~80 small passes. What
-// emitObject() saves without changing the kernels:
+// Object emission, 80-90% of a compile, costs time about linear in the IR's
+// size. emitObject() saves what it can without changing the objects:
 //
 //   - the codegen pipeline (a legacy PassManager with the AsmPrinter and its
-//     object streamer) is built once and run on every module. AsmPrinter and
-//     MachineModuleInfo reset the MC streamer and context at the end of each
-//     module, so the objects are byte-identical to a fresh pipeline's (all 54
-//     kernels, compiled over and over in any order). Saves ~1 ms per compile
-//     (emission -9%).
+//     object streamer) is built once per level and run on every module.
+//     AsmPrinter and MachineModuleInfo reset the MC streamer and context at
+//     the end of each module, so the objects are byte-identical to a fresh
+//     pipeline's.
 //   - SkipPasses, an OptPassGate set on the module's own LLVMContext while it
 //     is emitted (so no process-global cl::opt, nothing seen by other LLVM
 //     users in the process), skips passes that have nothing to do in a
 //     kernel: TLS, memcmp, libcall, GC, call-frame and Atom passes, the CFG
 //     passes (the CFG is always entry/loop/stage/compute/unstage/latch) and a
-//     few x86 peepholes that never fire here. Each of them, and all of them
-//     together, leave all 54 objects byte-identical; a pass LLVM renames
-//     merely runs again. Emission -3%.
+//     few x86 peepholes that never fire here. The objects stay byte-identical;
+//     a pass LLVM renames merely runs again.
 //
-// Together (facet_compile_timing, 14 interleaved runs, 54 kernels): emission
-// -12.6%, cold compile -10.5% (geomean; median over the rows 17.1 -> 15.3 ms,
-// bench/models 13.9 -> 12.6 ms), the kernels unchanged byte for byte.
-//
-// Tried and rejected (facet_compile_timing, 3-8 interleaved runs, 54 kernels):
-// skipping Loop Strength Reduction (-2% emission, -4% with -disable-lsr,
-// which also drops IVUsers/SCEV but is a process-global cl::opt; the 36 SIMD
-// objects change and the fastest ones run 1.5-2% slower),
-// -enable-misched=false (-9% cold, kernels up to +30%: gold fast, clearcoat),
-// -misched-regpressure=false (-5%, up to +24%), -misched=ilpmax/ilpmin (no
-// faster), -regalloc=basic (-5%, up to +19%), -disable-machine-cse / -licm,
-// -x86-machine-combiner=false, -disable-cgp (-1..-3% each; they change the
-// code, some kernels up to 6-10% slower, others faster), -fast-isel (no faster: vector code falls back to the DAG),
-// CodeGenOptLevel::None with -optimize-regalloc (-20% cold, kernels up to
-// +30%), width 8 (no faster to compile). Splitting the loop body into its
-// own function saves at most what the loop costs (0-25% of llc time on the
-// body alone, before the call) and compile time is near linear in size, so
-// splitting the body further buys little.
-//
-// Two codegen levels (issue 4: tiered compile)
-// --------------------------------------------
-// Level::Quick emits with CodeGenOptLevel::None (fast register allocation,
-// no machine scheduler or peepholes) after EarlyCSE alone: 2.2-2.8x less
-// emission time and half a middle end. Kernel.h's tiered compile returns
-// such code first and swaps in Level::Optimized code from a background
-// thread. The levels compute the same bits (all 54 kernels on the regular
-// and hard-case samples, dump cmp; JitTests checks it): codegen level does
-// not change floating-point results, and without fast-math flags neither do
-// Reassociate and InstCombine. With flags (fast kernels with estimates)
-// both levels run the full middle end, because dead code that those passes
-// remove keeps an fmul from contracting into an FMA (plastic fast differed
-// in a fifth of its output values). facet_compile_timing --runs 5,
-// bench/models (ms, cold compile / ns per eval):
-//                      optimized       quick
-//   GGX exact          14.6 / 2.7      8.1 / 3.3
-//   Beckmann exact     19.4 / 10.4     10.0 / 11.5
-//   aniso GGX exact    18.2 / 4.9      10.3 / 5.2
-//   Beckmann scalar    11.5 / 87       6.2 / 110
-//   median, 9 rows     11.9            6.3
+// Two levels. Level::Optimized emits at CodeGenOptLevel::Aggressive (Default
+// costs the same and differs only in late block placement). Level::Quick
+// emits at CodeGenOptLevel::None (fast register allocation, no machine
+// scheduler or peepholes) after EarlyCSE alone: 2.2-2.8x less emission
+// time, for kernels that run 6-26% slower on the bench models. Kernel.h's
+// tiered compile returns quick code first and swaps in optimized code from
+// a background thread. The levels compute the same bits: codegen level
+// does not change floating-point results, and without fast-math flags
+// neither do Reassociate and InstCombine. With flags (fast kernels with
+// estimates) both levels run the full middle end (see carriesFastMathFlags).
 #include "Jit.h"
 
 #include "Diagnostics.h"

@@ -49,11 +49,10 @@ Value* MathEmitter::isNanInfOrNegative(Value* a) {
     // Vectors: two compares, unordered a < 0 (NaN, -inf, negatives) or
     // a = +inf (llvm.is.fpclass would say it in one, but LLVM 19 expands it
     // into integer operations instead of vfpclassps). Scalars: not (|a| <
-    // inf and a >= 0), which x86 codegen keeps in vucomiss/setcc; the
-    // two-compare form became sign tests through integer registers there,
-    // and the scalar GGX kernel ran at 57 instead of 45 ns/eval
-    // (facet_compile_timing), while the SIMD kernels were 5-10% faster
-    // with it.
+    // inf and a >= 0), which x86 codegen keeps in vucomiss/setcc; there the
+    // two-compare form becomes sign tests through integer registers, which
+    // made the scalar GGX kernel 27% slower, while it makes the SIMD kernels
+    // 5-10% faster (docs/perf-log.md, 52c9884).
     if (width() == 1) return b.CreateNot(b.CreateAnd(isFinite(a), ge(a, c(0.0))));
     return b.CreateOr(b.CreateFCmpULT(a, c(0.0)), b.CreateFCmpOEQ(a, c(INFINITY)));
 }

@@ -2,8 +2,8 @@
 //
 // Shared by the differential tests over shipped/corpus materials and the
 // random-material test. Directions are drawn in float (both sides see the
-// very same float inputs); the reference runs in double. Error bounds are
-// those of the JIT issue: 99.9% of finite reference values within 1e-5
+// very same float inputs); the reference runs in double. Error bounds:
+// 99.9% of finite reference values within 1e-5
 // relative, every value within 2e-3 relative or 1e-30 absolute, no NaN, Inf
 // or negative output, and scalar/SIMD agreement within 4 ulp.
 #pragma once

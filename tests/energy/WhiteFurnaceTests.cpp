@@ -1,4 +1,4 @@
-// White furnace and conductor series of the compensated BRDF (issue 6).
+// White furnace and conductor series of the compensated BRDF.
 //
 // White furnace, F = 1: the total directional albedo
 //   A(mu_o) = Int (f_ss + f_ms)(wi, wo) (n.wi) dwi

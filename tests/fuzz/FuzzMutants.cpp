@@ -997,7 +997,7 @@ const std::vector<StressCase> kStressCases = {
                 "; ndf = ggx(0.5); }\n";
      },
      5},
-    // -- controls: pathological, and handled well today.
+    // -- controls: pathological, and handled well.
     {"1M '(' (bounded nesting)", "must stop at the nesting limit with one diagnostic",
      [] { return "material m { let a = " + repeat("(", 1000000) + "1; ndf = ggx(0.5); }\n"; }, 20},
     {"1M unary '-'", "unary minus recursion is bounded too",

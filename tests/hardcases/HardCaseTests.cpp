@@ -1,4 +1,4 @@
-// Hard-case tests (SPEC section 7, issue 5).
+// Hard-case tests (SPEC section 7).
 //
 // Over the hard-case sample (compiler/HardCases.h) of every generated
 // material -- every NDF form x masking x Fresnel the checker accepts, with

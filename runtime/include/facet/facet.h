@@ -2,8 +2,8 @@
  *
  * Compile a material once, then evaluate its BRDF (1/sr, rgb, without the
  * cosine factor) per direction pair or in SoA batches. Kernels are immutable
- * and may be evaluated from many threads at once. All kernels share one JIT
- * session per process, created on first use.
+ * and may be evaluated from many threads at once. All kernels share one
+ * compiler (one JIT and one kernel cache) per process, created on first use.
  */
 #ifndef FACET_FACET_H
 #define FACET_FACET_H
