@@ -161,17 +161,14 @@ bool carriesFastMathFlags(const llvm::Module& module) {
 }
 }  // namespace
 
-void FacetJit::optimize(llvm::Module& module, Level level) {
-    Codegen& codegen = codegenAt(level);
-    std::lock_guard<std::mutex> lock(codegen.mutex);
-    llvm::TargetMachine* tm = codegen.tm.get();
-    module.setDataLayout(tm->createDataLayout());
-    module.setTargetTriple(tm->getTargetTriple().str());
+void optimizeKernelModule(llvm::Module& module, llvm::TargetMachine& tm, FacetJit::Level level) {
+    module.setDataLayout(tm.createDataLayout());
+    module.setTargetTriple(tm.getTargetTriple().str());
     llvm::LoopAnalysisManager lam;
     llvm::FunctionAnalysisManager fam;
     llvm::CGSCCAnalysisManager cgam;
     llvm::ModuleAnalysisManager mam;
-    llvm::PassBuilder pb(tm);
+    llvm::PassBuilder pb(&tm);
     pb.registerModuleAnalyses(mam);
     pb.registerCGSCCAnalyses(cgam);
     pb.registerFunctionAnalyses(fam);
@@ -180,7 +177,7 @@ void FacetJit::optimize(llvm::Module& module, Level level) {
     // See the top of this file for the choice of passes.
     llvm::FunctionPassManager fpm;
     fpm.addPass(llvm::EarlyCSEPass());
-    if (level == Level::Optimized || carriesFastMathFlags(module)) {
+    if (level == FacetJit::Level::Optimized || carriesFastMathFlags(module)) {
         fpm.addPass(llvm::ReassociatePass());
         fpm.addPass(llvm::InstCombinePass());
     }
@@ -189,7 +186,21 @@ void FacetJit::optimize(llvm::Module& module, Level level) {
     mpm.run(module, mam);
 }
 
-bool FacetJit::SkipPasses::shouldRunPass(llvm::StringRef pass, llvm::StringRef) {
+void FacetJit::optimize(llvm::Module& module, Level level) {
+    Codegen& codegen = codegenAt(level);
+    std::lock_guard<std::mutex> lock(codegen.mutex);
+    optimizeKernelModule(module, *codegen.tm, level);
+}
+
+namespace {
+// Skips the codegen passes that have nothing to do in a kernel (see the top
+// of this file); set on the module's own LLVMContext only while it is emitted.
+struct SkipPasses : llvm::OptPassGate {
+    bool isEnabled() const override { return true; }
+    bool shouldRunPass(llvm::StringRef pass, llvm::StringRef) override;
+};
+
+bool SkipPasses::shouldRunPass(llvm::StringRef pass, llvm::StringRef) {
     // Legacy pass names (getPassName()) of LLVM 19; see the top of this file.
     static const llvm::StringRef skipped[] = {
         "Add __emutls_[vt]. variables for emultated TLS model",
@@ -216,6 +227,16 @@ bool FacetJit::SkipPasses::shouldRunPass(llvm::StringRef pass, llvm::StringRef) 
     };
     return std::find(std::begin(skipped), std::end(skipped), pass) == std::end(skipped);
 }
+}  // namespace
+
+void runKernelCodegen(llvm::legacy::PassManager& passes, llvm::Module& module) {
+    SkipPasses skipPasses;
+    llvm::LLVMContext& context = module.getContext();
+    llvm::OptPassGate& previousGate = context.getOptPassGate();
+    context.setOptPassGate(skipPasses);
+    passes.run(module);
+    context.setOptPassGate(previousGate);
+}
 
 std::unique_ptr<llvm::MemoryBuffer> FacetJit::emitObject(llvm::Module& module, Level level) {
     Codegen& codegen = codegenAt(level);
@@ -228,12 +249,8 @@ std::unique_ptr<llvm::MemoryBuffer> FacetJit::emitObject(llvm::Module& module, L
             throw std::runtime_error("emitting object code: the target cannot emit object files");
         codegen.passes = std::move(passes);
     }
-    llvm::LLVMContext& context = module.getContext();
-    llvm::OptPassGate& previousGate = context.getOptPassGate();
-    context.setOptPassGate(skipPasses_);
     codegen.object.clear();
-    codegen.passes->run(module);
-    context.setOptPassGate(previousGate);
+    runKernelCodegen(*codegen.passes, module);
     return llvm::MemoryBuffer::getMemBufferCopy(llvm::StringRef(codegen.object.data(), codegen.object.size()),
                                                 module.getModuleIdentifier() + "-jitted-objectbuffer");
 }

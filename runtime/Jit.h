@@ -77,16 +77,19 @@ private:
     };
     Codegen quick_, optimized_;
     Codegen& codegenAt(Level level) { return level == Level::Quick ? quick_ : optimized_; }
-    // Skips the codegen passes that have nothing to do in a kernel (see
-    // Jit.cpp); set on the module's own LLVMContext only while it is emitted.
-    struct SkipPasses : llvm::OptPassGate {
-        bool isEnabled() const override { return true; }
-        bool shouldRunPass(llvm::StringRef pass, llvm::StringRef) override;
-    };
-    SkipPasses skipPasses_;
     std::string cpu_, features_;
     std::mutex mutex_;  // LLJIT linking is not re-entrant
     uint64_t dylibCounter_ = 0;
 };
+
+// The kernel pipeline for any target machine: FacetJit runs it for the host,
+// `facet build` (Aot.h) for the target it is asked for, so that both emit
+// the same code from the same IR. optimizeKernelModule() sets the module's
+// data layout and triple and runs the middle end of `level` (Jit.cpp);
+// runKernelCodegen() runs a codegen pipeline built by the target machine
+// (addPassesToEmitMC or addPassesToEmitFile) on it, skipping the passes
+// that have nothing to do in a kernel.
+void optimizeKernelModule(llvm::Module& module, llvm::TargetMachine& tm, FacetJit::Level level);
+void runKernelCodegen(llvm::legacy::PassManager& passes, llvm::Module& module);
 
 }  // namespace facet

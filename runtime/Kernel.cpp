@@ -46,6 +46,20 @@ const char* backendName(Backend b) {
 
 namespace {
 
+// The lowering of a kernel with `options`: one entry point (scalar, or
+// batch of `width` lanes), the math mode's variant.
+LoweringOptions loweringOptionsFor(const CompileOptions& options, const EnergyTable* energyTable, bool simd, int width) {
+    LoweringOptions lowering;
+    lowering.energyTable = energyTable;
+    lowering.math = options.math;
+    lowering.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
+    lowering.variant.floatFirst = options.floatFirst;
+    lowering.width = simd ? width : 4;
+    lowering.emitScalar = !simd;
+    lowering.emitBatch = simd;
+    return lowering;
+}
+
 std::optional<double> parseDouble(const std::string& s) {
     if (s.empty()) return std::nullopt;
     char* end = nullptr;
@@ -490,14 +504,8 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
     }
     kernel->width_ = options.backend == Backend::Simd ? resolveWidth(options) : 1;
 
-    LoweringOptions lowering;
-    lowering.energyTable = kernel->energyTable_.get();
-    lowering.math = options.math;
-    lowering.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
-    lowering.variant.floatFirst = options.floatFirst;
-    lowering.width = options.backend == Backend::Simd ? kernel->width_ : 4;
-    lowering.emitScalar = options.backend == Backend::Scalar;
-    lowering.emitBatch = options.backend == Backend::Simd;
+    LoweringOptions lowering = loweringOptionsFor(options, kernel->energyTable_.get(), options.backend == Backend::Simd,
+                                                  kernel->width_);
 
     // The cache key: what the kernel computes (the specialized material,
     // printed), how (options incl. tolerance, width), and with what (LLVM,
@@ -660,6 +668,39 @@ CachedKernel Compiler::searchVariants(const CheckedMaterial& material, LoweringO
     return best;
 }
 
+std::optional<AotKernel> Compiler::compileAot(const CheckedMaterial& material, const CompileOptions& options,
+                                              llvm::TargetMachine& target, int width, const std::string& prefix,
+                                              AotOutput output, DiagnosticEngine& diags) {
+    internal_assert(options.backend != Backend::Interp) << "an ahead-of-time build needs a compiled backend";
+    AotKernel aot;
+    aot.material = specializeMaterial(material, options.bindings, diags);
+    if (diags.hasErrors()) return std::nullopt;
+    std::shared_ptr<const EnergyTable> table;
+    if (aot.material.compensatesEnergy()) table = tables_->getFor(aot.material);
+    const bool simd = options.backend == Backend::Simd;
+    aot.width = simd ? (options.width ? options.width : width) : 1;
+    LoweringOptions lowering = loweringOptionsFor(options, table.get(), simd, aot.width);
+    lowering.x86Target = target.getTargetTriple().isX86();
+    aot.variant = lowering.variant.name();
+    if (options.tolerance) {
+        // The variant compileMaterial chooses for the host: the same search,
+        // measuring JIT kernels of the host's width against the interpreter.
+        LoweringOptions host = loweringOptionsFor(options, table.get(), simd, resolveWidth(options));
+        MathVariant chosen = host.variant;
+        CachedKernel probe = searchVariants(aot.material, host, *options.tolerance, "facet_aot_probe",
+                                            FacetJit::Level::Quick, chosen);
+        lowering.variant = chosen;
+        aot.variant = probe.variant;
+        aot.measuredError = probe.measuredError;
+    }
+    llvm::LLVMContext context;
+    LoweredModule lowered = lowerMaterial(aot.material, lowering, context, prefix);
+    addAotEntryPoints(lowered, aot.material, prefix);
+    optimizeKernelModule(*lowered.module, target, FacetJit::Level::Optimized);
+    aot.output = writeAotOutput(*lowered.module, target, output);
+    return aot;
+}
+
 std::string Compiler::irText(const std::string& path, const std::string& name, const CompileOptions& options,
                              bool simd, bool stages, DiagnosticEngine& diags) {
     CheckedProgram program = loadProgramFile(path, diags);
@@ -671,16 +712,9 @@ std::string Compiler::irText(const std::string& path, const std::string& name, c
     }
     CheckedMaterial specialized = specializeMaterial(*material, options.bindings, diags);
     if (diags.hasErrors()) return "";
-    LoweringOptions lowering;
     std::shared_ptr<const EnergyTable> table;
     if (specialized.compensatesEnergy()) table = tables_->getFor(specialized);
-    lowering.energyTable = table.get();
-    lowering.math = options.math;
-    lowering.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
-    lowering.variant.floatFirst = options.floatFirst;
-    lowering.width = simd ? resolveWidth(options) : 4;
-    lowering.emitScalar = !simd;
-    lowering.emitBatch = simd;
+    LoweringOptions lowering = loweringOptionsFor(options, table.get(), simd, resolveWidth(options));
     std::string out;
     llvm::raw_string_ostream os(out);
     if (stages) {

@@ -24,6 +24,7 @@
 // kernels keep the quick code.
 #pragma once
 
+#include "Aot.h"
 #include "Jit.h"
 #include "Lowering.h"
 #include "Material.h"
@@ -143,6 +144,15 @@ private:
     double compileMillis_ = 0;
 };
 
+// An ahead-of-time build of a material (`facet build`, Compiler::compileAot).
+struct AotKernel {
+    std::string output;        // object file, assembly, IR text or bitcode (AotOutput)
+    CheckedMaterial material;  // specialized: its slots are the entry points' inputs
+    std::string variant;       // the math variant compiled ("exact", "fast", ...)
+    double measuredError = -1; // tolerance builds: the chosen variant's error on the host
+    int width = 1;             // SIMD lanes (1: scalar kernel)
+};
+
 class Compiler {
 public:
     Compiler();
@@ -156,6 +166,18 @@ public:
     // Compiles an already checked material (bindings in options are applied).
     std::unique_ptr<Kernel> compileMaterial(const CheckedMaterial& material, const CompileOptions& options,
                                             DiagnosticEngine& diags);
+
+    // The kernel `compileMaterial` would build with `options`, lowered with
+    // `prefix` for `target` (Aot.h) and given the C entry points
+    // PREFIX_eval / PREFIX_eval_batch: the same specialization, lowering,
+    // middle end and codegen, so that on the host the object computes what
+    // the JIT kernel computes. A tolerance is resolved on the host (the
+    // variant search measures JIT kernels). `width`: the target's natural
+    // SIMD width, used unless options.width is set. On a user error returns
+    // nullopt and fills diags.
+    std::optional<AotKernel> compileAot(const CheckedMaterial& material, const CompileOptions& options,
+                                        llvm::TargetMachine& target, int width, const std::string& prefix,
+                                        AotOutput output, DiagnosticEngine& diags);
 
     // The optimized IR of a material, for `facet ir`. With `stages`, also the
     // checked and specialized material and the IR before optimization.

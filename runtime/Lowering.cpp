@@ -1558,9 +1558,8 @@ void addKernelAttributes(llvm::Function* fn, int width, const MathVariant& varia
 // IEEE subnormals: a float-subnormal n.w is a valid input there.
 class DenormalFlush {
 public:
-    DenormalFlush(llvm::IRBuilder<>& b, llvm::Function* fn, const MathVariant& variant) : b_(b) {
-#if defined(__x86_64__) || defined(__i386__)
-        if (variant.precise) return;
+    DenormalFlush(llvm::IRBuilder<>& b, llvm::Function* fn, const LoweringOptions& options) : b_(b) {
+        if (options.variant.precise || !options.x86Target) return;
         fn->addFnAttr("denormal-fp-math", "preserve-sign,preserve-sign");
         saved_ = b.CreateAlloca(b.getInt32Ty(), nullptr, "mxcsr.saved");
         llvm::Value* flushed = b.CreateAlloca(b.getInt32Ty(), nullptr, "mxcsr.flushed");
@@ -1568,10 +1567,6 @@ public:
         llvm::Value* bits = b.CreateLoad(b.getInt32Ty(), saved_);
         b.CreateStore(b.CreateOr(bits, b.getInt32(0x8040)), flushed);  // FTZ (bit 15) | DAZ (bit 6)
         b.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {flushed});
-#else
-        (void)fn;
-        (void)variant;
-#endif
     }
     // Emits the restore at the current insertion point (before each return).
     void restore() {
@@ -1693,7 +1688,7 @@ void emitScalarEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llv
     auto* fn = llvm::Function::Create(statusTy, llvm::Function::ExternalLinkage, name + "_status", module);
     addKernelAttributes(fn, 1, opt.variant);
     b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", fn));
-    DenormalFlush flush(b, fn, opt.variant);
+    DenormalFlush flush(b, fn, opt);
     llvm::Value *wiP = fn->getArg(0), *woP = fn->getArg(1), *inP = fn->getArg(2), *outP = fn->getArg(3);
     llvm::Type* f32 = b.getFloatTy();
     std::array<llvm::Value*, 3> wi, wo;
@@ -1747,7 +1742,7 @@ void emitBatchEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llvm
     auto* exit = llvm::BasicBlock::Create(ctx, "exit", fn);
 
     b.SetInsertPoint(entry);
-    DenormalFlush flush(b, fn, opt.variant);
+    DenormalFlush flush(b, fn, opt);
     std::array<llvm::Value*, 3> wiP, woP, outP;
     for (int i = 0; i < 3; ++i) {
         wiP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, wiA, i), "wi.ptr");

@@ -90,6 +90,14 @@ struct LoweringOptions {
     int width = 16;  // lanes of the batch kernel: 4, 8 or 16
     bool emitScalar = true;
     bool emitBatch = true;
+    // Whether the target is x86, whose MXCSR fast kernels set to flush
+    // subnormals (Lowering.cpp, DenormalFlush). The host's by default; an
+    // ahead-of-time build for another target sets its own.
+#if defined(__x86_64__) || defined(__i386__)
+    bool x86Target = true;
+#else
+    bool x86Target = false;
+#endif
 };
 
 struct LoweredModule {

@@ -8,6 +8,7 @@ packages=(
   libzstd-dev zlib1g-dev libedit-dev libxml2-dev libffi-dev libcurl4-openssl-dev  # llvm-19-dev's link deps
   libopenimageio-dev openimageio-tools libfmt-dev doctest-dev  # OIIO's CMake config lists the tools
   fonts-dejavu-core   # the TrueType font `facet render` labels its plots with (OIIO render_text)
+  gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user  # tests: link and run `facet build --target aarch64-linux-gnu` objects
 )
 missing=()
 for p in "${packages[@]}"; do

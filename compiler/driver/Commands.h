@@ -20,4 +20,7 @@ int cmdBench(const std::vector<std::string>& args);
 // facet render FILE -o OUT [--plot lobe|ndf] ...  (RenderCommand.cpp, runtime/preview/)
 int cmdRender(const std::vector<std::string>& args);
 
+// facet build FILE -o OUT.o [--header OUT.h] [--target T] ...  (BuildCommand.cpp, runtime/Aot.h)
+int cmdBuild(const std::vector<std::string>& args);
+
 }  // namespace facet

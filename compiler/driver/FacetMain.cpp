@@ -4,7 +4,7 @@
 //   facet eval FILE [--material NAME] [--backend interp|scalar|simd] [--math exact|fast]
 //              [--width 4|8|16] [--set NAME=VALUE]... --in IN.csv [--out OUT.csv]
 //   facet ir FILE [--material NAME] [--simd] [--stages] [--set NAME=VALUE]...
-//   facet lut | bench | verify | render ...  (in their own files, Commands.h)
+//   facet lut | bench | verify | render | build ...  (in their own files, Commands.h)
 //
 // Exit codes: 0 ok, 1 a check failed (e.g. invalid rows), 2 usage,
 // 65 a material file error.
@@ -39,6 +39,10 @@ const char* kUsage =
     "  verify FILE... [--material NAME] [--verbose]   hard cases, backends and physics (SPEC 7)\n"
     "  render FILE -o OUT.png|.exr [--plot lobe|ndf] [--size N] [--light T,P] ...\n"
     "                                      lit-sphere preview, lobe or NDF plot ('facet render' for all options)\n"
+    "  build FILE -o OUT.o [--header OUT.h] [--material NAME] [--backend scalar|simd]\n"
+    "       [--math exact|fast|tolerance=X] [--width N] [--set NAME=VALUE]... [--target TRIPLE] [--cpu CPU]\n"
+    "       [--features +a,-b] [--prefix SYMBOL] [--emit obj|asm|llvm-ir|bitcode]\n"
+    "                                      a self-contained object + C header, for the host or another target\n"
     "exit codes: 0 ok, 1 a check failed, 2 usage, 65 a material file error\n";
 
 struct UsageError {
@@ -359,6 +363,7 @@ int main(int argc, char** argv) {
         if (command == "lut") return cmdLut(args);
         if (command == "bench") return cmdBench(args);
         if (command == "render") return cmdRender(args);
+        if (command == "build") return cmdBuild(args);
         throw UsageError{fmt::format("unknown command '{}'", command)};
     } catch (const UsageError& e) {
         std::fprintf(stderr, "facet: %s\n%s", e.message.c_str(), kUsage);

@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# `facet build` on bad input: each mistake is one line on stderr naming what
+# is wrong, with exit 2 (usage: options, target, CPU, feature, an output that
+# cannot be written) or 65 (material file error, including a material the
+# file does not have), and no output file is left behind or half-replaced.
+# Also the other outputs (--emit) and the header as C99 and C++.
+set -euo pipefail
+build=$1 source=$2
+facet=$build/compiler/facet
+gold=$source/materials/gold.mat
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+failed=0
+fail() { echo "FAIL: $*"; failed=1; }
+
+# expect CODE PATTERN ARGS...: exit code CODE, one stderr line matching PATTERN, no file in $work/out.
+expect() {
+  local code=$1 pattern=$2
+  shift 2
+  rm -rf "$work/out" && mkdir "$work/out"
+  local got=0
+  "$facet" build "$@" 2>"$work/err" >/dev/null || got=$?
+  local lines
+  lines=$(wc -l <"$work/err")
+  [ "$got" = "$code" ] || fail "build $*: exit $got, expected $code ($(cat "$work/err"))"
+  [ "$lines" = 1 ] || fail "build $*: $lines lines on stderr, expected one: $(cat "$work/err")"
+  grep -q -e "$pattern" "$work/err" || fail "build $*: stderr '$(cat "$work/err")' does not match '$pattern'"
+  [ -z "$(ls -A "$work/out")" ] || fail "build $*: left $(ls -A "$work/out")"
+  echo "ok ($got): $(cat "$work/err")" | cut -c1-160
+}
+
+o=$work/out/g.o h=$work/out/g.h
+expect 2 "unknown target 'sparc99-linux-gnu' (this LLVM has: .*aarch64.*x86-64" "$gold" --target sparc99-linux-gnu -o "$o" --header "$h"
+expect 2 "unknown CPU 'pentium9' for aarch64 (CPUs: .*cortex-a72" "$gold" --target aarch64-linux-gnu --cpu pentium9 -o "$o"
+expect 2 "unknown CPU 'cortex-a72' for x86_64 (CPUs: .*skylake" "$gold" --cpu cortex-a72 -o "$o"
+expect 2 "unknown feature '+avx9' for x86_64 .*avx2" "$gold" --features +avx9 -o "$o"
+expect 2 "unknown feature 'neon' for aarch64 (write +NAME or -NAME" "$gold" --target aarch64-linux-gnu --features neon -o "$o"
+expect 65 "no material named 'silver' (materials: gold)" "$gold" --material silver -o "$o" --header "$h"
+printf 'material broken {\n    ndf = ggx(;\n}\n' >"$work/broken.mat"
+expect 65 "broken.mat:2:" "$work/broken.mat" -o "$o"
+expect 2 "backend 'interp' is not scalar or simd" "$gold" --backend interp -o "$o"
+expect 2 "math 'precise' is not exact, fast or tolerance=X" "$gold" --math precise -o "$o"
+expect 2 "tolerance '-1' is not a positive number" "$gold" --math tolerance=-1 -o "$o"
+expect 2 "prefix '9lives' is not a C identifier" "$gold" --prefix 9lives -o "$o"
+expect 2 "emit 'exe' is not obj, asm, llvm-ir or bitcode" "$gold" --emit exe -o "$o"
+expect 2 "material 'gold' has no input 'shine'" "$gold" --set shine=1 -o "$o"
+expect 2 "-o OUT is required" "$gold" --header "$h"
+touch "$work/file"
+expect 2 "file/g.o: error: cannot write: Not a directory" "$gold" -o "$work/file/g.o" --header "$h"
+# The object can be written, the header cannot: neither appears.
+expect 2 "file/g.h: error: cannot write: Not a directory" "$gold" -o "$o" --header "$work/file/g.h"
+
+# A failed build leaves an existing output as it was.
+echo previous >"$work/keep.o"
+"$facet" build "$gold" --target nowhere -o "$work/keep.o" 2>/dev/null && fail "unknown target accepted"
+[ "$(cat "$work/keep.o")" = previous ] || fail "a failed build changed an existing output"
+[ -z "$(ls "$work" | grep tmp)" ] || fail "temporary files left: $(ls "$work")"
+
+# The inspection outputs.
+"$facet" build "$gold" --emit llvm-ir -o "$work/g.ll"
+grep -q '^define i64 @gold_eval_batch(' "$work/g.ll" || fail "llvm-ir lacks gold_eval_batch"
+grep -q '^define internal i64 @gold_batch(' "$work/g.ll" || fail "llvm-ir: the kernel is not internal"
+"$facet" build "$gold" --emit bitcode -o "$work/g.bc"
+[ "$(head -c 2 "$work/g.bc")" = BC ] || fail "bitcode does not start with BC"
+"$facet" build "$gold" --target aarch64-linux-gnu --emit asm -o "$work/g.s"
+grep -q 'gold_eval_batch:' "$work/g.s" && grep -q -E 'fmul[[:space:]]+v[0-9]+\.4s' "$work/g.s" ||
+  fail "aarch64 assembly lacks gold_eval_batch or 4-lane NEON arithmetic"
+
+# The header: plain C99 and C++, slots documented, bound inputs are not slots.
+"$facet" build "$source/materials/plastic.mat" --set roughness=0.3 --prefix red -o "$work/red.o" --header "$work/red.h"
+grep -q '#define RED_INPUT_COUNT 3' "$work/red.h" || fail "red.h: plastic with roughness bound has 3 slots"
+grep -q '#define RED_SLOT_ALBEDO_G 1' "$work/red.h" || fail "red.h: albedo.g is slot 1"
+grep -q 'options   backend=simd;math=exact;width=[0-9]*;set.roughness=0.3' "$work/red.h" || fail "red.h: options not recorded"
+grep -q 'hash      sha256 [0-9a-f]\{64\}' "$work/red.h" || fail "red.h: no material hash"
+grep -q 'Facet [0-9]' "$work/red.h" || fail "red.h: no Facet version"
+printf '#include "red.h"\nint main(void) { float n[3] = {0, 0, 1}, rgb[3]; red_eval(n, n, 0, rgb); return rgb[0] > 0 ? 0 : 1; }\n' >"$work/use.c"
+cc -std=c99 -pedantic -Wall -Wextra -Werror -I"$work" "$work/use.c" "$work/red.o" -lm -o "$work/use" && "$work/use" ||
+  fail "red.h/red.o: a C99 program does not compile, link or evaluate"
+c++ -x c++ -std=c++17 -Wall -Werror -fsyntax-only -I"$work" "$work/use.c" || fail "red.h is not valid C++"
+exit $failed

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Host objects of `facet build` against the JIT: for gold, plastic and
+# brushed_metal in SIMD exact, SIMD fast, SIMD with a tolerance (the variant
+# chosen on the host) and scalar exact, a plain C99
+# program (aot_run.c, compiled by the system cc, linked against the object
+# and libm only) evaluates the hard-case sample and 100k random pairs, and
+# facet_aot_reference requires its outputs to be the JIT kernel's bit for bit.
+# Also: the objects reference no symbol outside themselves but libm's.
+set -euo pipefail
+build=$1 source=$2
+facet=$build/compiler/facet reference=$build/tests/aot/facet_aot_reference
+cc=${CC:-cc}
+random=100000
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+failed=0
+for material in gold plastic brushed_metal; do
+  mat=$source/materials/$material.mat
+  "$reference" inputs "$mat" "$material" "" $random "$work/$material.in"
+  for config in "simd exact" "simd fast" "simd tolerance=1e-4" "scalar exact"; do
+    set -- $config
+    backend=$1 math=$2 prefix=${material}_${1}_${2%%=*}
+    options="backend=$backend;math=$math"
+    [[ $math == tolerance=* ]] && options="backend=$backend;$math"
+    "$facet" build "$mat" --backend "$backend" --math "$math" --prefix "$prefix" \
+      -o "$work/$prefix.o" --header "$work/$prefix.h"
+    # Self-contained: every undefined symbol must come from libm (none is expected).
+    undefined=$(nm -u "$work/$prefix.o" | awk '{print $2}' | grep -v -x -E '(sin|cos|exp|log|pow|sqrt|atan2|expf|logf|powf|sqrtf)' || true)
+    if [ -n "$undefined" ]; then
+      echo "FAIL $prefix.o needs symbols outside itself and libm: $undefined"
+      failed=1
+    fi
+    # Exported: the two entry points and nothing else.
+    exported=$(nm -g --defined-only "$work/$prefix.o" | awk '{print $3}' | sort | tr '\n' ' ')
+    if [ "$exported" != "${prefix}_eval ${prefix}_eval_batch " ]; then
+      echo "FAIL $prefix.o exports '$exported'"
+      failed=1
+    fi
+    "$cc" -std=c99 -pedantic -Wall -Wextra -Werror -O2 -DAOT_PREFIX="$prefix" -DAOT_MACRO="${prefix^^}" -include "$work/$prefix.h" \
+      "$source/tests/aot/aot_run.c" "$work/$prefix.o" -lm -o "$work/$prefix.run"
+    "$work/$prefix.run" "$work/$material.in" "$work/$prefix.out" || failed=1
+    "$reference" same-as-jit "$mat" "$material" "$options" $random "$work/$prefix.out" || failed=1
+  done
+done
+exit $failed
