@@ -2,7 +2,9 @@
 #include "BenchPlot.h"
 
 #include "BitmapFont.h"
+#include "ImageFiles.h"
 
+#include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -325,14 +327,10 @@ std::string writeScatterPlot(const BenchReport& report, const std::string& path)
     if (report.settings.quick) cv.text(lx, ly + 10, "QUICK RUN (noisy)", 2, Rgb{200, 0, 0});
 
     // Write through OpenImageIO.
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out) return fmt::format("{}: cannot create an image writer: {}", path, OIIO::geterror());
     OIIO::ImageSpec spec(W, H, 3, OIIO::TypeDesc::UINT8);
     spec.attribute("Software", "facet bench");
-    if (!out->open(path, spec)) return fmt::format("{}: {}", path, out->geterror());
-    if (!out->write_image(OIIO::TypeDesc::UINT8, cv.data())) return fmt::format("{}: {}", path, out->geterror());
-    if (!out->close()) return fmt::format("{}: {}", path, out->geterror());
-    return "";
+    OIIO::ImageBuf image(spec, const_cast<uint8_t*>(cv.data()));  // wraps the canvas
+    return writeImageFile(image, path, OIIO::TypeDesc::UINT8);
 }
 
 }  // namespace facet::bench

@@ -8,7 +8,12 @@
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
-#include <fstream>
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
+#include <optional>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <map>
 #include <sstream>
 
@@ -564,23 +569,52 @@ CheckedProgram loadProgramText(std::string_view text, const std::string& path, D
     return checked;
 }
 
+std::optional<std::string> readSourceFile(const std::string& path, std::string& error) {
+    // O_NONBLOCK: opening a FIFO nobody writes to must not hang; reads
+    // block again below, so a pipe (`facet check <(...)`) is read to its end.
+    int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        error = errno == ENOENT ? "cannot open file" : fmt::format("cannot open file: {}", std::strerror(errno));
+        return std::nullopt;
+    }
+    struct stat st;
+    if (::fstat(fd, &st) != 0 || S_ISDIR(st.st_mode) || !(S_ISREG(st.st_mode) || S_ISFIFO(st.st_mode))) {
+        error = S_ISDIR(st.st_mode) ? "is a directory, not a file"
+                                    : "is a device or socket, not a file";
+        ::close(fd);
+        return std::nullopt;
+    }
+    ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+    std::string text;
+    char buffer[65536];
+    for (;;) {
+        ssize_t got = ::read(fd, buffer, sizeof buffer);
+        if (got < 0 && errno == EINTR) continue;
+        if (got < 0) {
+            error = fmt::format("cannot read file: {}", std::strerror(errno));
+            ::close(fd);
+            return std::nullopt;
+        }
+        if (got == 0) break;
+        if (text.size() + size_t(got) > kMaxSourceBytes) {
+            error = fmt::format("file is too large (more than {} bytes)", kMaxSourceBytes);
+            ::close(fd);
+            return std::nullopt;
+        }
+        text.append(buffer, size_t(got));
+    }
+    ::close(fd);
+    return text;
+}
+
 CheckedProgram loadProgramFile(const std::string& path, DiagnosticEngine& diags) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        diags.error({std::make_shared<const std::string>(path), 0, 0}, "cannot open file");
+    std::string error;
+    std::optional<std::string> text = readSourceFile(path, error);
+    if (!text) {
+        diags.error({std::make_shared<const std::string>(path), 0, 0}, error);
         return {};
     }
-    in.seekg(0, std::ios::end);
-    std::streamoff size = in.tellg();
-    in.seekg(0);
-    if (size < 0 || size_t(size) > kMaxSourceBytes) {
-        diags.error({std::make_shared<const std::string>(path), 0, 0},
-                    fmt::format("file is too large or unreadable (limit {} bytes)", kMaxSourceBytes));
-        return {};
-    }
-    std::string text(size_t(size), '\0');
-    in.read(text.data(), size);
-    return loadProgramText(text, path, diags);
+    return loadProgramText(*text, path, diags);
 }
 
 }  // namespace facet

@@ -13,6 +13,9 @@
 #include "Diagnostics.h"
 #include "Material.h"
 
+#include <optional>
+#include <string>
+
 namespace facet {
 
 // Checks `program`. The result is meaningful only if diags has no errors.
@@ -21,6 +24,10 @@ CheckedProgram checkProgram(const Program& program, DiagnosticEngine& diags);
 // Convenience: read, parse and check a file; diagnostics go to diags.
 // A file that cannot be read is reported as an error at "path".
 CheckedProgram loadProgramFile(const std::string& path, DiagnosticEngine& diags);
+// The text of a material file (a regular file, or a pipe read to its end;
+// never a directory or device; at most kMaxSourceBytes). nullopt with the
+// reason in `error` ("cannot open file", "is a directory, not a file").
+std::optional<std::string> readSourceFile(const std::string& path, std::string& error);
 CheckedProgram loadProgramText(std::string_view text, const std::string& path, DiagnosticEngine& diags);
 
 // Largest material file accepted (the compiler must not allocate without bound).

@@ -38,7 +38,10 @@ namespace {
 class Scanner {
 public:
     Scanner(std::string_view src, std::shared_ptr<const std::string> file)
-        : src_(src), file_(std::move(file)) {}
+        : src_(src), file_(std::move(file)) {
+        // A UTF-8 byte order mark (editors on Windows write one) is not text.
+        if (src_.substr(0, 3) == "\xEF\xBB\xBF") pos_ = 3;
+    }
 
     std::vector<Token> run() {
         // The parser reports at most DiagnosticEngine::kMaxErrors errors, so
@@ -64,8 +67,11 @@ private:
     char peek(size_t ahead = 0) const {
         return pos_ + ahead < src_.size() ? src_[pos_ + ahead] : '\0';
     }
+    // A line ends at "\n", "\r\n" or a lone "\r" (classic Mac files), so
+    // that diagnostics point at the right line whatever the line endings.
+    bool atLineBreak() const { return peek() == '\n' || (peek() == '\r' && peek(1) != '\n'); }
     void advance() {
-        if (src_[pos_] == '\n') {
+        if (atLineBreak()) {
             ++line_;
             col_ = 1;
         } else {
@@ -80,7 +86,7 @@ private:
             if (c == ' ' || c == '\t' || c == '\r' || c == '\n') {
                 advance();
             } else if (c == '/' && peek(1) == '/') {
-                while (pos_ < src_.size() && peek() != '\n') advance();
+                while (pos_ < src_.size() && peek() != '\n' && peek() != '\r') advance();
             } else if (c == '/' && peek(1) == '*') {
                 SourceLoc start = here();
                 advance();

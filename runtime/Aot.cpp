@@ -182,7 +182,9 @@ void addAotEntryPoints(LoweredModule& lowered, const CheckedMaterial& material, 
             if (material.slotCount > 0)
                 slotsArg = b.CreateSelect(b.CreateIsNull(inputs), slotsArg,
                                           pointerArray(inputs, material.slotCount, "input.lanes"));
-            b.CreateCall(batch, {llvm::ConstantInt::get(i64, 1), wiP, woP, slotsArg, outP});
+            // (no per-lane status: the batch entry's sixth argument is null)
+            b.CreateCall(batch, {llvm::ConstantInt::get(i64, 1), wiP, woP, slotsArg, outP,
+                                 llvm::ConstantPointerNull::get(llvm::PointerType::get(ctx, 0))});
         }
         b.CreateBr(done);
         b.SetInsertPoint(done);
@@ -214,7 +216,8 @@ void addAotEntryPoints(LoweredModule& lowered, const CheckedMaterial& material, 
         b.CreateRet(llvm::ConstantInt::get(i64, 0));
         b.SetInsertPoint(run);
         if (batch) {
-            b.CreateRet(b.CreateCall(batch, {n, wi, wo, inputs, rgb}));
+            b.CreateRet(b.CreateCall(batch, {n, wi, wo, inputs, rgb,
+                                              llvm::ConstantPointerNull::get(llvm::PointerType::get(ctx, 0))}));
         } else {
             // The scalar kernel one lane at a time through its status twin,
             // with the conventions of Kernel::evalBatch for scalar kernels:

@@ -8,6 +8,7 @@
 #include "Kernel.h"
 
 #include <cstring>
+#include <string>
 #include <mutex>
 #include <new>
 
@@ -54,6 +55,27 @@ facet_kernel* compileWith(const char* options, char* err, size_t errLen, Compile
     }
 }
 
+// The message of the last failed batch call in this thread (facet_last_error).
+std::string& lastError() {
+    thread_local std::string message;
+    return message;
+}
+
+int64_t callError(const char* fn, const std::string& what) {
+    lastError() = std::string(fn) + ": error: " + what;
+    return -1;
+}
+
+// Which required array is missing: the pointer array itself or one of its three entries.
+template <typename T>
+const char* missingArray(T* const* array, const char* name) {
+    static thread_local std::string text;
+    if (!array) text = std::string(name) + " is NULL";
+    else if (!array[0] || !array[1] || !array[2]) text = std::string(name) + "[" + std::to_string(!array[0] ? 0 : !array[1] ? 1 : 2) + "] is NULL";
+    else return nullptr;
+    return text.c_str();
+}
+
 }  // namespace
 
 extern "C" {
@@ -97,9 +119,23 @@ void facet_eval(const facet_kernel* k, const float wi[3], const float wo[3], con
 
 int64_t facet_eval_batch(const facet_kernel* k, int64_t n, const float* const wi[3], const float* const wo[3],
                          const float* const* inputs, float* const rgb[3]) {
-    if (!k || n <= 0 || !wi || !wo || !rgb) return 0;
-    return k->kernel->evalBatch(n, wi, wo, inputs, rgb);
+    return facet_eval_batch_status(k, n, wi, wo, inputs, rgb, nullptr);
 }
+
+int64_t facet_eval_batch_status(const facet_kernel* k, int64_t n, const float* const wi[3],
+                                const float* const wo[3], const float* const* inputs, float* const rgb[3],
+                                uint8_t* status) {
+    const char* fn = status ? "facet_eval_batch_status" : "facet_eval_batch";
+    if (!k) return callError(fn, "the kernel is NULL");
+    if (n < 0) return callError(fn, "n is negative (" + std::to_string(n) + ")");
+    if (n == 0) return 0;
+    if (const char* missing = missingArray(wi, "wi")) return callError(fn, missing);
+    if (const char* missing = missingArray(wo, "wo")) return callError(fn, missing);
+    if (const char* missing = missingArray(rgb, "rgb")) return callError(fn, missing);
+    return k->kernel->evalBatch(n, wi, wo, inputs, rgb, status);
+}
+
+const char* facet_last_error(void) { return lastError().c_str(); }
 
 void facet_release(facet_kernel* k) { delete k; }
 

@@ -1,6 +1,7 @@
 // Kernel: option parsing, the compile pipeline, kernel caches, evaluation.
 #include "Kernel.h"
 
+#include "CacheFiles.h"
 #include "Checker.h"
 #include "Interpreter.h"
 #include "Jit.h"
@@ -21,13 +22,13 @@
 #include <functional>
 #include <thread>
 #include <random>
+#include <set>
 #include <unistd.h>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fmt/format.h>
-#include <fstream>
 
 namespace facet {
 
@@ -72,72 +73,67 @@ double millisSince(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-std::string defaultCacheDir() {
-    if (const char* dir = std::getenv("FACET_CACHE_DIR")) return dir;
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME")) return std::string(xdg) + "/facet";
-    if (const char* home = std::getenv("HOME")) return std::string(home) + "/.cache/facet";
-    return "";
-}
-
 constexpr char kCacheMagic[8] = {'F', 'A', 'C', 'E', 'T', 'K', 'O', '2'};
+// Largest kernel cache file read; objects are tens of kilobytes.
+constexpr uint64_t kMaxCacheFileBytes = uint64_t(256) << 20;
 
-// Reads a string field written by writeField.
-bool readField(std::istream& in, std::string& out, uint64_t limit) {
-    uint64_t len = 0;
-    if (!in.read(reinterpret_cast<char*>(&len), 8) || len > limit) return false;
-    out.assign(len, '\0');
-    return bool(in.read(out.data(), std::streamsize(len)));
-}
-void writeField(std::ostream& out, const std::string& s) {
+// Reads the fields of a cache file from memory; every length is checked
+// against the bytes left before anything is allocated.
+class CacheFileReader {
+public:
+    explicit CacheFileReader(std::string_view bytes) : rest_(bytes) {}
+    bool raw(void* out, size_t n) {
+        if (rest_.size() < n) return false;
+        std::memcpy(out, rest_.data(), n);
+        rest_.remove_prefix(n);
+        return true;
+    }
+    bool field(std::string& out) {
+        uint64_t len = 0;
+        if (!raw(&len, 8) || len > rest_.size()) return false;
+        out.assign(rest_.data(), size_t(len));
+        rest_.remove_prefix(size_t(len));
+        return true;
+    }
+    bool atEnd() const { return rest_.empty(); }
+
+private:
+    std::string_view rest_;
+};
+
+void appendRaw(std::string& out, const void* p, size_t n) { out.append(static_cast<const char*>(p), n); }
+void appendField(std::string& out, const std::string& s) {
     uint64_t len = s.size();
-    out.write(reinterpret_cast<const char*>(&len), 8);
-    out.write(s.data(), std::streamsize(len));
+    appendRaw(out, &len, 8);
+    out += s;
 }
 
-// Reads a cached kernel; any mismatch (truncation, wrong key, bad checksum)
+// Parses a cached kernel; any mismatch (truncation, wrong key, bad checksum)
 // returns nullopt so the caller recompiles.
-std::optional<CachedKernel> readCacheFile(const std::string& path, const std::string& key) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return std::nullopt;
+std::optional<CachedKernel> parseCacheFile(std::string_view bytes, const std::string& key) {
+    CacheFileReader in(bytes);
     char magic[8];
     std::string storedKey;
     CachedKernel k;
     uint64_t checksum = 0;
-    if (!in.read(magic, 8) || std::memcmp(magic, kCacheMagic, 8) != 0) return std::nullopt;
-    if (!readField(in, storedKey, 4096) || storedKey != key) return std::nullopt;
-    if (!readField(in, k.variant, 4096)) return std::nullopt;
-    if (!in.read(reinterpret_cast<char*>(&k.measuredError), 8)) return std::nullopt;
-    if (!in.read(reinterpret_cast<char*>(&checksum), 8)) return std::nullopt;
-    if (!readField(in, k.object, 256u << 20)) return std::nullopt;
-    if (in.peek() != std::char_traits<char>::eof()) return std::nullopt;
+    if (!in.raw(magic, 8) || std::memcmp(magic, kCacheMagic, 8) != 0) return std::nullopt;
+    if (!in.field(storedKey) || storedKey != key) return std::nullopt;
+    if (!in.field(k.variant)) return std::nullopt;
+    if (!in.raw(&k.measuredError, 8) || !in.raw(&checksum, 8)) return std::nullopt;
+    if (!in.field(k.object) || !in.atEnd()) return std::nullopt;
     if (llvm::xxh3_64bits(llvm::StringRef(k.object)) != checksum) return std::nullopt;
     return k;
 }
 
-void writeCacheFile(const std::string& dir, const std::string& path, const std::string& key, const CachedKernel& k) {
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    if (ec) return;  // a cache that cannot be written is only slower
-    // Write to a unique temporary name and rename, so a concurrent reader
-    // never sees a half-written file.
-    static std::atomic<uint64_t> counter{0};
-    std::string tmp = fmt::format("{}.tmp{}.{}", path, ::getpid(), counter++);
-    {
-        std::ofstream out(tmp, std::ios::binary);
-        uint64_t checksum = llvm::xxh3_64bits(llvm::StringRef(k.object));
-        out.write(kCacheMagic, 8);
-        writeField(out, key);
-        writeField(out, k.variant);
-        out.write(reinterpret_cast<const char*>(&k.measuredError), 8);
-        out.write(reinterpret_cast<const char*>(&checksum), 8);
-        writeField(out, k.object);
-        if (!out) {
-            std::filesystem::remove(tmp, ec);
-            return;
-        }
-    }
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) std::filesystem::remove(tmp, ec);
+std::string cacheFileBytes(const std::string& key, const CachedKernel& k) {
+    std::string out(kCacheMagic, 8);
+    uint64_t checksum = llvm::xxh3_64bits(llvm::StringRef(k.object));
+    appendField(out, key);
+    appendField(out, k.variant);
+    appendRaw(out, &k.measuredError, 8);
+    appendRaw(out, &checksum, 8);
+    appendField(out, k.object);
+    return out;
 }
 
 // Candidate variants for a tolerance, fastest first. The model
@@ -212,18 +208,25 @@ namespace {
 }  // namespace
 
 std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) {
+    auto trim = [](std::string t) {
+        t.erase(0, t.find_first_not_of(" \t"));
+        t.erase(t.find_last_not_of(" \t") + 1);
+        return t;
+    };
+    std::set<std::string> seen;
     size_t start = 0;
     while (start <= spec.size()) {
         size_t end = spec.find(';', start);
         std::string item = spec.substr(start, end == std::string::npos ? std::string::npos : end - start);
         start = end == std::string::npos ? spec.size() + 1 : end + 1;
-        // Allow blanks around items: "backend=simd; math=fast".
-        item.erase(0, item.find_first_not_of(" \t"));
-        item.erase(item.find_last_not_of(" \t") + 1);
+        // Blanks around items, keys and values are allowed: "backend = simd ; math=fast".
+        item = trim(item);
         if (item.empty()) continue;
         size_t eq = item.find('=');
         if (eq == std::string::npos) return fmt::format("option '{}' is not key=value", item);
-        std::string key = item.substr(0, eq), value = item.substr(eq + 1);
+        std::string key = trim(item.substr(0, eq)), value = trim(item.substr(eq + 1));
+        // A repeated option is a mistake either way it would be resolved.
+        if (!seen.insert(key).second) return fmt::format("option '{}' is given twice", key);
         if (key == "backend") {
             if (value == "scalar") out.backend = Backend::Scalar;
             else if (value == "simd") out.backend = Backend::Simd;
@@ -413,10 +416,10 @@ void Kernel::eval(const float wi[3], const float wo[3], const float* inputs, flo
 }
 
 int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
-                          float* const rgb[3]) const {
-    if (n <= 0) return 0;
+                          float* const rgb[3], uint8_t* status) const {
+    if (n <= 0) return n == 0 ? 0 : -1;
     if (BatchKernelFn batch = code_ ? code_->batch.load(std::memory_order_acquire) : nullptr)
-        return batch(n, wi, wo, inputs, rgb);
+        return batch(n, wi, wo, inputs, rgb, status);
     ScalarStatusFn scalarStatus = code_ ? code_->scalarStatus.load(std::memory_order_acquire) : nullptr;
     // Scalar and interpreter kernels: one lane at a time, same conventions.
     int64_t invalid = 0;
@@ -432,14 +435,23 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
             laneInputs[s] = float(laneSlots[s]);
         }
         float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, out[3];
+        bool bad;
         if (scalarStatus) {
-            invalid += scalarStatus(a, b, laneInputs.data(), out);
+            bad = scalarStatus(a, b, laneInputs.data(), out) != 0;
         } else {
             double da[3] = {a[0], a[1], a[2]}, db[3] = {b[0], b[1], b[2]};
             EvalResult<double> r = interp->eval(da, db, laneSlots.data());
-            invalid += !r.valid;
-            for (int c = 0; c < 3; ++c) out[c] = r.valid ? float(r.rgb[c]) : 0.0f;
+            bad = !r.valid;
+            // As the compiled kernels: a result float cannot hold is an
+            // invalid lane, never Inf.
+            for (int c = 0; c < 3; ++c) {
+                out[c] = float(r.rgb[c]);
+                bad |= !std::isfinite(out[c]);
+            }
+            if (bad) out[0] = out[1] = out[2] = 0.0f;
         }
+        invalid += bad;
+        if (status) status[i] = uint8_t(bad);
         for (int c = 0; c < 3; ++c) rgb[c][i] = out[c];
     }
     return invalid;
@@ -447,8 +459,8 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
 
 Compiler::Compiler()
     : jit_(FacetJit::Create()),
-      tables_(std::make_unique<TableCache>()),
-      cacheDir_(defaultCacheDir()),
+      cache_(std::make_shared<CacheDirectory>(defaultCacheRoot())),
+      tables_(std::make_unique<TableCache>(cache_, "tables")),
       tierUpWorker_(std::make_unique<TierUpWorker>()) {}
 Compiler::~Compiler() {
     tierUpWorker_.reset();  // first: its running job uses the JIT and the caches
@@ -456,19 +468,23 @@ Compiler::~Compiler() {
 
 void Compiler::finishTierUps() { tierUpWorker_->drain(); }
 
+void Compiler::setCacheDir(std::string dir) { cache_ = std::make_shared<CacheDirectory>(std::move(dir)); }
+const std::string& Compiler::cacheDir() const { return cache_->root(); }
+std::string Compiler::cacheWarning() const { return cache_->warning(); }
+
 int Compiler::resolveWidth(const CompileOptions& options) const {
     return options.width ? options.width : jit_->hostVectorWidth();
 }
 
 std::unique_ptr<Kernel> Compiler::compileFile(const std::string& path, const std::string& name,
                                               const CompileOptions& options, DiagnosticEngine& diags) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        diags.error({std::make_shared<const std::string>(path), 0, 0}, "cannot open file");
+    std::string error;
+    std::optional<std::string> text = readSourceFile(path, error);
+    if (!text) {
+        diags.error({std::make_shared<const std::string>(path), 0, 0}, error);
         return nullptr;
     }
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    return compileText(text, path, name, options, diags);
+    return compileText(*text, path, name, options, diags);
 }
 
 std::unique_ptr<Kernel> Compiler::compileText(const std::string& text, const std::string& path,
@@ -519,7 +535,8 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
     auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(keyText));
     std::string key = llvm::toHex(digest, true);
     std::string prefix = "facet_" + key.substr(0, 16);
-    std::string cachePath = cacheDir_.empty() ? "" : cacheDir_ + "/" + key + ".fko";
+    std::shared_ptr<CacheDirectory> disk = cache_;
+    std::string cachePath = disk->usable() ? key + ".fko" : "";  // relative to the cache root
 
     std::optional<CachedKernel> cached;
     if (options.cache != CompileOptions::Cache::Off) {
@@ -531,7 +548,8 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
         }
     }
     if (!cached && options.cache == CompileOptions::Cache::On && !cachePath.empty()) {
-        cached = readCacheFile(cachePath, key);
+        if (std::optional<std::string> bytes = disk->read(cachePath, kMaxCacheFileBytes))
+            cached = parseCacheFile(*bytes, key);
         if (cached) {
             kernel->origin_ = "disk cache";
             storeInCaches(key, "", options.cache, *cached);  // memory only
@@ -573,7 +591,8 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
 
 void Compiler::storeInCaches(const std::string& key, const std::string& cachePath, CompileOptions::Cache cache,
                              const CachedKernel& record) {
-    if (cache == CompileOptions::Cache::On && !cachePath.empty()) writeCacheFile(cacheDir_, cachePath, key, record);
+    // A cache that cannot be written is only slower.
+    if (cache == CompileOptions::Cache::On && !cachePath.empty()) cache_->write(cachePath, cacheFileBytes(key, record));
     if (cache != CompileOptions::Cache::Off) {
         std::lock_guard<std::mutex> lock(cacheMutex_);
         memoryCache_.emplace(key, record);

@@ -1,7 +1,8 @@
 // Kernel: the C++ library API — compile a material with options, evaluate it.
 //
 // A Compiler owns one JIT and the compiled-kernel caches (in memory, and on
-// disk under FACET_CACHE_DIR or ~/.cache/facet). Several Compilers may live
+// disk under FACET_CACHE_DIR, $XDG_CACHE_HOME/facet or ~/.cache/facet, used
+// only when trusted: CacheFiles.h). Several Compilers may live
 // in one process. A Kernel is immutable once built and safe to evaluate from
 // many threads at once.
 //
@@ -46,6 +47,7 @@ struct KernelCode;
 class TierUpWorker;
 class EnergyTable;
 class TableCache;
+class CacheDirectory;
 
 // A compiled kernel as the caches keep it: object code, the math variant it
 // was compiled with, and (for tolerance builds) its measured error.
@@ -90,8 +92,9 @@ struct CompileOptions {
 using ScalarKernelFn = void (*)(const float*, const float*, const float*, float*);
 // The scalar kernel's twin that also reports whether the lane was invalid.
 using ScalarStatusFn = int32_t (*)(const float*, const float*, const float*, float*);
+// The batch kernel; the last argument is the optional per-lane status array.
 using BatchKernelFn = int64_t (*)(int64_t, const float* const*, const float* const*, const float* const*,
-                                  float* const*);
+                                  float* const*, uint8_t*);
 
 class Kernel {
 public:
@@ -124,8 +127,13 @@ public:
     double tierUpMillis() const;
 
     void eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]) const;
+    // n lanes, SoA (facet.h). Returns the number of invalid lanes (their rgb
+    // is 0), 0 for n = 0 and -1 for n < 0. `status`, when not null, receives
+    // one byte per lane: 0 valid, 1 invalid (a non-finite or non-unit
+    // direction, a non-finite input, a model parameter not finite in float,
+    // or a result float cannot hold) -- on every backend alike.
     int64_t evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
-                      float* const rgb[3]) const;
+                      float* const rgb[3], uint8_t* status = nullptr) const;
 
 private:
     friend class Compiler;
@@ -190,8 +198,12 @@ public:
 
     FacetJit& jit() { return *jit_; }
     int resolveWidth(const CompileOptions& options) const;
-    void setCacheDir(std::string dir) { cacheDir_ = std::move(dir); }
-    const std::string& cacheDir() const { return cacheDir_; }
+    // The kernel objects' disk cache ("" = none); the tables stay in the
+    // default root's tables/ directory. Call before compiling.
+    void setCacheDir(std::string dir);
+    const std::string& cacheDir() const;
+    // The warning given when the disk cache was refused (CacheFiles.h), or "".
+    std::string cacheWarning() const;
 
 private:
     std::string compileObject(const CheckedMaterial& material, const LoweringOptions& lowering,
@@ -217,8 +229,8 @@ private:
                        const CachedKernel& record);
 
     std::shared_ptr<FacetJit> jit_;
-    std::unique_ptr<TableCache> tables_;  // Kulla-Conty E tables (memory + EXR on disk)
-    std::string cacheDir_;
+    std::shared_ptr<CacheDirectory> cache_;  // kernel objects; tables/ below it
+    std::unique_ptr<TableCache> tables_;     // Kulla-Conty E tables (memory + EXR on disk)
     std::mutex cacheMutex_;
     std::map<std::string, CachedKernel> memoryCache_;  // key -> compiled kernel
     // Its thread starts with the first tiered compile; the destructor stops

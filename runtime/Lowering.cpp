@@ -499,16 +499,21 @@ private:
     // small integer powers, min/max/clamp/abs of inputs and constants keep
     // them in float: relative errors of such chains only add up (alpha =
     // roughness^2 is within 1 ulp), and double costs conversions.
+    // (At most kMaxFloatExpressionOperations of them: see below.)
     MathEmitter& exprEmitter() { return floatFirst_ && !floatExpressions_ ? wide_ : d_; }
+    static constexpr int kMaxFloatExpressionOperations = 8;
     bool onlyMultiplicativeExpressions() const {
         struct Scan : ExprVisitor {
             bool additive = false;
+            int operations = 0;
             void visitBinary(const BinaryExpr& e) override {
+                ++operations;
                 if (e.op == BinaryOp::Add || e.op == BinaryOp::Sub) additive = true;
                 if (e.op == BinaryOp::Pow && !smallPower(*e.rhs)) additive = true;
                 ExprVisitor::visitBinary(e);
             }
             void visitCall(const CallExpr& e) override {
+                ++operations;
                 switch (e.function->id) {
                     case BuiltinFn::Sqrt:
                     case BuiltinFn::Abs:
@@ -534,7 +539,10 @@ private:
         for (const ModelUse* use : {&mat_.ndf, &mat_.masking, &mat_.fresnel, &mat_.diffuse, &mat_.energy})
             for (const ExprPtr& arg : use->args)
                 if (arg) scan.visit(*arg);
-        return !scan.additive;
+        // Each operation adds up to half an ulp (2^-24) of relative error;
+        // a long chain (a 20000-step let chain drifted 3e-5 in float) keeps
+        // double. 8 operations bound the float error to 8 * 2^-24 = 4.8e-7.
+        return !scan.additive && scan.operations <= kMaxFloatExpressionOperations;
     }
 
     // x^k for a small integer k, by repeated squaring (exact-ish and fast).
@@ -815,6 +823,25 @@ private:
         MathEmitter& m = f_;
         switch (mat_.ndfModel()) {
             case NdfModel::Ggx: {
+                if (!guarded_ && d_.isDouble() && hD[0]) {
+                    // The precise body of an exact kernel: D in double, so
+                    // that an alpha beyond float range or alphas far apart
+                    // (ggx(1e30), alpha_x = 1e30 with alpha_y = 1e-30), whose
+                    // D or lobe can still be a normal float at grazing h, get
+                    // the reference's value instead of a float 0 or Inf/Inf.
+                    MathEmitter& d = d_;
+                    Value *x2 = d.mul(hD[0], hD[0]), *y2 = d.mul(hD[1], hD[1]), *z2 = d.mul(hD[2], hD[2]);
+                    if (n.isotropic) {
+                        Value* a2 = d.mul(n.axD, n.axD);
+                        Value* t = d.fma(a2, z2, d.add(x2, y2));
+                        return d.div(d.mul(a2, d.c(1.0 / kPi)), d.mul(t, t));
+                    }
+                    // 1 / (pi ax ay (x2/ax^2 + y2/ay^2 + z2)^2), scaled by ax ay so that
+                    // nothing overflows for ax ay within double range.
+                    Value* axy = d.mul(n.axD, n.ayD);
+                    Value* t = d.add(d.fma(d.div(n.ayD, n.axD), x2, d.mul(d.div(n.axD, n.ayD), y2)), d.mul(axy, z2));
+                    return d.div(d.mul(axy, d.c(1.0 / kPi)), d.mul(t, t));
+                }
                 if (n.isotropic) {
                     // 1 / (pi a^2 (s2/a^2 + mz^2)^2) = a^2 / (pi (s2 + a^2 mz^2)^2): one division.
                     Value* a2 = m.mul(n.ax, n.ax);
@@ -1731,11 +1758,13 @@ void emitBatchEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llvm
     llvm::Type* i64 = b.getInt64Ty();
     llvm::Type* f32 = b.getFloatTy();
     auto* vecTy = llvm::FixedVectorType::get(f32, W);
-    auto* fnTy = llvm::FunctionType::get(i64, {i64, ptr, ptr, ptr, ptr}, false);
+    // The sixth argument is the optional per-lane status array (one byte
+    // per lane, 1 = invalid; null: not wanted).
+    auto* fnTy = llvm::FunctionType::get(i64, {i64, ptr, ptr, ptr, ptr, ptr}, false);
     auto* fn = llvm::Function::Create(fnTy, llvm::Function::ExternalLinkage, name, module);
     addKernelAttributes(fn, W, opt.variant);
     llvm::Value *n = fn->getArg(0), *wiA = fn->getArg(1), *woA = fn->getArg(2), *inA = fn->getArg(3),
-                *outA = fn->getArg(4);
+                *outA = fn->getArg(4), *statusA = fn->getArg(5);
     auto* entry = llvm::BasicBlock::Create(ctx, "entry", fn);
     auto* header = llvm::BasicBlock::Create(ctx, "loop.header", fn);
     auto* body = llvm::BasicBlock::Create(ctx, "loop.body", fn);
@@ -1847,8 +1876,19 @@ void emitBatchEntry(const CheckedMaterial& mat, const LoweringOptions& opt, llvm
     LaneEmitter::Result r = emitLanes(mat, opt, b, vecTy, module, wi, wo, slots);
     for (int c = 0; c < 3; ++c) b.CreateAlignedStore(r.rgb[c], out[c], llvm::Align(4));
     llvm::Value* bodyCount = b.CreateAdd(count, popcount(b.CreateAnd(r.invalid, mask)));
+    auto* statusBlock = llvm::BasicBlock::Create(ctx, "status", fn);
+    auto* statusDone = llvm::BasicBlock::Create(ctx, "status.done", fn);
     auto* unstage = llvm::BasicBlock::Create(ctx, "unstage", fn);
     auto* latch = llvm::BasicBlock::Create(ctx, "latch", fn);
+    b.CreateCondBr(b.CreateIsNull(statusA), statusDone, statusBlock,
+                   llvm::MDBuilder(ctx).createBranchWeights(1, 1));
+
+    b.SetInsertPoint(statusBlock);
+    b.CreateMaskedStore(b.CreateZExt(r.invalid, llvm::FixedVectorType::get(b.getInt8Ty(), W)),
+                        b.CreateGEP(b.getInt8Ty(), statusA, i), llvm::Align(1), mask);
+    b.CreateBr(statusDone);
+
+    b.SetInsertPoint(statusDone);
     b.CreateCondBr(partial, unstage, latch);
 
     b.SetInsertPoint(unstage);

@@ -8,6 +8,7 @@
 #include "BenchPlot.h"
 #include "BenchRunner.h"
 #include "Commands.h"
+#include "OutputFile.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -36,11 +37,6 @@ int usage(const std::string& message) {
     return kExitUsage;
 }
 
-bool writeText(const std::filesystem::path& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary);
-    out << text;
-    return bool(out);
-}
 
 }  // namespace
 
@@ -109,12 +105,13 @@ int cmdBench(const std::vector<std::string>& args) {
     std::error_code ec;
     std::filesystem::create_directories(outDir, ec);
     std::filesystem::path dir(outDir);
-    bool ok = !ec && writeText(dir / "bench.md", bench::markdown(report)) &&
-              writeText(dir / "bench.json", bench::json(report));
-    if (!ok) {
-        std::fprintf(stderr, "facet bench: cannot write the report into '%s'\n", outDir.c_str());
+    if (ec) {
+        std::fprintf(stderr, "facet bench: error: cannot create '%s': %s\n", outDir.c_str(), ec.message().c_str());
         return kExitFailed;
     }
+    if (!writeOutput((dir / "bench.md").string(), bench::markdown(report)) ||
+        !writeOutput((dir / "bench.json").string(), bench::json(report)))
+        return kExitFailed;
     std::string plotError = bench::writeScatterPlot(report, (dir / "bench.png").string());
     if (!plotError.empty()) {
         std::fprintf(stderr, "facet bench: %s\n", plotError.c_str());

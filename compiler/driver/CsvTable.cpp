@@ -1,10 +1,11 @@
 // CsvTable: a small, strict CSV reader for numeric tables.
 #include "CsvTable.h"
 
+#include "Checker.h"
+
 #include <cerrno>
 #include <cstdlib>
 #include <fmt/format.h>
-#include <fstream>
 
 namespace facet {
 
@@ -46,20 +47,34 @@ std::optional<double> parseNumber(const std::string& field) {
 }
 
 std::optional<CsvTable> readCsv(const std::string& path, std::string& error) {
-    std::ifstream in(path);
-    if (!in) {
-        error = fmt::format("{}: error: cannot open file", path);
+    std::optional<std::string> text = readSourceFile(path, error);
+    if (!text) {
+        error = fmt::format("{}: error: {}", path, error);
         return std::nullopt;
     }
+    // A UTF-8 byte order mark is not part of the first column's name.
+    if (text->compare(0, 3, "\xEF\xBB\xBF") == 0) text->erase(0, 3);
     CsvTable table;
     std::string line;
     int lineNo = 0;
     bool haveHeader = false;
-    while (std::getline(in, line)) {
+    // Lines end at "\n", "\r\n" or a lone "\r".
+    for (size_t pos = 0; pos < text->size();) {
+        size_t end = text->find_first_of("\r\n", pos);
+        if (end == std::string::npos) end = text->size();
+        line = text->substr(pos, end - pos);
+        pos = end + ((*text)[end] == '\r' && end + 1 < text->size() && (*text)[end + 1] == '\n' ? 2 : 1);
         ++lineNo;
         if (trim(line).empty()) continue;
         std::vector<std::string> fields = splitFields(line);
         if (!haveHeader) {
+            for (size_t i = 0; i < fields.size(); ++i)
+                for (size_t j = 0; j < i; ++j)
+                    if (fields[i] == fields[j]) {
+                        error = fmt::format("{}:{}: error: column '{}' appears twice (columns {} and {})", path,
+                                            lineNo, fields[i], j + 1, i + 1);
+                        return std::nullopt;
+                    }
             table.columns = fields;
             haveHeader = true;
             continue;

@@ -13,7 +13,10 @@
 #include "CsvTable.h"
 #include "Interpreter.h"
 #include "Kernel.h"
+#include "OutputFile.h"
 
+#include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <fmt/format.h>
@@ -81,7 +84,18 @@ void parseSet(const std::string& spec, Bindings& out) {
     }
     if (values.size() != 1 && values.size() != 3)
         throw UsageError{fmt::format("--set {}: expected one value or three (r,g,b), got {}", name, values.size())};
-    out[name] = values;
+    if (!out.emplace(name, values).second) throw UsageError{fmt::format("--set {}: given twice", name)};
+}
+
+// --set values against the material's inputs: the same usage errors (exit 2)
+// in every command.
+void checkBindings(const CheckedMaterial& material, const Bindings& bindings) {
+    for (const auto& [name, values] : bindings) {
+        const CheckedInput* in = material.findInput(name);
+        if (!in) throw UsageError{fmt::format("--set: material '{}' has no input '{}'", material.name, name)};
+        if (in->type == ValueType::Float && values.size() != 1)
+            throw UsageError{fmt::format("--set {}: input '{}' is float; give one value", name, name)};
+    }
 }
 
 struct EvalOptions {
@@ -101,6 +115,7 @@ CompileOptions compileOptionsFor(const EvalOptions& opt) {
 
 int cmdEval(const std::vector<std::string>& args) {
     EvalOptions opt;
+    bool mathGiven = false, widthGiven = false;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         auto value = [&]() -> const std::string& {
@@ -112,15 +127,20 @@ int cmdEval(const std::vector<std::string>& args) {
         else if (a == "--in") opt.in = value();
         else if (a == "--out") opt.out = value();
         else if (a == "--set") parseSet(value(), opt.bindings);
-        else if (a == "--math") opt.math = value();
-        else if (a == "--width") opt.width = value();
+        else if (a == "--math") opt.math = value(), mathGiven = true;
+        else if (a == "--width") opt.width = value(), widthGiven = true;
         else if (!a.empty() && a[0] == '-') throw UsageError{fmt::format("eval: unknown option '{}'", a)};
         else if (opt.file.empty()) opt.file = a;
         else throw UsageError{fmt::format("eval: more than one material file ('{}' and '{}')", opt.file, a)};
     }
     if (opt.file.empty()) throw UsageError{"eval: no material file given"};
     if (opt.in.empty()) throw UsageError{"eval: --in IN.csv is required"};
+    if (opt.backend == "interp" && (mathGiven || widthGiven))
+        throw UsageError{fmt::format("eval: {} applies to the scalar and simd backends; the interp backend "
+                                     "computes in double (add --backend scalar or simd)",
+                                     mathGiven ? "--math" : "--width")};
     CompileOptions compileOptions = compileOptionsFor(opt);
+    const bool jitBackend = compileOptions.backend != Backend::Interp;
 
     DiagnosticEngine diags;
     CheckedProgram program = loadProgramFile(opt.file, diags);
@@ -133,11 +153,9 @@ int cmdEval(const std::vector<std::string>& args) {
 
     // Slot values: defaults, overridden by --set, overridden per row by columns.
     std::vector<double> slots = material->defaultSlots();
+    checkBindings(*material, opt.bindings);
     for (const auto& [name, values] : opt.bindings) {
         const CheckedInput* in = material->findInput(name);
-        if (!in) throw UsageError{fmt::format("--set: material '{}' has no input '{}'", material->name, name)};
-        if (in->type == ValueType::Float && values.size() != 1)
-            throw UsageError{fmt::format("--set {}: input '{}' is float; give one value", name, name)};
         for (int c = 0; c < in->slotCount(); ++c) slots[in->firstSlot + c] = values[values.size() == 1 ? 0 : c];
     }
 
@@ -189,18 +207,27 @@ int cmdEval(const std::vector<std::string>& args) {
                          opt.in.c_str(), name.c_str(), in->name.c_str());
             return kExitUsage;
         }
+        for (const auto& [other, otherTargets] : inputColumns)
+            for (int t : targets)
+                if (std::find(otherTargets.begin(), otherTargets.end(), t) != otherTargets.end()) {
+                    std::fprintf(stderr, "%s:1: error: columns '%s' and '%s' both set '%s'\n", opt.in.c_str(),
+                                 table->columns[other].c_str(), name.c_str(), material->slotName(t).c_str());
+                    return kExitUsage;
+                }
         inputColumns.push_back({int(c), targets});
     }
 
-    FILE* out = stdout;
+    // Output: built in memory and written at the end, every write checked;
+    // a file that cannot even be created is a usage error, found first.
     if (!opt.out.empty()) {
-        out = std::fopen(opt.out.c_str(), "w");
-        if (!out) {
+        FILE* probe = std::fopen(opt.out.c_str(), "w");
+        if (!probe) {
             std::fprintf(stderr, "%s: error: cannot open for writing\n", opt.out.c_str());
             return kExitUsage;
         }
+        std::fclose(probe);
     }
-    std::fprintf(out, "r,g,b\n");
+    std::string outText = "r,g,b\n";
     // First pass: per-row validation with precise messages, and the slot
     // values of every row.
     size_t rows = table->rows.size();
@@ -222,6 +249,16 @@ int cmdEval(const std::vector<std::string>& args) {
             if (problem.empty() && !std::isfinite(row.values[col]))
                 problem = fmt::format("column '{}' is {}", table->columns[col],
                                       std::isnan(row.values[col]) ? "NaN" : "infinite");
+        // Inputs are clamped to their declared ranges in double, before the
+        // conversion to float (SPEC 4), so 1e39 for an input in 0 .. 1 is 1.
+        for (const CheckedInput& in : material->inputs)
+            for (int c = 0; c < in.slotCount(); ++c) {
+                double& x = rowSlots[r][in.firstSlot + c];
+                if (in.hasRange) x = std::min(std::max(x, in.lo), in.hi);
+                // A kernel takes float inputs; the interpreter, doubles.
+                if (problem.empty() && jitBackend && std::isfinite(x) && std::fabs(x) > double(FLT_MAX))
+                    problem = fmt::format("input '{}' = {:.9g} is beyond float range", material->slotName(in.firstSlot + c), x);
+            }
         for (int d = 0; d < 2 && problem.empty(); ++d) {
             const double* w = &dirs[r][3 * d];
             double len = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
@@ -230,13 +267,12 @@ int cmdEval(const std::vector<std::string>& args) {
         }
     }
     std::vector<std::array<double, 3>> results(rows, {0, 0, 0});
-    const char* parameterProblem = "a model parameter is not finite for this row's inputs";
     if (compileOptions.backend == Backend::Interp) {
         Interpreter<double> interp(*material);
         for (size_t r = 0; r < rows; ++r) {
             if (!problems[r].empty()) continue;
             EvalResult<double> res = interp.eval(&dirs[r][0], &dirs[r][3], rowSlots[r].data());
-            if (!res.valid) problems[r] = parameterProblem;
+            if (!res.valid) problems[r] = "a model parameter is not finite for this row's inputs";
             else results[r] = {res.rgb[0], res.rgb[1], res.rgb[2]};
         }
     } else {
@@ -264,27 +300,16 @@ int cmdEval(const std::vector<std::string>& args) {
         std::vector<const float*> inputs;
         for (int s = 0; s < slotCount; ++s) inputs.push_back(column(6 + s));
         float* rgb[3] = {column(6 + slotCount), column(7 + slotCount), column(8 + slotCount)};
-        int64_t invalid = 0;
-        if (compileOptions.backend == Backend::Simd) {
-            invalid = kernel->evalBatch(int64_t(live.size()), wi, wo, slotCount ? inputs.data() : nullptr, rgb);
-        } else {
-            for (size_t j = 0; j < live.size(); ++j) {
-                float a[3] = {wi[0][j], wi[1][j], wi[2][j]}, b[3] = {wo[0][j], wo[1][j], wo[2][j]}, o[3];
-                std::vector<float> in(slotCount);
-                for (int s = 0; s < slotCount; ++s) in[s] = inputs[s][j];
-                kernel->eval(a, b, in.data(), o);
-                for (int c = 0; c < 3; ++c) rgb[c][j] = o[c];
-            }
-        }
-        // Which rows the kernel found invalid: the reference says precisely.
-        Interpreter<double> interp(*material);
+        // Which rows are invalid comes from the kernel itself, lane by lane.
+        std::vector<uint8_t> status(live.size(), 0);
+        kernel->evalBatch(int64_t(live.size()), wi, wo, slotCount ? inputs.data() : nullptr, rgb, status.data());
         for (size_t j = 0; j < live.size(); ++j) {
             size_t r = live[j];
             for (int c = 0; c < 3; ++c) results[r][c] = rgb[c][j];
-            if (invalid > 0 || compileOptions.backend == Backend::Scalar) {
-                EvalResult<double> res = interp.eval(&dirs[r][0], &dirs[r][3], rowSlots[r].data());
-                if (!res.valid) problems[r] = parameterProblem;
-            }
+            if (status[j])
+                problems[r] = fmt::format("the {} kernel rejected it: a model parameter is not finite in float, or "
+                                          "the result is beyond float range",
+                                          backendName(compileOptions.backend));
         }
     }
     bool doublePrecision = compileOptions.backend == Backend::Interp;
@@ -297,11 +322,12 @@ int cmdEval(const std::vector<std::string>& args) {
                          table->rows[r].line, r + 1, problems[r].c_str());
         }
         if (doublePrecision)
-            std::fprintf(out, "%.17g,%.17g,%.17g\n", results[r][0], results[r][1], results[r][2]);
+            outText += fmt::format("{:.17g},{:.17g},{:.17g}\n", results[r][0], results[r][1], results[r][2]);
         else
-            std::fprintf(out, "%.9g,%.9g,%.9g\n", results[r][0], results[r][1], results[r][2]);
+            outText += fmt::format("{:.9g},{:.9g},{:.9g}\n", float(results[r][0]), float(results[r][1]),
+                                   float(results[r][2]));
     }
-    if (out != stdout) std::fclose(out);
+    if (!writeOutput(opt.out, outText)) return kExitCheckFailed;
     if (bad) {
         std::fprintf(stderr, "%d of %zu rows invalid\n", bad, rows);
         return kExitCheckFailed;
@@ -332,15 +358,22 @@ int cmdIr(const std::vector<std::string>& args) {
     opt.backend = simd ? "simd" : "scalar";
     CompileOptions options = compileOptionsFor(opt);
     options.bindings = opt.bindings;
-    Compiler compiler;
     DiagnosticEngine diags;
+    CheckedProgram program = loadProgramFile(opt.file, diags);
+    if (diags.hasErrors()) {
+        std::fputs(diags.str().c_str(), stderr);
+        return kExitMaterialError;
+    }
+    const CheckedMaterial* material = program.find(opt.material);
+    if (!material) throw UsageError{fmt::format("ir: no material named '{}' in {}", opt.material, opt.file)};
+    checkBindings(*material, opt.bindings);
+    Compiler compiler;
     std::string ir = compiler.irText(opt.file, opt.material, options, simd, stages, diags);
     if (diags.hasErrors()) {
         std::fputs(diags.str().c_str(), stderr);
         return kExitMaterialError;
     }
-    std::fputs(ir.c_str(), stdout);
-    return kExitOk;
+    return writeOutput("", ir) ? kExitOk : kExitCheckFailed;
 }
 
 }  // namespace
@@ -350,21 +383,28 @@ int main(int argc, char** argv) {
     using namespace facet;
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
-        std::fputs(kUsage, args.empty() ? stderr : stdout);
-        return args.empty() ? kExitUsage : kExitOk;
+        if (args.empty()) {
+            std::fputs(kUsage, stderr);
+            return kExitUsage;
+        }
+        return writeOutput("", kUsage) ? kExitOk : kExitCheckFailed;
     }
     std::string command = args[0];
     args.erase(args.begin());
     try {
-        if (command == "check") return cmdCheck(args);
-        if (command == "eval") return cmdEval(args);
-        if (command == "ir") return cmdIr(args);
-        if (command == "verify") return cmdVerify(args);
-        if (command == "lut") return cmdLut(args);
-        if (command == "bench") return cmdBench(args);
-        if (command == "render") return cmdRender(args);
-        if (command == "build") return cmdBuild(args);
-        throw UsageError{fmt::format("unknown command '{}'", command)};
+        int status = 0;
+        if (command == "check") status = cmdCheck(args);
+        else if (command == "eval") status = cmdEval(args);
+        else if (command == "ir") status = cmdIr(args);
+        else if (command == "verify") status = cmdVerify(args);
+        else if (command == "lut") status = cmdLut(args);
+        else if (command == "bench") status = cmdBench(args);
+        else if (command == "render") status = cmdRender(args);
+        else if (command == "build") status = cmdBuild(args);
+        else throw UsageError{fmt::format("unknown command '{}'", command)};
+        // Whatever a command printed must have reached its destination.
+        if (status == kExitOk && !finishStandardOutput()) status = kExitCheckFailed;
+        return status;
     } catch (const UsageError& e) {
         std::fprintf(stderr, "facet: %s\n%s", e.message.c_str(), kUsage);
         return kExitUsage;

@@ -146,6 +146,14 @@ std::unique_ptr<Kernel> compileForRender(Compiler& compiler, const RenderArgs& r
     CompileOptions options;
     if (std::string err = CompileOptions::parse(r.options, options); !err.empty()) throw RenderUsageError{err};
     DiagnosticEngine diags;
+    // --set names an input of the material: a usage error (exit 2) otherwise,
+    // as in eval and ir.
+    CheckedProgram program = loadProgramFile(r.file, diags);
+    if (const CheckedMaterial* m = diags.hasErrors() ? nullptr : program.find(r.material))
+        for (const auto& [name, values] : options.bindings)
+            if (!m->findInput(name))
+                throw RenderUsageError{fmt::format("--set: material '{}' has no input '{}'", m->name, name)};
+    diags.clear();
     std::unique_ptr<Kernel> kernel = compiler.compileFile(r.file, r.material, options, diags);
     if (!kernel) {
         std::fputs(diags.str().c_str(), stderr);

@@ -1,16 +1,18 @@
 // TableCache: EXR I/O of the Kulla-Conty tables and the cache object.
 #include "TableCache.h"
 
+#include "CacheFiles.h"
+
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <fmt/format.h>
-#include <unistd.h>
 
 namespace facet {
 
@@ -32,28 +34,19 @@ double millisSince(std::chrono::steady_clock::time_point t) {
 }  // namespace
 
 std::string defaultTableCacheDir() {
-    if (const char* dir = std::getenv("FACET_CACHE_DIR")) return std::string(dir) + "/tables";
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME")) return std::string(xdg) + "/facet/tables";
-    if (const char* home = std::getenv("HOME")) return std::string(home) + "/.cache/facet/tables";
-    return "";
+    std::string root = defaultCacheRoot();
+    return root.empty() ? "" : root + "/tables";
 }
 
 std::string replaceEnergyTableExr(const EnergyTable& table, const std::string& path) {
-    // Write next to the target and rename over it: readers in other
-    // threads or processes see the old file or the new one, never half.
-    static std::atomic<unsigned> counter{0};
-    std::filesystem::path target(path);
-    std::filesystem::path dir = target.parent_path();
+    // Readers in other threads or processes see the old file or the new
+    // one, never half (CacheFiles.h).
+    std::string bytes, err = encodeEnergyTableExr(table, bytes);
+    if (!err.empty()) return fmt::format("cannot write {}: {}", path, err);
+    std::filesystem::path dir = std::filesystem::path(path).parent_path();
     std::error_code ec;
     if (!dir.empty()) std::filesystem::create_directories(dir, ec);
-    std::string tmp = (dir / fmt::format(".{}.{}.{}.tmp.exr", target.stem().string(), ::getpid(), counter++)).string();
-    std::string err = writeEnergyTableExr(table, tmp);
-    if (err.empty()) {
-        std::filesystem::rename(tmp, path, ec);
-        if (ec) err = fmt::format("cannot rename {} to {}: {}", tmp, path, ec.message());
-    }
-    if (!err.empty()) std::filesystem::remove(tmp, ec);
-    return err;
+    return writeFileAtomically(path, bytes);
 }
 
 const char* tableFileStatusName(TableFileStatus s) {
@@ -67,7 +60,13 @@ const char* tableFileStatusName(TableFileStatus s) {
     return "?";
 }
 
-std::string writeEnergyTableExr(const EnergyTable& t, const std::string& path) {
+std::string writeEnergyTableExr(const EnergyTable& table, const std::string& path) {
+    std::string bytes, err = encodeEnergyTableExr(table, bytes);
+    if (!err.empty()) return fmt::format("cannot write {}: {}", path, err);
+    return writeFileChecked(path, bytes);
+}
+
+std::string encodeEnergyTableExr(const EnergyTable& t, std::string& bytes) {
     std::string bad = t.validate();
     if (!bad.empty()) return "refusing to write an invalid table: " + bad;
     OIIO::ImageSpec spec(t.muCount, t.alphaCount, 4, OIIO::TypeDesc::FLOAT);
@@ -100,35 +99,49 @@ std::string writeEnergyTableExr(const EnergyTable& t, const std::string& path) {
             p[2] = 1 - avg;
             p[3] = avg;
         }
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out) return fmt::format("cannot write {}: {}", path, OIIO::geterror());
-    if (!out->open(path, spec)) return fmt::format("cannot write {}: {}", path, out->geterror());
+    // Encoded in memory: the file itself is written by the caller, with
+    // every write checked (and, for the cache, atomically).
+    std::vector<unsigned char> buffer;
+    OIIO::Filesystem::IOVecOutput proxy(buffer);
+    auto out = OIIO::ImageOutput::create("table.exr", &proxy);
+    if (!out) return OIIO::geterror();
+    if (!out->open("table.exr", spec)) return out->geterror();
     bool ok = out->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
     std::string err = ok ? "" : out->geterror();
     if (!out->close() && ok) {
         ok = false;
         err = out->geterror();
     }
-    if (!ok) return fmt::format("cannot write {}: {}", path, err);
+    if (!ok) return err;
+    bytes.assign(buffer.begin(), buffer.end());
     return "";
 }
 
 TableFileResult readEnergyTableExr(const std::string& path, const EnergyTableKey* expected,
                                    const EnergyQuadrature& quadrature) {
-    TableFileResult r;
-    std::error_code ec;
-    if (!std::filesystem::exists(path, ec)) {
-        r.status = TableFileStatus::Missing;
-        r.message = "no file " + path;
+    std::string why;
+    bool missing = false;
+    std::optional<std::string> bytes = readRegularFile(path, kMaxTableFileBytes, why, &missing);
+    if (!bytes) {
+        TableFileResult r;
+        r.status = missing ? TableFileStatus::Missing : TableFileStatus::Unreadable;
+        r.message = missing ? "no file " + path : why;
         return r;
     }
+    return decodeEnergyTableExr(*bytes, path, expected, quadrature);
+}
+
+TableFileResult decodeEnergyTableExr(const std::string& bytes, const std::string& path,
+                                     const EnergyTableKey* expected, const EnergyQuadrature& quadrature) {
+    TableFileResult r;
     auto fail = [&](TableFileStatus s, std::string msg) {
         r.status = s;
         r.message = std::move(msg);
         r.table.reset();
         return r;
     };
-    auto in = OIIO::ImageInput::open(path);
+    OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
+    auto in = OIIO::ImageInput::open("table.exr", nullptr, &proxy);
     if (!in) return fail(TableFileStatus::Unreadable, fmt::format("cannot open {}: {}", path, OIIO::geterror()));
     const OIIO::ImageSpec& spec = in->spec();
     if (std::string(in->format_name()) != "openexr")
@@ -232,7 +245,13 @@ TableFileResult readEnergyTableExr(const std::string& path, const EnergyTableKey
 // ---- cache ----------------------------------------------------------------
 
 TableCache::TableCache(std::string dir, EnergyQuadrature quadrature)
-    : dir_(std::move(dir)), quadrature_(std::move(quadrature)) {}
+    : TableCache(std::make_shared<CacheDirectory>(std::move(dir)), "", std::move(quadrature)) {}
+
+TableCache::TableCache(std::shared_ptr<CacheDirectory> cache, std::string sub, EnergyQuadrature quadrature)
+    : cache_(std::move(cache)),
+      sub_(sub.empty() ? "" : sub + "/"),
+      dir_(cache_->root().empty() ? "" : sub.empty() ? cache_->root() : cache_->root() + "/" + sub),
+      quadrature_(std::move(quadrature)) {}
 
 std::string TableCache::pathFor(const EnergyTableKey& key) const {
     if (dir_.empty()) return "";
@@ -274,25 +293,32 @@ std::shared_ptr<const EnergyTable> TableCache::produce(const EnergyTableKey& key
     auto start = std::chrono::steady_clock::now();
     Event ev;
     ev.key = key.name();
-    std::string path = pathFor(key);
+    std::string path = pathFor(key), relPath = sub_ + "kc_" + key.name() + ".exr";
     std::shared_ptr<EnergyTable> table;
-    if (!path.empty()) {
-        TableFileResult r = readEnergyTableExr(path, &key, quadrature_);
+    if (cache_->usable()) {
+        std::optional<std::string> bytes = cache_->read(relPath, kMaxTableFileBytes);
+        TableFileResult r;
+        if (bytes) r = decodeEnergyTableExr(*bytes, path, &key, quadrature_);
         if (r.status == TableFileStatus::Ok) {
             table = r.table;
             ev.action = "disk";
+        } else if (!bytes) {
+            ev.action = "built";
+            ev.reason = cache_->usable() ? "missing" : "refused: " + cache_->warning();
         } else {
-            ev.action = r.status == TableFileStatus::Missing ? "built" : "rebuilt";
+            ev.action = "rebuilt";
             ev.reason = std::string(tableFileStatusName(r.status)) + ": " + r.message;
         }
     } else {
         ev.action = "built";
-        ev.reason = "memory-only cache";
+        ev.reason = dir_.empty() ? "memory-only cache" : "refused: " + cache_->warning();
     }
     if (!table) {
         table = buildEnergyTable(key, quadrature_);
-        if (!path.empty()) {
-            ev.writeError = replaceEnergyTableExr(*table, path);
+        std::string bytes;
+        if (cache_->usable()) {
+            ev.writeError = encodeEnergyTableExr(*table, bytes);
+            if (ev.writeError.empty()) ev.writeError = cache_->write(relPath, bytes);
         }
     }
     ev.millis = millisSince(start);

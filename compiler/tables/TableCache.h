@@ -21,9 +21,12 @@
 // E + Ec = 1, EcAvg constant along rows and equal to the exact integral of
 // the interpolated Ec row (else "corrupt"). A cache miss of any kind rebuilds
 // the table and rewrites the file (atomically: a temporary file renamed over
-// it, so a concurrent reader never sees half a file).
+// it, so a concurrent reader never sees half a file). The cache's files are
+// read and written through a CacheDirectory (CacheFiles.h): only files the
+// current user owns and nobody else can write are loaded.
 #pragma once
 
+#include "CacheFiles.h"
 #include "KullaConty.h"
 
 #include <future>
@@ -35,12 +38,18 @@
 
 namespace facet {
 
-// $FACET_CACHE_DIR/tables, else $XDG_CACHE_HOME/facet/tables, else
-// ~/.cache/facet/tables (the kernel cache's convention, runtime/Kernel.cpp); "" if none.
+// defaultCacheRoot() + "/tables"; "" if there is no cache root (an empty
+// FACET_CACHE_DIR included).
 std::string defaultTableCacheDir();
 
-// Writes `table` to `path` (any directory must exist). Returns "" or an error message.
+// Largest table file read (a 4096 x 4096 grid of 4 floats is 256 MB).
+constexpr uint64_t kMaxTableFileBytes = uint64_t(300) << 20;
+
+// Writes `table` to `path` (any directory must exist), every write checked.
+// Returns "" or an error message naming the file.
 std::string writeEnergyTableExr(const EnergyTable& table, const std::string& path);
+// The EXR file of `table` in memory. Returns "" or an error message.
+std::string encodeEnergyTableExr(const EnergyTable& table, std::string& bytes);
 
 // Writes `table` to `path` atomically (a temporary file in the same
 // directory, renamed over `path`; the directory is created). "" or an error.
@@ -59,6 +68,9 @@ struct TableFileResult {
 // grid or quadrature is Stale; without, any well-formed table is accepted.
 TableFileResult readEnergyTableExr(const std::string& path, const EnergyTableKey* expected = nullptr,
                                    const EnergyQuadrature& quadrature = {});
+// The same from the bytes of a file; `path` names it in messages.
+TableFileResult decodeEnergyTableExr(const std::string& bytes, const std::string& path,
+                                     const EnergyTableKey* expected = nullptr, const EnergyQuadrature& quadrature = {});
 
 // Tables by key, shared by shared_ptr and immutable once built. Thread-safe:
 // concurrent requests for one key wait for a single load/build (the mutex is
@@ -68,6 +80,9 @@ class TableCache {
 public:
     // dir: where the EXR files live; "" keeps tables in memory only.
     explicit TableCache(std::string dir = defaultTableCacheDir(), EnergyQuadrature quadrature = {});
+    // The files live in `sub` below a cache directory shared with other
+    // caches (one trust decision, one warning for all of them).
+    TableCache(std::shared_ptr<CacheDirectory> cache, std::string sub, EnergyQuadrature quadrature = {});
 
     std::shared_ptr<const EnergyTable> get(const EnergyTableKey& key);
     // The table of a checked material with energy = kulla_conty.
@@ -76,6 +91,8 @@ public:
     // kc_<key>.exr in dir (empty when dir is empty).
     std::string pathFor(const EnergyTableKey& key) const;
     const std::string& dir() const { return dir_; }
+    // The warning given when the directory or a file in it was refused, or "".
+    std::string refusal() const { return cache_->warning(); }
 
     // What happened per request that reached the disk or built a table:
     // action is "disk" (loaded), "built" (no file), "rebuilt" (the file was
@@ -90,7 +107,9 @@ public:
 private:
     std::shared_ptr<const EnergyTable> produce(const EnergyTableKey& key);
 
-    std::string dir_;
+    std::shared_ptr<CacheDirectory> cache_;
+    std::string sub_;  // "" or "SUBDIR/" below cache_'s root
+    std::string dir_;  // cache_'s root + sub_, "" without a root
     EnergyQuadrature quadrature_;
     mutable std::mutex mutex_;
     std::map<EnergyTableKey, std::shared_future<std::shared_ptr<const EnergyTable>>> tables_;

@@ -5,6 +5,8 @@
 // can do.
 #include "PlotCanvas.h"
 
+#include "ImageFiles.h"
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 
@@ -228,12 +230,7 @@ std::string PlotCanvas::write(const std::string& path) const {
     std::string ext = OIIO::Filesystem::extension(path, false);
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     OIIO::TypeDesc format = ext == "exr" ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8;
-    if (!out.write(path, format)) {
-        std::string why = out.geterror();
-        if (why.empty()) why = OIIO::geterror();
-        return "cannot write " + path + ": " + (why.empty() ? std::string("unknown OpenImageIO error") : why);
-    }
-    return "";
+    return writeImageFile(out, path, format);
 }
 
 }  // namespace facet::preview

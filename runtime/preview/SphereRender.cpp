@@ -7,6 +7,8 @@
 // into the pixels. Rows are handed out to the threads one at a time.
 #include "SphereRender.h"
 
+#include "ImageFiles.h"
+
 #include "Interpreter.h"
 
 #include <OpenImageIO/filesystem.h>
@@ -371,9 +373,7 @@ std::string writeSphereImage(const SphereImage& image, const SphereScene& scene,
             if (linear) px[3] = cov;
         }
     OIIO::ImageBuf buf(spec, pixels.data());  // wraps the buffer; written below, before it goes away
-    if (!buf.write(path, linear ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8))
-        return fmt::format("cannot write '{}': {}", path, buf.geterror());
-    return "";
+    return writeImageFile(buf, path, linear ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8);
 }
 
 std::optional<std::array<double, 2>> highlightPixel(const SphereScene& scene) {

@@ -542,12 +542,13 @@ struct Failures {
     }
 };
 
-// Line lengths of `text` (lines split at '\n'), for checking that a
-// diagnostic points inside the file.
+// Line lengths of `text` (lines end at '\n' or a lone '\r', as the lexer
+// counts them), for checking that a diagnostic points inside the file.
 std::vector<size_t> lineLengths(const std::string& text) {
     std::vector<size_t> out{0};
-    for (char c : text) {
-        if (c == '\n') out.push_back(0);
+    for (size_t i = 0; i < text.size(); ++i) {
+        char c = text[i];
+        if (c == '\n' || (c == '\r' && (i + 1 == text.size() || text[i + 1] != '\n'))) out.push_back(0);
         else ++out.back();
     }
     return out;

@@ -88,6 +88,68 @@ int main(void) {
     EXPECT(facet_eval_batch(scalar, N, wi, wo, inputs, out2) == 2, "scalar backend batch invalid count");
     EXPECT(facet_eval_batch(interp, N, wi, wo, inputs, out2) == 2, "interp backend batch invalid count");
 
+    /* Per-lane status: 1 exactly for the two invalid lanes, on every backend. */
+    facet_kernel* kernels[3] = {simd, scalar, interp};
+    for (int kk = 0; kk < 3; ++kk) {
+        uint8_t status[N];
+        memset(status, 9, sizeof status);
+        EXPECT(facet_eval_batch_status(kernels[kk], N, wi, wo, inputs, out2, status) == 2, "status count %d", kk);
+        for (int i = 0; i < N; ++i)
+            EXPECT(status[i] == (i == 5 || i == 9), "kernel %d lane %d status %d", kk, i, status[i]);
+    }
+
+    /* Misuse: -1 and a message, never a lane count; n = 0 is 0. */
+    const float* wiBroken[3] = {wix, NULL, wiz};
+    EXPECT(facet_eval_batch(NULL, N, wi, wo, inputs, out2) == -1, "NULL kernel");
+    EXPECT(strcmp(facet_last_error(), "facet_eval_batch: error: the kernel is NULL") == 0, "msg: %s", facet_last_error());
+    EXPECT(facet_eval_batch(simd, -3, wi, wo, inputs, out2) == -1, "n < 0");
+    EXPECT(strcmp(facet_last_error(), "facet_eval_batch: error: n is negative (-3)") == 0, "msg: %s", facet_last_error());
+    EXPECT(facet_eval_batch(simd, N, NULL, wo, inputs, out2) == -1, "NULL wi");
+    EXPECT(strcmp(facet_last_error(), "facet_eval_batch: error: wi is NULL") == 0, "msg: %s", facet_last_error());
+    EXPECT(facet_eval_batch(scalar, N, wiBroken, wo, inputs, out2) == -1, "NULL wi[1]");
+    EXPECT(strcmp(facet_last_error(), "facet_eval_batch: error: wi[1] is NULL") == 0, "msg: %s", facet_last_error());
+    EXPECT(facet_eval_batch(interp, N, wi, wo, inputs, NULL) == -1, "NULL rgb");
+    EXPECT(facet_eval_batch(simd, 0, NULL, NULL, NULL, NULL) == 0, "n = 0");
+
+    /* The interp backend counts a lane whose double value float cannot hold
+       (plastic at wi = (1,0,1e-40), wo = (-1,0,1e-40): about 1.9e41) as
+       invalid, as the compiled backends do; never +Inf. */
+    {
+        static const char* kPlastic =
+            "material plastic {\n"
+            "    input roughness = 0.4 in 0 .. 1;\n"
+            "    ndf = ggx(roughness * roughness);\n"
+            "    masking = smith_height_correlated;\n"
+            "    fresnel = schlick(eta = 1.49);\n"
+            "    diffuse = lambert(0.5);\n"
+            "}\n";
+        float gx[1] = {1}, gy[1] = {0}, gz[1] = {1e-40f}, hx[1] = {-1}, hz[1] = {1e-40f}, o[3][1];
+        const float* gwi[3] = {gx, gy, gz};
+        const float* gwo[3] = {hx, gy, hz};
+        float* gout[3] = {o[0], o[1], o[2]};
+        const char* backends[3] = {"backend=interp", "backend=scalar;cache=memory", "backend=simd;cache=memory"};
+        for (int kk = 0; kk < 3; ++kk) {
+            facet_kernel* k = facet_compile_text(kPlastic, "plastic.mat", NULL, backends[kk], err, sizeof err);
+            EXPECT(k != NULL, "compile %s: %s", backends[kk], err);
+            if (!k) continue;
+            uint8_t st = 9;
+            EXPECT(facet_eval_batch_status(k, 1, gwi, gwo, NULL, gout, &st) == 1, "%s: grazing lane counted", backends[kk]);
+            EXPECT(st == 1 && o[0][0] == 0 && o[1][0] == 0 && o[2][0] == 0, "%s: grazing lane %g status %d",
+                   backends[kk], o[0][0], st);
+            facet_release(k);
+        }
+    }
+
+    /* Options: blanks around '=' and ';' are fine, a repeated option is not. */
+    facet_kernel* spaced = facet_compile_text(kMaterial, "t", NULL, " backend = scalar ; math = exact ;cache=memory", err, sizeof err);
+    EXPECT(spaced != NULL, "spaced options: %s", err);
+    if (spaced) facet_release(spaced);
+    EXPECT(facet_compile_text(kMaterial, "t", NULL, "backend=simd;backend=scalar", err, sizeof err) == NULL, "repeated option");
+    EXPECT(strcmp(err, "options: error: option 'backend' is given twice") == 0, "err: %s", err);
+    EXPECT(facet_compile_text(kMaterial, "t", NULL, "set.roughness=0.1;set.roughness=0.2", err, sizeof err) == NULL, "repeated set");
+    EXPECT(facet_compile_file("/", NULL, NULL, err, sizeof err) == NULL, "a directory");
+    EXPECT(strcmp(err, "/: error: is a directory, not a file") == 0, "err: %s", err);
+
     /* Bound input: set.roughness removes the slot. */
     facet_kernel* bound = facet_compile_text(kMaterial, "test.mat", NULL, "set.roughness=0.5", err, sizeof err);
     EXPECT(bound && facet_input_count(bound) == 3, "bound kernel slots");

@@ -53,8 +53,8 @@ check "bad sky" 2 "$facet" render "$src/materials/gold.mat" -o "$out/x.png" --sk
 expect_text "bad sky" "$out/stderr" "--sky expects gradient, constant or none"
 check "bad compare" 2 "$facet" render --plot ndf --compare ggx,ward -o "$out/x.png"
 expect_text "bad compare" "$out/stderr" "'ward' is not an NDF"
-check "unknown input" 65 "$facet" render "$src/materials/gold.mat" -o "$out/x.png" --set shininess=3
-expect_text "unknown input" "$out/stderr" "shininess"
+check "unknown input (a usage error, as in eval and ir)" 2 "$facet" render "$src/materials/gold.mat" -o "$out/x.png" --set shininess=3
+expect_text "unknown input" "$out/stderr" "--set: material 'gold' has no input 'shininess'"
 printf 'material broken {\n    ndf = ggx(;\n}\n' >"$out/broken.mat"
 check "material error" 65 "$facet" render "$out/broken.mat" -o "$out/x.png"
 expect_text "material error" "$out/stderr" "broken.mat:2:"

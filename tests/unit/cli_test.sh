@@ -299,6 +299,114 @@ run "$FACET" eval bad.mat --in dirs.csv
 expect_rc 65 "eval of a bad material"
 expect_eq "$err" "$bad_diags" "eval of a bad material: the same diagnostics as check"
 
+# ---- no silent zeros: clamping in double, the kernel's own per-row status ----------
+printf 'material rough {\n    input roughness = 0.4 in 0 .. 1;\n    ndf = ggx(roughness * roughness);\n    fresnel = schlick(f0 = 0.04);\n    diffuse = lambert(0.5);\n}\n' >rough.mat
+# roughness = 1e39 is clamped to 1 in double (not converted to float first:
+# that is Inf, an invalid lane): every backend gives the value of roughness 1.
+printf 'wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,roughness\n0,0,1,0,0,1,1e39\n0,0,1,0,0,1,1\n' >rough.csv
+for backend in interp scalar simd; do
+    run "$FACET" eval rough.mat --backend $backend --in rough.csv
+    expect_rc 0 "roughness=1e39 clamped in double ($backend)"
+    echo "$out" >rough.$backend.out
+    expect_eq "$(sed -n 2p rough.$backend.out)" "$(sed -n 3p rough.$backend.out)" "1e39 is 1 ($backend)"
+    run "$FACET" eval rough.mat --backend $backend --set roughness=1e39 --in dirs.csv
+    expect_rc 0 "--set roughness=1e39 ($backend)"
+    expect_eq "$(printf '%s\n' "$out" | sed -n 2p)" "$(sed -n 3p rough.$backend.out)" "--set 1e39 is 1 ($backend)"
+done
+near_row rough.interp.out 1 "0.01/pi + 0.5/pi" "0.01/pi + 0.5/pi" "0.01/pi + 0.5/pi"
+# A grazing pair whose BRDF (about 5e40) float cannot hold: the compiled
+# kernels' status marks the row; its number and the reason go to stderr, exit 1.
+printf 'wi_x,wi_y,wi_z,wo_x,wo_y,wo_z\n0,0,1,0,0,1\n1,0,1e-40,-1,0,1e-40\n' >grazing.csv
+for backend in scalar simd; do
+    run "$FACET" eval rough.mat --backend $backend --in grazing.csv
+    expect_rc 1 "grazing row beyond float ($backend)"
+    expect_eq "$err" "grazing.csv:3: error: row 2: the $backend kernel rejected it: a model parameter is not finite in float, or the result is beyond float range; its output is 0,0,0
+1 of 2 rows invalid" "grazing row beyond float: reported ($backend)"
+    echo "$out" >grazing.$backend.out
+    expect_zero_row grazing.$backend.out 2
+done
+run "$FACET" eval rough.mat --backend interp --in grazing.csv
+expect_rc 0 "grazing row in double (interp prints doubles)"
+printf 'wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,x\n0,0,1,0,0,1,1e39\n' >wide.csv
+printf 'material wide { input x = 1; ndf = ggx(0.5); diffuse = lambert(min(x, 1)); }\n' >wide.mat
+run "$FACET" eval wide.mat --backend simd --in wide.csv
+expect_rc 1 "an unranged input beyond float on a float kernel"
+expect_first_line "$err" "wide.csv:2: error: row 1: input 'x' = 1e+39 is beyond float range; its output is 0,0,0" \
+    "an unranged input beyond float: message"
+
+# ---- every write checked ------------------------------------------------------------
+if [ -w /dev/full ]; then
+    run "$FACET" eval test.mat --in dirs.csv --out /dev/full
+    expect_rc 1 "eval --out /dev/full"
+    expect_eq "$err" "facet: error: cannot write /dev/full: No space left on device" "eval --out /dev/full: message"
+    "$FACET" eval test.mat --in dirs.csv >/dev/full 2>stderr.txt; rc=$?; err=$(cat stderr.txt)
+    expect_rc 1 "eval >/dev/full"
+    expect_eq "$err" "facet: error: cannot write standard output: No space left on device" "eval >/dev/full: message"
+    "$FACET" ir test.mat >/dev/full 2>stderr.txt; rc=$?; err=$(cat stderr.txt)
+    expect_rc 1 "ir >/dev/full"
+    expect_eq "$err" "facet: error: cannot write standard output: No space left on device" "ir >/dev/full: message"
+    "$FACET" --help >/dev/full 2>stderr.txt; rc=$?; err=$(cat stderr.txt)
+    expect_rc 1 "--help >/dev/full"
+    printf 'material k { ndf = ggx(0.5); masking = smith_height_correlated; energy = kulla_conty; }\n' >kc.mat
+    run "$FACET" lut kc.mat -o /dev/full
+    expect_rc 1 "lut -o /dev/full"
+    expect_first_line "$err" "facet: lut: cannot write /dev/full: No space left on device" "lut -o /dev/full: message"
+    ln -s /dev/full full.png
+    run "$FACET" render test.mat -o full.png --size 16
+    expect_rc 1 "render into /dev/full"
+    expect_first_line "$err" "facet: render: cannot write full.png: No space left on device" "render into /dev/full: message"
+fi
+run "$FACET" render test.mat -o x.bmpx --size 16
+expect_rc 1 "render -o with an unknown extension"
+expect_first_line "$err" "facet: render: cannot write x.bmpx: OpenImageIO could not find a format writer for \"x.bmpx\". Is it a file format that OpenImageIO doesn't know about?" \
+    "render -o x.bmpx: the reason"
+
+# ---- messages ----------------------------------------------------------------------
+printf '\xef\xbb\xbfwi_x,wi_y,wi_z,wo_x,wo_y,wo_z\n0,0,1,0,0,1\n' >bom.csv
+run "$FACET" eval test.mat --in bom.csv
+expect_rc 0 "a CSV with a UTF-8 BOM"
+printf '\xef\xbb\xbfmaterial m { ndf = ggx(0.5); }\n' >bom.mat
+run "$FACET" check bom.mat
+expect_rc 0 "a material file with a UTF-8 BOM"
+printf 'material m {\r    ndf = ggx(0.5);\r    masking = nope;\r}\r' >cr.mat
+run "$FACET" check cr.mat
+expect_rc 65 "CR-only line endings"
+expect_first_line "$err" "cr.mat:3:15: error: unknown masking model 'nope' (did you mean 'none'?)" "CR-only line endings: the line is counted"
+printf 'wi_x,wi_y,wi_z,wo_x,wo_y,wo_z\r0,0,1,0,0,1\r0,0,2,0,0,1\r' >cr.csv
+run "$FACET" eval test.mat --in cr.csv
+expect_rc 1 "CSV with CR-only line endings"
+expect_first_line "$err" "cr.csv:3: error: row 2: wi is not a unit vector (length 2); its output is 0,0,0" \
+    "CSV with CR-only line endings: the line is counted"
+mkdir -p adir.mat
+run "$FACET" check adir.mat
+expect_rc 65 "a directory as material file"
+expect_eq "$err" "adir.mat: error: is a directory, not a file" "a directory as material file: message"
+mkfifo fifo.mat
+run timeout 20 "$FACET" check fifo.mat
+expect_rc 65 "a FIFO nobody writes to as material file (no hang)"
+run "$FACET" check <(cat test.mat)
+expect_rc 0 "a pipe as material file"
+printf 'wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,wi_x\n0,0,1,0,0,1,0\n' >dupcol.csv
+run "$FACET" eval test.mat --in dupcol.csv
+expect_rc 2 "a duplicated CSV column"
+expect_eq "$err" "dupcol.csv:1: error: column 'wi_x' appears twice (columns 1 and 7)" "a duplicated CSV column: message"
+printf 'wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,albedo,albedo.g\n0,0,1,0,0,1,0.1,0.2\n' >dupinput.csv
+run "$FACET" eval test.mat --in dupinput.csv
+expect_rc 2 "two columns setting one input"
+expect_eq "$err" "dupinput.csv:1: error: columns 'albedo' and 'albedo.g' both set 'albedo.g'" "two columns setting one input: message"
+run "$FACET" eval test.mat --set alpha=0.5 --set alpha=1 --in dirs.csv
+expect_rc 2 "a repeated --set"
+expect_first_line "$err" "facet: --set alpha: given twice" "a repeated --set: message"
+run "$FACET" ir test.mat --set nosuch=1
+expect_rc 2 "ir --set of an unknown input: the same exit code as eval"
+expect_first_line "$err" "facet: --set: material 'test' has no input 'nosuch'" "ir --set nosuch: message"
+run "$FACET" render test.mat -o r.png --set nosuch=1 --size 16
+expect_rc 2 "render --set of an unknown input: the same exit code as eval"
+run "$FACET" eval test.mat --math fast --in dirs.csv
+expect_rc 2 "--math with the interp backend"
+expect_first_line "$err" "facet: eval: --math applies to the scalar and simd backends; the interp backend computes in double (add --backend scalar or simd)" \
+    "--math with the interp backend: message"
+
 # ---- usage errors ------------------------------------------------------------------
 run "$FACET"
 expect_rc 2 "no arguments"

@@ -46,10 +46,26 @@ void facet_eval(const facet_kernel* k, const float wi[3], const float wo[3], con
 
 /* SoA: wi[0..2], wo[0..2], rgb[0..2] each point to n floats; inputs is NULL
    (all defaults) or inputs[s] points to n floats (or is NULL: that slot's
-   default). Returns the number of invalid lanes (non-finite or non-unit
-   directions, non-finite inputs or parameters); their rgb is 0. */
+   default). Inputs are clamped to their declared ranges in the kernel; a
+   caller holding a value beyond float (say 1e39 for an input in 0 .. 1)
+   clamps it in double before converting it to float.
+   Returns the number of invalid lanes (non-finite or non-unit directions,
+   non-finite inputs, a model parameter not finite in float, or a result
+   float cannot hold); their rgb is 0, on every backend alike.
+   Returns -1 -- never a lane count -- for a NULL kernel, n < 0, or a NULL
+   wi, wo or rgb (or a NULL entry of one); facet_last_error() then says
+   which. n = 0 returns 0 (the pointers are not read). */
 int64_t facet_eval_batch(const facet_kernel* k, int64_t n, const float* const wi[3], const float* const wo[3],
                          const float* const* inputs, float* const rgb[3]);
+/* facet_eval_batch, and status[i] (status points to n bytes) set to 1 for
+   each invalid lane and 0 for each valid one. status may be NULL. */
+int64_t facet_eval_batch_status(const facet_kernel* k, int64_t n, const float* const wi[3],
+                                const float* const wo[3], const float* const* inputs, float* const rgb[3],
+                                uint8_t* status);
+/* The message of the last batch call that returned -1 in this thread
+   ("facet_eval_batch: error: wi[2] is NULL"); "" before any. Valid until
+   the next failing call in this thread. */
+const char* facet_last_error(void);
 
 void facet_release(facet_kernel* k);
 
