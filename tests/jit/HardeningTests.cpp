@@ -208,8 +208,8 @@ TEST_CASE("table cache: a group-writable directory is refused; the table is buil
     auto dir = std::make_shared<CacheDirectory>(scratch.str(), [&](const std::string& m) { warnings.push_back(m); });
     TableCache cache(dir, "tables");
     EnergyTableKey key;
-    key.ndf = NdfModel::Ggx;
-    key.masking = MaskingModel::SmithHeightCorrelated;
+    key.ndf = &ndfEntry(modelNamed(ModelSlot::Ndf, "ggx"));
+    key.masking = &maskingEntry(modelNamed(ModelSlot::Masking, "smith_height_correlated"));
     auto table = cache.get(key);
     REQUIRE(table);
     CHECK(table->validate() == "");
@@ -218,7 +218,7 @@ TEST_CASE("table cache: a group-writable directory is refused; the table is buil
     CHECK(cache.events().at(0).reason.rfind("refused: ", 0) == 0);
     CHECK(entries(scratch.path).empty());
     // A second table: no second warning.
-    key.ndf = NdfModel::Beckmann;
+    key.ndf = &ndfEntry(modelNamed(ModelSlot::Ndf, "beckmann"));
     cache.get(key);
     CHECK(warnings.size() == 1);
 }

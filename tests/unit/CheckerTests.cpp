@@ -220,8 +220,8 @@ TEST_CASE("omitted slots default to none") {
     const CheckedMaterial& m = prog.materials[0];
     CHECK(std::string(m.masking.model->name) == "none");
     CHECK(std::string(m.fresnel.model->name) == "none");
-    CHECK(m.energyModel() == EnergyModel::None);
-    CHECK(m.diffuseModel() == DiffuseModel::None);
+    CHECK(std::string(m.energy.model->name) == "none");
+    CHECK(std::string(m.diffuse.model->name) == "none");
 }
 
 TEST_CASE("diagnostics: rendering, ordering, the error limit, the whole-file form") {
