@@ -22,10 +22,7 @@ namespace facet {
 // anisotropic lobe.
 template <typename Real>
 double energyAlpha(const ResolvedMaterial<Real>& r) {
-    ModelArgs<double> args;
-    for (int p = 0; p < kMaxModelParams; ++p)
-        for (int ch = 0; ch < 3; ++ch) args.value[p][ch] = double(r.ndfArgs.value[p][ch]);
-    std::array<double, 2> a = r.ndf->equivalentAlphas(args);
+    std::array<double, 2> a = r.ndf->equivalentAlphas(convertArgs<double>(r.ndfArgs));
     return a[0] == a[1] ? a[0] : std::sqrt(a[0] * a[1]);
 }
 

@@ -122,6 +122,17 @@ struct ModelArgs {
     void set(int p, Real x) { value[p] = {x, x, x}, given[p] = true; }
 };
 
+// The same arguments in another real type, each value converted.
+template <typename To, typename From>
+ModelArgs<To> convertArgs(const ModelArgs<From>& a) {
+    ModelArgs<To> out;
+    for (int p = 0; p < kMaxModelParams; ++p)
+        for (int ch = 0; ch < 3; ++ch) out.value[p][ch] = To(a.value[p][ch]);
+    out.given = a.given;
+    for (size_t i = 0; i < a.derived.size(); ++i) out.derived[i] = To(a.derived[i]);
+    return out;
+}
+
 template <typename Real>
 struct ResolvedMaterial;
 

@@ -31,10 +31,7 @@ void checkNdfFormulas(const NdfEntry& ndf) {
     std::vector<double> shape;
     for (int p : ndf.tableShapeParams) shape.push_back(ndf.canonical[p].typical);
     ModelArgs<double> a = ndf.argsAtAlpha(0.3, shape);
-    ModelArgs<Real> args;
-    for (int p = 0; p < kMaxModelParams; ++p)
-        for (int ch = 0; ch < 3; ++ch) args.value[p][ch] = Real(a.value[p][ch]);
-    args.given = a.given;
+    ModelArgs<Real> args = convertArgs<Real>(a);
     const NdfFormulas<Real>& f = ndf.formulas.template get<Real>();
     f.derive(args);
     Vec3<Real> n{0, 0, 1}, grazing{Real(0.9999995), 0, Real(0.001)};
