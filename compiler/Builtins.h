@@ -1,10 +1,11 @@
-// Builtins: the one table of built-in functions and models of the language.
+// Builtins: the one table of built-in functions of the language.
 //
 // The checker, the reference interpreter and the JIT lowering all read the
 // function table, so a function is declared exactly once: its name, its
 // parameters and their types, and its scalar semantics in any real type.
-// Models live in the model catalog (models/ModelCatalog.h); the enums and
-// parameter indices below are the lowering's view of them.
+// Models live in the model catalog (models/ModelCatalog.h): their
+// reference formulas in the entries, their IR in the entries' emitters
+// (lowering/TermEmitters.h).
 #pragma once
 
 #include "AST.h"
@@ -67,40 +68,6 @@ Real applyBuiltin(BuiltinFn fn, const Real* a) {
     }
     return Real(0) / Real(0);  // unreachable for checked input
 }
-
-// ---- models --------------------------------------------------------------
-
-enum class NdfModel { Ggx, Beckmann, BlinnPhong, Gtr, Gaussian, Ward };
-enum class MaskingModel {
-    None, Implicit, CookTorrance, Kelemen, Neumann, SchlickSmith, SmithSeparable,
-    SmithHeightCorrelated, SmithDirectionCorrelated, SmithHeightDirectionCorrelated,
-};
-enum class FresnelModel { None, Schlick, Dielectric, Conductor };
-enum class EnergyModel { None, KullaConty };
-enum class DiffuseModel { None, Lambert };
-
-// Canonical parameter indices per model: checked model uses store their
-// argument expressions in this order, whatever form the user wrote.
-namespace param {
-// ggx, beckmann, ward
-constexpr int AlphaX = 0, AlphaY = 1;
-// blinn_phong
-constexpr int Exponent = 0;
-// gtr
-constexpr int GtrAlpha = 0, GtrGamma = 1;
-// gaussian
-constexpr int GaussianAlpha = 0;
-// schlick_smith
-constexpr int SchlickK = 0;
-// schlick: exactly one of F0, Eta is set
-constexpr int F0 = 0, SchlickEta = 1;
-// dielectric
-constexpr int DielectricEta = 0;
-// conductor
-constexpr int ConductorEta = 0, ConductorK = 1;
-// lambert
-constexpr int Albedo = 0;
-}  // namespace param
 
 constexpr double kUnitTolerance = 1e-3;   // SPEC 2: |len(w) - 1| allowed
 

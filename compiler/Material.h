@@ -51,11 +51,6 @@ struct CheckedMaterial {
     ModelUse ndf, masking, fresnel, energy, diffuse;
     int slotCount = 0;
 
-    NdfModel ndfModel() const { return NdfModel(ndf.model->id); }
-    MaskingModel maskingModel() const { return MaskingModel(masking.model->id); }
-    FresnelModel fresnelModel() const { return FresnelModel(fresnel.model->id); }
-    EnergyModel energyModel() const { return EnergyModel(energy.model->id); }
-    DiffuseModel diffuseModel() const { return DiffuseModel(diffuse.model->id); }
     // Multiple-scattering compensation from a tabulated albedo (kulla_conty).
     bool compensatesEnergy() const { return energy.model && energyEntry(*energy.model).compensates; }
 

@@ -2,6 +2,7 @@
 #include "Kernel.h"
 
 #include "CacheFiles.h"
+#include "CodegenIdentity.h"
 #include "Checker.h"
 #include "Interpreter.h"
 #include "Jit.h"
@@ -31,10 +32,6 @@
 #include <fmt/format.h>
 
 namespace facet {
-
-// Changes whenever the lowering is rebuilt, so that a disk cache never
-// serves objects produced by older code generation.
-extern const char* const kLoweringBuildStamp;
 
 const char* backendName(Backend b) {
     switch (b) {
@@ -525,13 +522,13 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
 
     // The cache key: what the kernel computes (the specialized material,
     // printed), how (options incl. tolerance, width), and with what (LLVM,
-    // CPU, codegen build and optimization pipeline).
+    // CPU, code generator (CodegenIdentity.h) and optimization pipeline).
     std::string tableId = kernel->energyTable_ ? fmt::format("{}/v{}/{}", kernel->energyTable_->key.name(),
                                                              kEnergyTableVersion, kernel->energyTable_->quadrature.describe())
                                                : "";
     std::string keyText = fmt::format("{}|{}|w{}|{}|{}|{}|{}|{}|{}", printMaterial(kernel->material_),
                                       options.canonical(), lowering.width, LLVM_VERSION_STRING, jit_->cpuName(),
-                                      jit_->cpuFeatures(), kLoweringBuildStamp, FacetJit::kPipelineId, tableId);
+                                      jit_->cpuFeatures(), codegenIdentity(), FacetJit::kPipelineId, tableId);
     auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(keyText));
     std::string key = llvm::toHex(digest, true);
     std::string prefix = "facet_" + key.substr(0, 16);
@@ -721,7 +718,7 @@ std::optional<AotKernel> Compiler::compileAot(const CheckedMaterial& material, c
 }
 
 std::string Compiler::irText(const std::string& path, const std::string& name, const CompileOptions& options,
-                             bool simd, bool stages, DiagnosticEngine& diags) {
+                             bool simd, IrOutput output, DiagnosticEngine& diags) {
     CheckedProgram program = loadProgramFile(path, diags);
     if (diags.hasErrors()) return "";
     const CheckedMaterial* material = program.find(name);
@@ -734,18 +731,28 @@ std::string Compiler::irText(const std::string& path, const std::string& name, c
     std::shared_ptr<const EnergyTable> table;
     if (specialized.compensatesEnergy()) table = tables_->getFor(specialized);
     LoweringOptions lowering = loweringOptionsFor(options, table.get(), simd, resolveWidth(options));
+    LoweringPlan plan = planLowering(specialized, lowering.variant, lowering.x86Target);
+    if (output == IrOutput::Plan) return printPlan(specialized, plan);
+    const bool stages = output == IrOutput::Stages;
     std::string out;
     llvm::raw_string_ostream os(out);
     if (stages) {
         os << "; ==== stage 1: checked material\n" << printMaterial(*material);
         os << "; ==== stage 2: specialized material (" << options.bindings.size() << " inputs bound)\n"
            << printMaterial(specialized);
+        os << "; ==== stage 3: lowering plan\n";
+        std::string planText = printPlan(specialized, plan);
+        for (size_t start = 0; start < planText.size();) {
+            size_t end = planText.find('\n', start);
+            os << "; " << planText.substr(start, end - start) << "\n";
+            start = end == std::string::npos ? planText.size() : end + 1;
+        }
     }
     llvm::LLVMContext context;
     LoweredModule lowered = lowerMaterial(specialized, lowering, context, "facet_" + specialized.name);
-    if (stages) os << "; ==== stage 3: lowered IR (verified, unoptimized)\n" << *lowered.module;
+    if (stages) os << "; ==== stage 4: lowered IR (verified, unoptimized)\n" << *lowered.module;
     jit_->optimize(*lowered.module);
-    if (stages) os << "; ==== stage 4: optimized IR\n";
+    if (stages) os << "; ==== stage 5: optimized IR\n";
     os << *lowered.module;
     return os.str();
 }

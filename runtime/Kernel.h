@@ -187,10 +187,12 @@ public:
                                         llvm::TargetMachine& target, int width, const std::string& prefix,
                                         AotOutput output, DiagnosticEngine& diags);
 
-    // The optimized IR of a material, for `facet ir`. With `stages`, also the
-    // checked and specialized material and the IR before optimization.
+    // What `facet ir` prints: the optimized IR; every stage (the checked and
+    // specialized material, the lowering plan, the IR before and after
+    // optimization); or only the lowering plan.
+    enum class IrOutput { Optimized, Stages, Plan };
     std::string irText(const std::string& path, const std::string& name, const CompileOptions& options,
-                       bool simd, bool stages, DiagnosticEngine& diags);
+                       bool simd, IrOutput output, DiagnosticEngine& diags);
 
     // Blocks until every tier-up queued so far is done (its kernel switched,
     // the caches filled).

@@ -3,7 +3,7 @@
 //   facet check FILE...
 //   facet eval FILE [--material NAME] [--backend interp|scalar|simd] [--math exact|fast]
 //              [--width 4|8|16] [--set NAME=VALUE]... --in IN.csv [--out OUT.csv]
-//   facet ir FILE [--material NAME] [--simd] [--stages] [--set NAME=VALUE]...
+//   facet ir FILE [--material NAME] [--simd] [--stages | --plan] [--set NAME=VALUE]...
 //   facet lut | bench | verify | render | build ...  (in their own files, Commands.h)
 //
 // Exit codes: 0 ok, 1 a check failed (e.g. invalid rows), 2 usage,
@@ -35,8 +35,9 @@ const char* kUsage =
     "  eval FILE --in IN.csv [--out OUT.csv] [--material NAME] [--backend interp|scalar|simd]\n"
     "       [--math exact|fast] [--width 4|8|16] [--set NAME=VALUE]...\n"
     "                                      evaluate the BRDF for each CSV row\n"
-    "  ir FILE [--material NAME] [--simd] [--stages] [--math exact|fast] [--width N] [--set NAME=VALUE]...\n"
-    "                                      print the optimized LLVM IR (--stages: every stage)\n"
+    "  ir FILE [--material NAME] [--simd] [--stages|--plan] [--math exact|fast] [--width N] [--set NAME=VALUE]...\n"
+    "                                      print the optimized LLVM IR (--stages: every stage;\n"
+    "                                      --plan: only the lowering plan)\n"
     "  lut FILE [--material NAME] -o TABLES.exr   write the Kulla-Conty E/E_avg tables (EXR)\n"
     "  bench FILE... [--out DIR] [--json] [--quick]   speed against error (bench.md/.json/.png)\n"
     "  verify FILE... [--material NAME] [--verbose]   hard cases, backends and physics (SPEC 7)\n"
@@ -337,7 +338,8 @@ int cmdEval(const std::vector<std::string>& args) {
 
 int cmdIr(const std::vector<std::string>& args) {
     EvalOptions opt;
-    bool simd = false, stages = false;
+    bool simd = false;
+    Compiler::IrOutput output = Compiler::IrOutput::Optimized;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         auto value = [&]() -> const std::string& {
@@ -346,7 +348,12 @@ int cmdIr(const std::vector<std::string>& args) {
         };
         if (a == "--material") opt.material = value();
         else if (a == "--simd") simd = true;
-        else if (a == "--stages") stages = true;
+        else if (a == "--stages" || a == "--plan") {
+            Compiler::IrOutput wanted = a == "--plan" ? Compiler::IrOutput::Plan : Compiler::IrOutput::Stages;
+            if (output != Compiler::IrOutput::Optimized && output != wanted)
+                throw UsageError{"ir: --stages and --plan exclude each other"};
+            output = wanted;
+        }
         else if (a == "--set") parseSet(value(), opt.bindings);
         else if (a == "--math") opt.math = value();
         else if (a == "--width") opt.width = value();
@@ -368,7 +375,7 @@ int cmdIr(const std::vector<std::string>& args) {
     if (!material) throw UsageError{fmt::format("ir: no material named '{}' in {}", opt.material, opt.file)};
     checkBindings(*material, opt.bindings);
     Compiler compiler;
-    std::string ir = compiler.irText(opt.file, opt.material, options, simd, stages, diags);
+    std::string ir = compiler.irText(opt.file, opt.material, options, simd, output, diags);
     if (diags.hasErrors()) {
         std::fputs(diags.str().c_str(), stderr);
         return kExitMaterialError;

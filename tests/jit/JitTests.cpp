@@ -264,7 +264,7 @@ TEST_CASE("SIMD kernels keep their math vectorized: no libm calls") {
     Compiler c;
     DiagnosticEngine d;
     CompileOptions o = opts("backend=simd");
-    std::string ir = c.irText(path, "", o, true, false, d);
+    std::string ir = c.irText(path, "", o, true, Compiler::IrOutput::Optimized, d);
     REQUIRE_MESSAGE(!d.hasErrors(), d.str());
     size_t calls = 0, vectorOps = 0;
     // The host's width: 16 lanes with AVX-512, 8 with AVX2, else 4.
@@ -390,7 +390,7 @@ TEST_CASE("guarded fast SIMD: unscaled Smith forms where the range guards allow,
         DiagnosticEngine d;
         CheckedProgram p = loadProgramText(text, "t.mat", d);
         REQUIRE_MESSAGE(!d.hasErrors(), d.str());
-        return guardedFastApplies(p.materials[0], variant);
+        return planLowering(p.materials[0], variant, true).batchBodies == BatchBodies::GuardedFast;
     };
     CHECK(applies(ggx));
     CHECK(applies(kGold));  // fast mode computes the conductor in float anyway
@@ -519,7 +519,7 @@ TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the p
         DiagnosticEngine d;
         CheckedProgram p = loadProgramText(text, "t.mat", d);
         REQUIRE_MESSAGE(!d.hasErrors(), d.str());
-        return floatFirstApplies(p.materials[0], MathVariant::exact());
+        return planLowering(p.materials[0], MathVariant::exact(), true).batchBodies == BatchBodies::FloatFirst;
     };
     CHECK(applies(ggx));
     CHECK_FALSE(applies(kGold));  // conductor eta is an input: ill-conditioned regions possible

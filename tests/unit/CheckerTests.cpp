@@ -64,7 +64,7 @@ TEST_CASE("expression types: float, rgb, and float promoting to rgb") {
     CHECK(letNamed(m, "p").value->type == ValueType::Float);
     CHECK(m.inputs[0].type == ValueType::Rgb);
     CHECK(std::string(m.fresnel.model->name) == "schlick");
-    CHECK(m.diffuseModel() == DiffuseModel::Lambert);
+    CHECK(std::string(m.diffuse.model->name) == "lambert");
 }
 
 TEST_CASE("rgb where a float is required is a type error") {

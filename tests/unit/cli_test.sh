@@ -400,6 +400,16 @@ expect_first_line "$err" "facet: --set alpha: given twice" "a repeated --set: me
 run "$FACET" ir test.mat --set nosuch=1
 expect_rc 2 "ir --set of an unknown input: the same exit code as eval"
 expect_first_line "$err" "facet: --set: material 'test' has no input 'nosuch'" "ir --set nosuch: message"
+# ir --plan: the lowering plan of the material, one decision per line.
+run "$FACET" ir test.mat --simd --plan
+expect_rc 0 "ir --plan"
+expect_eq "$(printf '%s\n' "$out" | grep -E '^(batch-bodies|smith-lambda|flush-denormals):')" \
+    "batch-bodies: float-first"$'\n'"smith-lambda: none"$'\n'"flush-denormals: no" "ir --plan: the decisions"
+run "$FACET" ir test.mat --simd --plan --math fast
+expect_eq "$(printf '%s\n' "$out" | grep -E '^batch-bodies:')" "batch-bodies: guarded-fast" "ir --plan --math fast"
+run "$FACET" ir test.mat --plan --stages
+expect_rc 2 "ir --plan with --stages"
+expect_first_line "$err" "facet: ir: --stages and --plan exclude each other" "ir --plan --stages: message"
 run "$FACET" render test.mat -o r.png --set nosuch=1 --size 16
 expect_rc 2 "render --set of an unknown input: the same exit code as eval"
 run "$FACET" eval test.mat --math fast --in dirs.csv

@@ -1,0 +1,51 @@
+// CodegenIdentity: the code generator's part of the kernel cache key (see
+// CodegenIdentity.h).
+#include "CodegenIdentity.h"
+
+#include "TermEmitters.h"
+
+#include <llvm/ADT/StringExtras.h>
+#include <llvm/Config/llvm-config.h>
+#include <llvm/Support/SHA256.h>
+
+#include <fmt/format.h>
+
+#include "CodegenSourceDigest.inc"  // kCodegenSourceDigest, kCodegenSourceList
+
+namespace facet {
+
+const char* codegenSourceDigest() { return kCodegenSourceDigest; }
+const char* codegenSourceList() { return kCodegenSourceList; }
+
+std::vector<EmbeddedTable> embeddedTables() {
+    std::vector<EmbeddedTable> all;
+    for (const TermEmitterEntry& e : termEmitterRegistry())
+        if (e.tables)
+            for (const EmbeddedTable& t : e.tables()) {
+                bool seen = false;  // entries of one file may share a table
+                for (const EmbeddedTable& a : all) seen |= a.name == t.name;
+                if (!seen) all.push_back(t);
+            }
+    return all;
+}
+
+std::string codegenIdentity(std::string_view sourceDigest, const std::vector<EmbeddedTable>& tables) {
+    llvm::SHA256 hash;
+    for (const EmbeddedTable& t : tables) {
+        // name, size, bytes: a renamed or resized table changes the digest too.
+        hash.update(t.name);
+        hash.update(llvm::StringRef("\0", 1));
+        hash.update(fmt::format("{}", t.bytes));
+        hash.update(llvm::ArrayRef<uint8_t>(static_cast<const uint8_t*>(t.data), t.bytes));
+    }
+    std::array<uint8_t, 32> digest = hash.final();
+    return fmt::format("codegen v{}; sources {}; tables {}; llvm {}", kCodegenVersion, sourceDigest,
+                       llvm::toHex(digest, true), LLVM_VERSION_STRING);
+}
+
+const std::string& codegenIdentity() {
+    static const std::string identity = codegenIdentity(kCodegenSourceDigest, embeddedTables());
+    return identity;
+}
+
+}  // namespace facet

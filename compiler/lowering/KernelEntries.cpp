@@ -1,0 +1,401 @@
+// KernelEntries: the scalar and batch entry points of a kernel module
+// around the lane bodies (LaneEmitter), and lowerMaterial(), which plans the
+// material and emits both.
+//
+// The batch entry loops over vectors of `width` lanes; the lane bodies are
+// the plan's (LoweringPlan::batchBodies): one plain body, or a guarded first
+// body and a cold fallback function for the lanes it distrusts.
+#include "Lowering.h"
+
+#include "Diagnostics.h"
+#include "LaneEmitter.h"
+
+#include <llvm/IR/Constants.h>
+#include <llvm/IR/IRBuilder.h>
+#include <llvm/IR/IntrinsicsX86.h>
+#include <llvm/IR/MDBuilder.h>
+#include <llvm/IR/Verifier.h>
+#include <llvm/Support/raw_ostream.h>
+
+namespace facet {
+namespace {
+
+// A module's lowering inputs: the material, its plan, the options.
+struct KernelContext {
+    const CheckedMaterial& material;
+    const LoweringPlan& plan;
+    const LoweringOptions& options;
+};
+
+
+// Builds the constant global array of slot defaults, `count` copies of
+// each slot's default (the batch kernel reads `width` lanes of a default
+// with stride 0; the scalar kernel reads one).
+llvm::GlobalVariable* defaultsArray(llvm::Module& module, const std::vector<float>& values, const std::string& name) {
+    auto* arr = llvm::ConstantDataArray::get(module.getContext(), values);
+    return new llvm::GlobalVariable(module, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
+}
+
+void addKernelAttributes(llvm::Function* fn, int width, const BodyPlan& body) {
+    if (body.estimates) fn->addFnAttr("reciprocal-estimates", "div:1,vec-div:1,sqrt:1,vec-sqrt:1");
+    fn->addFnAttr(llvm::Attribute::NoUnwind);
+    fn->addFnAttr(llvm::Attribute::NoFree);
+    fn->addFnAttr(llvm::Attribute::WillReturn);
+    // Explicit 512-bit vectors should stay in zmm registers even on CPUs
+    // whose default preference is 256-bit.
+    std::string bits = std::to_string(width * 32);
+    fn->addFnAttr("min-legal-vector-width", bits);
+    fn->addFnAttr("prefer-vector-width", bits);
+}
+
+// Fast mode runs with subnormals flushed to zero (x86: MXCSR FTZ and DAZ
+// for the duration of the call, restored on return), as -ffast-math code
+// does. A subnormal operand or result costs a microcode assist of ~100
+// cycles, and fast kernels produce them routinely in NDF and Smith tails.
+// Exact mode keeps IEEE subnormals: a float-subnormal n.w is a valid input
+// there. The plan decides (LoweringPlan::flushDenormals).
+class DenormalFlush {
+public:
+    DenormalFlush(llvm::IRBuilder<>& b, llvm::Function* fn, const LoweringPlan& plan) : b_(b) {
+        if (!plan.flushDenormals) return;
+        fn->addFnAttr("denormal-fp-math", "preserve-sign,preserve-sign");
+        saved_ = b.CreateAlloca(b.getInt32Ty(), nullptr, "mxcsr.saved");
+        llvm::Value* flushed = b.CreateAlloca(b.getInt32Ty(), nullptr, "mxcsr.flushed");
+        b.CreateIntrinsic(llvm::Intrinsic::x86_sse_stmxcsr, {}, {saved_});
+        llvm::Value* bits = b.CreateLoad(b.getInt32Ty(), saved_);
+        b.CreateStore(b.CreateOr(bits, b.getInt32(0x8040)), flushed);  // FTZ (bit 15) | DAZ (bit 6)
+        b.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {flushed});
+    }
+    // Emits the restore at the current insertion point (before each return).
+    void restore() {
+        if (saved_) b_.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {saved_});
+    }
+
+private:
+    llvm::IRBuilder<>& b_;
+    llvm::Value* saved_ = nullptr;
+};
+
+// The lane body of the batch entry, for lanes of type `laneTy`
+// (<W x float>). A two-body kernel (BatchBodies::FloatFirst: exact, guarded
+// float body and precise body; BatchBodies::GuardedFast: fast, guarded body
+// with the unscaled Smith forms and the plain fast body) runs the guarded body and,
+// only if some lane of the vector is untrusted, calls the other body (named
+// .precise in both cases) and keeps its values for those lanes. Each lane's
+// value is decided by the lane alone, never by its neighbours in the vector,
+// so a direction pair gives the same result in any batch.
+LaneEmitter::Result emitLanes(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type* laneTy, llvm::Module& module,
+                              const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
+                              const std::vector<llvm::Value*>& slots) {
+    const LoweringPlan& plan = k.plan;
+    LaneEmitter firstLanes(k.material, plan, plan.batchBody, k.options.energyTable, b, laneTy, module);
+    if (plan.batchBodies == BatchBodies::Plain) return firstLanes.emit(wi, wo, slots);
+    internal_assert(plan.fallbackBody) << "a guarded batch body without a fallback body";
+    LaneEmitter::Result fl = firstLanes.emit(wi, wo, slots);
+
+    llvm::LLVMContext& ctx = module.getContext();
+    llvm::Function* fn = b.GetInsertBlock()->getParent();
+    llvm::Value* anyUntrusted = fl.untrusted;
+    if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(fl.untrusted->getType())) {
+        llvm::Value* bits = b.CreateBitCast(fl.untrusted, b.getIntNTy(unsigned(vt->getNumElements())));
+        anyUntrusted = b.CreateICmpNE(bits, llvm::ConstantInt::get(bits->getType(), 0));
+    }
+    // The fallback body is a cold function of its own, called only when
+    // needed, so that its code does not take part in the hot loop's register
+    // allocation and layout. It is optnone: our own pipeline still runs on
+    // it, but codegen selects it at -O0 and skips the machine
+    // optimizations, which shortens a cold compile by a few milliseconds
+    // and leaves the outputs bit-identical and batches of untrusted lanes
+    // as fast as before (docs/perf-log.md).
+    std::vector<llvm::Type*> argTypes(6 + slots.size(), laneTy);
+    llvm::Type* maskTy = fl.invalid->getType();
+    auto* resultTy = llvm::StructType::get(ctx, {laneTy, laneTy, laneTy, maskTy});
+    auto* preciseFn = llvm::Function::Create(llvm::FunctionType::get(resultTy, argTypes, false),
+                                             llvm::Function::InternalLinkage, fn->getName() + ".precise", module);
+    preciseFn->setCallingConv(llvm::CallingConv::Fast);
+    addKernelAttributes(preciseFn, laneTy->isVectorTy() ? int(llvm::cast<llvm::FixedVectorType>(laneTy)->getNumElements()) : 1,
+                        *plan.fallbackBody);
+    preciseFn->addFnAttr(llvm::Attribute::NoInline);
+    preciseFn->addFnAttr(llvm::Attribute::Cold);
+    preciseFn->addFnAttr(llvm::Attribute::OptimizeNone);
+    if (plan.flushDenormals) preciseFn->addFnAttr("denormal-fp-math", "preserve-sign,preserve-sign");
+    {
+        llvm::IRBuilder<> pb(llvm::BasicBlock::Create(ctx, "entry", preciseFn));
+        std::array<llvm::Value*, 3> pwi, pwo;
+        std::vector<llvm::Value*> pslots;
+        for (int i = 0; i < 3; ++i) pwi[i] = preciseFn->getArg(i), pwo[i] = preciseFn->getArg(3 + i);
+        for (size_t k = 0; k < slots.size(); ++k) pslots.push_back(preciseFn->getArg(unsigned(6 + k)));
+        LaneEmitter preciseLanes(k.material, plan, *plan.fallbackBody, k.options.energyTable, pb, laneTy, module);
+        LaneEmitter::Result pr = preciseLanes.emit(pwi, pwo, pslots);
+        llvm::Value* agg = llvm::UndefValue::get(resultTy);
+        for (unsigned c = 0; c < 3; ++c) agg = pb.CreateInsertValue(agg, pr.rgb[c], c);
+        agg = pb.CreateInsertValue(agg, pr.invalid, 3);
+        pb.CreateRet(agg);
+    }
+    auto* precise = llvm::BasicBlock::Create(ctx, "precise.lanes", fn);
+    auto* done = llvm::BasicBlock::Create(ctx, "lanes.done", fn);
+    llvm::BasicBlock* floatEnd = b.GetInsertBlock();
+    // Untrusted lanes are rare in renderer batches.
+    b.CreateCondBr(anyUntrusted, precise, done, llvm::MDBuilder(ctx).createBranchWeights(1, 1000));
+
+    b.SetInsertPoint(precise);
+    std::vector<llvm::Value*> args(wi.begin(), wi.end());
+    args.insert(args.end(), wo.begin(), wo.end());
+    args.insert(args.end(), slots.begin(), slots.end());
+    llvm::CallInst* call = b.CreateCall(preciseFn, args);
+    call->setCallingConv(llvm::CallingConv::Fast);
+    LaneEmitter::Result mixed;
+    for (unsigned c = 0; c < 3; ++c) mixed.rgb[c] = b.CreateSelect(fl.untrusted, b.CreateExtractValue(call, c), fl.rgb[c]);
+    // Invalid lanes are untrusted, so the precise body's mask is the whole answer.
+    mixed.invalid = b.CreateExtractValue(call, 3);
+    b.CreateBr(done);
+
+    b.SetInsertPoint(done);
+    LaneEmitter::Result out;
+    for (int c = 0; c < 3; ++c) {
+        llvm::PHINode* phi = b.CreatePHI(laneTy, 2, "rgb");
+        phi->addIncoming(fl.rgb[c], floatEnd);
+        phi->addIncoming(mixed.rgb[c], precise);
+        out.rgb[c] = phi;
+    }
+    llvm::PHINode* inv = b.CreatePHI(maskTy, 2, "invalid");
+    inv->addIncoming(fl.invalid, floatEnd);
+    inv->addIncoming(mixed.invalid, precise);
+    out.invalid = inv;
+    out.untrusted = llvm::Constant::getNullValue(inv->getType());
+    return out;
+}
+
+// The scalar kernel: `<name>_status` computes one lane and returns 1 if it
+// was invalid; `<name>` is the SPEC's void entry point, a thin wrapper.
+void emitScalarEntry(const KernelContext& k, llvm::Module& module, const std::string& name) {
+    const CheckedMaterial& mat = k.material;
+    llvm::LLVMContext& ctx = module.getContext();
+    llvm::IRBuilder<> b(ctx);
+    llvm::Type* ptr = b.getPtrTy();
+    auto* statusTy = llvm::FunctionType::get(b.getInt32Ty(), {ptr, ptr, ptr, ptr}, false);
+    auto* fn = llvm::Function::Create(statusTy, llvm::Function::ExternalLinkage, name + "_status", module);
+    addKernelAttributes(fn, 1, k.plan.scalarBody);
+    b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", fn));
+    DenormalFlush flush(b, fn, k.plan);
+    llvm::Value *wiP = fn->getArg(0), *woP = fn->getArg(1), *inP = fn->getArg(2), *outP = fn->getArg(3);
+    llvm::Type* f32 = b.getFloatTy();
+    std::array<llvm::Value*, 3> wi, wo;
+    for (int i = 0; i < 3; ++i) {
+        wi[i] = b.CreateLoad(f32, b.CreateConstGEP1_32(f32, wiP, i));
+        wo[i] = b.CreateLoad(f32, b.CreateConstGEP1_32(f32, woP, i));
+    }
+    std::vector<llvm::Value*> slots;
+    if (mat.slotCount > 0) {
+        // inputs == NULL means all defaults: read from a constant array instead.
+        std::vector<double> d = mat.defaultSlots();
+        auto* defaults = defaultsArray(module, std::vector<float>(d.begin(), d.end()), name + ".defaults");
+        llvm::Value* base = b.CreateSelect(b.CreateIsNull(inP), defaults, inP);
+        for (int s = 0; s < mat.slotCount; ++s) slots.push_back(b.CreateLoad(f32, b.CreateConstGEP1_32(f32, base, s)));
+    }
+    // The scalar kernel computes the precise body directly: per lane, float
+    // arithmetic is no faster than double except for division and square
+    // root, and the guards would cost more than they save (measured: GGX
+    // 47 ns/eval precise, 56 ns float-first).
+    LaneEmitter lanes(mat, k.plan, k.plan.scalarBody, k.options.energyTable, b, f32, module);
+    LaneEmitter::Result r = lanes.emit(wi, wo, slots);
+    for (int i = 0; i < 3; ++i) b.CreateStore(r.rgb[i], b.CreateConstGEP1_32(f32, outP, i));
+    flush.restore();
+    b.CreateRet(b.CreateZExt(r.invalid, b.getInt32Ty()));
+
+    auto* voidTy = llvm::FunctionType::get(b.getVoidTy(), {ptr, ptr, ptr, ptr}, false);
+    auto* entry = llvm::Function::Create(voidTy, llvm::Function::ExternalLinkage, name, module);
+    addKernelAttributes(entry, 1, k.plan.scalarBody);
+    b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", entry));
+    b.CreateCall(fn, {entry->getArg(0), entry->getArg(1), entry->getArg(2), entry->getArg(3)});
+    b.CreateRetVoid();
+}
+
+void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::string& name) {
+    const CheckedMaterial& mat = k.material;
+    llvm::LLVMContext& ctx = module.getContext();
+    llvm::IRBuilder<> b(ctx);
+    const int W = k.options.width;
+    llvm::Type* ptr = b.getPtrTy();
+    llvm::Type* i64 = b.getInt64Ty();
+    llvm::Type* f32 = b.getFloatTy();
+    auto* vecTy = llvm::FixedVectorType::get(f32, W);
+    // The sixth argument is the optional per-lane status array (one byte
+    // per lane, 1 = invalid; null: not wanted).
+    auto* fnTy = llvm::FunctionType::get(i64, {i64, ptr, ptr, ptr, ptr, ptr}, false);
+    auto* fn = llvm::Function::Create(fnTy, llvm::Function::ExternalLinkage, name, module);
+    addKernelAttributes(fn, W, k.plan.batchBody);
+    llvm::Value *n = fn->getArg(0), *wiA = fn->getArg(1), *woA = fn->getArg(2), *inA = fn->getArg(3),
+                *outA = fn->getArg(4), *statusA = fn->getArg(5);
+    auto* entry = llvm::BasicBlock::Create(ctx, "entry", fn);
+    auto* header = llvm::BasicBlock::Create(ctx, "loop.header", fn);
+    auto* body = llvm::BasicBlock::Create(ctx, "loop.body", fn);
+    auto* exit = llvm::BasicBlock::Create(ctx, "exit", fn);
+
+    b.SetInsertPoint(entry);
+    DenormalFlush flush(b, fn, k.plan);
+    std::array<llvm::Value*, 3> wiP, woP, outP;
+    for (int i = 0; i < 3; ++i) {
+        wiP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, wiA, i), "wi.ptr");
+        woP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, woA, i), "wo.ptr");
+        outP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, outA, i), "rgb.ptr");
+    }
+    // Per slot: a base pointer and a stride (1 for a caller array, 0 for the
+    // constant array of defaults when inputs or inputs[s] is NULL).
+    std::vector<llvm::Value*> slotBase, slotStep;
+    std::vector<double> defaults = mat.defaultSlots();
+    for (int s = 0; s < mat.slotCount; ++s) {
+        auto* dflt = defaultsArray(module, std::vector<float>(W, float(defaults[s])), name + ".default" + std::to_string(s));
+        llvm::Value* inputsNull = b.CreateIsNull(inA);
+        llvm::Value* slotPtrAddr = b.CreateSelect(inputsNull, dflt, b.CreateConstGEP1_32(ptr, inA, s));
+        // When inputs is NULL, slotPtrAddr points at the defaults (non-null
+        // data), and the loaded "pointer" is discarded below.
+        llvm::Value* loaded = b.CreateLoad(ptr, slotPtrAddr);
+        llvm::Value* useDefault = b.CreateOr(inputsNull, b.CreateIsNull(loaded));
+        slotBase.push_back(b.CreateSelect(useDefault, dflt, loaded));
+        slotStep.push_back(b.CreateSelect(useDefault, llvm::ConstantInt::get(i64, 0), llvm::ConstantInt::get(i64, 1)));
+    }
+
+    auto popcount = [&](llvm::Value* mask) {
+        llvm::Value* bits = b.CreateBitCast(mask, b.getIntNTy(W));
+        llvm::Value* cnt = b.CreateUnaryIntrinsic(llvm::Intrinsic::ctpop, bits);
+        return b.CreateZExt(cnt, i64);
+    };
+
+    // The lane body is emitted once (it is most of the module: emitting it a
+    // second time for the remainder doubled the compile time). The last,
+    // partial chunk is staged through W-lane buffers on the stack: masked
+    // loads fill them (masked-off lanes read the valid direction (0,0,1) and
+    // the slot defaults), the body runs on the buffers, and masked stores
+    // write the valid lanes back.
+    const int streams = 6 + mat.slotCount;  // wi xyz, wo xyz, slots
+    llvm::Value* stageIn = b.CreateAlloca(vecTy, b.getInt32(streams), "stage.in");
+    llvm::Value* stageOut = b.CreateAlloca(vecTy, b.getInt32(3), "stage.out");
+    b.CreateBr(header);
+
+    b.SetInsertPoint(header);
+    llvm::PHINode* i = b.CreatePHI(i64, 2, "i");
+    llvm::PHINode* count = b.CreatePHI(i64, 2, "invalid");
+    i->addIncoming(llvm::ConstantInt::get(i64, 0), entry);
+    count->addIncoming(llvm::ConstantInt::get(i64, 0), entry);
+    llvm::Value* remaining = b.CreateSub(n, i);
+    b.CreateCondBr(b.CreateICmpSGT(remaining, llvm::ConstantInt::get(i64, 0)), body, exit);
+
+    b.SetInsertPoint(body);
+    llvm::Value* partial = b.CreateICmpSLT(remaining, llvm::ConstantInt::get(i64, W));
+    std::vector<llvm::Constant*> laneIds;
+    for (int l = 0; l < W; ++l) laneIds.push_back(llvm::ConstantInt::get(i64, l));
+    // All lanes on a full chunk; the first `remaining` on the last one.
+    llvm::Value* mask = b.CreateICmpSLT(llvm::ConstantVector::get(laneIds), b.CreateVectorSplat(W, remaining));
+    // Source pointers of the chunk: the caller's arrays, or the stage
+    // buffers on the partial chunk (filled below).
+    std::vector<llvm::Value*> streamPtr;
+    std::vector<float> padding;
+    for (int c = 0; c < 3; ++c) {
+        streamPtr.push_back(b.CreateGEP(f32, wiP[c], i));
+        padding.push_back(c == 2 ? 1.0f : 0.0f);
+    }
+    for (int c = 0; c < 3; ++c) {
+        streamPtr.push_back(b.CreateGEP(f32, woP[c], i));
+        padding.push_back(c == 2 ? 1.0f : 0.0f);
+    }
+    for (int s = 0; s < mat.slotCount; ++s) {
+        streamPtr.push_back(b.CreateGEP(f32, slotBase[s], b.CreateMul(i, slotStep[s])));
+        padding.push_back(float(defaults[s]));
+    }
+    auto* stageBlock = llvm::BasicBlock::Create(ctx, "stage", fn);
+    auto* compute = llvm::BasicBlock::Create(ctx, "compute", fn);
+    llvm::BasicBlock* bodyEntry = b.GetInsertBlock();
+    b.CreateCondBr(partial, stageBlock, compute);
+
+    b.SetInsertPoint(stageBlock);
+    std::vector<llvm::Value*> stagePtr;
+    for (int k = 0; k < streams; ++k) {
+        llvm::Value* v = b.CreateMaskedLoad(vecTy, streamPtr[k], llvm::Align(4), mask,
+                                            llvm::ConstantFP::get(vecTy, padding[k]));
+        stagePtr.push_back(b.CreateConstGEP1_32(vecTy, stageIn, k));
+        b.CreateAlignedStore(v, stagePtr.back(), llvm::Align(4));
+    }
+    b.CreateBr(compute);
+
+    b.SetInsertPoint(compute);
+    std::vector<llvm::PHINode*> src;
+    for (int k = 0; k < streams; ++k) {
+        src.push_back(b.CreatePHI(ptr, 2));
+        src.back()->addIncoming(streamPtr[k], bodyEntry);
+        src.back()->addIncoming(stagePtr[k], stageBlock);
+    }
+    std::array<llvm::Value*, 3> wi, wo, out;
+    std::vector<llvm::Value*> slots;
+    for (int k = 0; k < streams; ++k) {
+        llvm::Value* v = b.CreateAlignedLoad(vecTy, src[k], llvm::Align(4));
+        if (k < 3) wi[k] = v;
+        else if (k < 6) wo[k - 3] = v;
+        else slots.push_back(v);
+    }
+    for (int c = 0; c < 3; ++c) out[c] = b.CreateSelect(partial, b.CreateConstGEP1_32(vecTy, stageOut, c),
+                                                        b.CreateGEP(f32, outP[c], i));
+    LaneEmitter::Result r = emitLanes(k, b, vecTy, module, wi, wo, slots);
+    for (int c = 0; c < 3; ++c) b.CreateAlignedStore(r.rgb[c], out[c], llvm::Align(4));
+    llvm::Value* bodyCount = b.CreateAdd(count, popcount(b.CreateAnd(r.invalid, mask)));
+    auto* statusBlock = llvm::BasicBlock::Create(ctx, "status", fn);
+    auto* statusDone = llvm::BasicBlock::Create(ctx, "status.done", fn);
+    auto* unstage = llvm::BasicBlock::Create(ctx, "unstage", fn);
+    auto* latch = llvm::BasicBlock::Create(ctx, "latch", fn);
+    b.CreateCondBr(b.CreateIsNull(statusA), statusDone, statusBlock,
+                   llvm::MDBuilder(ctx).createBranchWeights(1, 1));
+
+    b.SetInsertPoint(statusBlock);
+    b.CreateMaskedStore(b.CreateZExt(r.invalid, llvm::FixedVectorType::get(b.getInt8Ty(), W)),
+                        b.CreateGEP(b.getInt8Ty(), statusA, i), llvm::Align(1), mask);
+    b.CreateBr(statusDone);
+
+    b.SetInsertPoint(statusDone);
+    b.CreateCondBr(partial, unstage, latch);
+
+    b.SetInsertPoint(unstage);
+    for (int c = 0; c < 3; ++c) {
+        llvm::Value* v = b.CreateAlignedLoad(vecTy, b.CreateConstGEP1_32(vecTy, stageOut, c), llvm::Align(4));
+        b.CreateMaskedStore(v, b.CreateGEP(f32, outP[c], i), llvm::Align(4), mask);
+    }
+    b.CreateBr(latch);
+
+    b.SetInsertPoint(latch);
+    i->addIncoming(b.CreateAdd(i, llvm::ConstantInt::get(i64, W)), latch);
+    count->addIncoming(bodyCount, latch);
+    b.CreateBr(header);
+
+    b.SetInsertPoint(exit);
+    llvm::Value* result = count;
+    flush.restore();
+    b.CreateRet(result);
+}
+
+}  // namespace
+
+LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringOptions& options,
+                            llvm::LLVMContext& context, const std::string& symbolPrefix) {
+    internal_assert(options.width == 4 || options.width == 8 || options.width == 16)
+        << "unsupported vector width " << options.width;
+    LoweredModule out;
+    out.plan = planLowering(material, options.variant, options.x86Target);
+    const KernelContext k{material, out.plan, options};
+    out.module = std::make_unique<llvm::Module>(symbolPrefix, context);
+    if (options.emitScalar) {
+        out.scalarSymbol = symbolPrefix + "_scalar";
+        emitScalarEntry(k, *out.module, out.scalarSymbol);
+    }
+    if (options.emitBatch) {
+        out.batchSymbol = symbolPrefix + "_batch";
+        emitBatchEntry(k, *out.module, out.batchSymbol);
+    }
+    std::string errors;
+    llvm::raw_string_ostream os(errors);
+    for (llvm::Function& fn : *out.module)
+        if (!fn.isDeclaration() && llvm::verifyFunction(fn, &os)) internal_error << "invalid IR for " << fn.getName().str() << ": " << os.str();
+    if (llvm::verifyModule(*out.module, &os)) internal_error << "invalid module: " << os.str();
+    return out;
+}
+
+}  // namespace facet
+

@@ -1,0 +1,312 @@
+// LaneEmitter: the checked directions and half vector of a lane, and the
+// assembly of f from the model terms (see LaneEmitter.h).
+#include "LaneEmitter.h"
+
+#include "Diagnostics.h"
+
+#include <cfloat>
+
+namespace facet {
+
+using llvm::Value;
+
+namespace {
+
+llvm::Type* doubleOf(llvm::IRBuilder<>& b, llvm::Type* laneType) {
+    if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(laneType))
+        return llvm::FixedVectorType::get(b.getDoubleTy(), vt->getNumElements());
+    return b.getDoubleTy();
+}
+
+}  // namespace
+
+LaneEmitter::LaneEmitter(const CheckedMaterial& material, const LoweringPlan& plan, const BodyPlan& body,
+                         const EnergyTable* energyTable, llvm::IRBuilder<>& builder, llvm::Type* laneType,
+                         llvm::Module& module)
+    : material(material), plan(plan), body(body), builder(builder), energyTable_(energyTable), module_(module),
+      emitters_(termEmitters(material)), floatMath_(builder, laneType, body.shortPolynomials),
+      preciseMath_(builder, body.precise == Precision::Double ? doubleOf(builder, laneType) : laneType,
+                   body.shortPolynomials),
+      doubleMath_(builder, doubleOf(builder, laneType)) {
+    internal_assert(!body.guarded() || body.precise == Precision::Float)
+        << "a guarded body is the float body of an exact kernel or the body of a fast one";
+    invalid_ = llvm::Constant::getNullValue(boolType());
+    untrusted_ = invalid_;
+    if (body.estimates) {
+        // Lets the backend replace x/sqrt(y) by an rsqrt estimate plus a
+        // Newton step (the kernel's "reciprocal-estimates" attribute). No
+        // nnan/ninf: the NaN and overflow checks must stay exact. Without
+        // ninf LLVM keeps the other divisions and square roots IEEE.
+        // (Explicit rcp14 + Newton for every division was measured mixed:
+        // docs/perf-log.md.)
+        llvm::FastMathFlags fmf;
+        fmf.setAllowReciprocal();
+        fmf.setApproxFunc();
+        fmf.setAllowContract();
+        builder.setFastMathFlags(fmf);
+    }
+}
+
+llvm::Type* LaneEmitter::boolType() {
+    if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(floatMath_.type()))
+        return llvm::FixedVectorType::get(builder.getInt1Ty(), vt->getNumElements());
+    return builder.getInt1Ty();
+}
+
+void LaneEmitter::markInvalid(Value* cond) { invalid_ = builder.CreateOr(invalid_, cond); }
+
+void LaneEmitter::distrust(Value* cond) {
+    if (body.guarded()) untrusted_ = builder.CreateOr(untrusted_, cond);
+}
+
+LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value*, 3> wo,
+                                      const std::vector<Value*>& slots) {
+    LaneGeometry geo = geometry(wi, wo);
+    lowerInputsAndLets(slots);
+
+    MathEmitter& fm = floatMath_;
+    Result r;
+    r.rgb = brdf(geo);
+    // A value that overflows float is an invalid lane, never Inf/NaN, and an
+    // invalid lane's value is 0. A guarded body needs neither: its invalid
+    // lanes are untrusted, so their value and status come from the other
+    // body, and where the plan says its guards bound the value of every
+    // trusted lane (checkOutput off) no trusted lane can be NaN, Inf or
+    // negative.
+    if (body.checkOutput)
+        for (Value*& x : r.rgb) markInvalid(fm.isNanInfOrNegative(x));
+    if (!body.guarded())
+        for (Value*& x : r.rgb) x = fm.select(invalid_, fm.c(0.0), x);
+    r.invalid = invalid_;
+    r.untrusted = builder.CreateOr(untrusted_, invalid_);
+    return r;
+}
+
+// SPEC 2: non-finite or non-unit directions are invalid lanes; valid ones
+// are renormalized. Normalization and the half vector are computed in the
+// precise type (double in exact mode): wi + wo cancels when the directions
+// are nearly opposite, and the float rounding of the renormalization would
+// then decide h (and so D, G and F) by itself. Fast mode keeps them in
+// float (its accuracy at grazing, near-opposite directions is in
+// docs/numerics.md).
+LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& pm = preciseMath_;
+    llvm::IRBuilder<>& b = builder;
+    std::array<Value*, 3> wiD, woD;
+    // A valid direction has |w| within 1e-3 of 1, so 1/|w| = (1 +
+    // delta)^(-1/2), delta = |w|^2 - 1 in [-2e-3, 2e-3], is a polynomial:
+    // the binomial series to delta^6 leaves 0.23 delta^7 < 3e-20, below
+    // double rounding; in float (fast mode) the series to delta^2 leaves
+    // 0.32 delta^3 < 2.6e-9, below float rounding. No square root or
+    // division; lanes outside the range are invalid and their value unused.
+    // |w|^2 in emitter `math` (double in both bodies of an exact kernel, so
+    // their invalid lanes agree); a non-finite or non-unit w marks the lane
+    // invalid. `widened` receives w in math's type. The ordered range test
+    // on |w|^2 is also the finiteness test: a NaN component makes |w|^2 NaN
+    // and an infinite one makes it +inf, and both fail it.
+    auto checkedLength2 = [&](MathEmitter& math, const std::array<Value*, 3>& w, std::array<Value*, 3>& widened) {
+        for (int i = 0; i < 3; ++i) widened[i] = math.convert(w[i], math.type());
+        Value* len2 = math.fma(widened[0], widened[0], math.fma(widened[1], widened[1], math.mul(widened[2], widened[2])));
+        Value* unit = b.CreateAnd(math.ge(len2, math.c((1 - kUnitTolerance) * (1 - kUnitTolerance))),
+                                  math.le(len2, math.c((1 + kUnitTolerance) * (1 + kUnitTolerance))));
+        markInvalid(b.CreateNot(unit));
+        return len2;
+    };
+    // With a double precise type, `unitF` receives the unit w in float too,
+    // as w + w (1/|w| - 1) with one float FMA from the float input and the
+    // correction rounded to float: the same 0.5 ulp as rounding the double
+    // unit w, for one conversion instead of three.
+    auto normalize = [&](const std::array<Value*, 3>& w, std::array<Value*, 3>& out, std::array<Value*, 3>& unitF) {
+        Value* len2 = checkedLength2(pm, w, out);
+        Value* delta = pm.sub(len2, pm.c(1.0));
+        Value* inv = pm.isDouble()
+                         ? pm.poly(delta, {1.0, -1.0 / 2, 3.0 / 8, -5.0 / 16, 35.0 / 128, -63.0 / 256, 231.0 / 1024})
+                         : pm.poly(delta, {1.0, -1.0 / 2, 3.0 / 8});
+        for (Value*& x : out) x = pm.mul(x, inv);
+        if (pm.isDouble()) {
+            Value* corr = fm.convert(pm.sub(inv, pm.c(1.0)), fm.type());
+            for (int i = 0; i < 3; ++i) unitF[i] = fm.fma(w[i], corr, w[i]);
+        }
+    };
+    std::array<Value*, 3> wiF{}, woF{};  // unit directions in float, where normalize() made them
+    std::array<Value*, 3> hD, diff;
+    if (body.role == BodyRole::FloatGuarded) {
+        // Float body. Rounding the normalized directions to float and then
+        // adding them would lose h where wi + wo cancels (error eps/|wi + wo|,
+        // amplified ~2/alpha by D). Instead the float inputs are summed as
+        // they are (each sum rounded relative to itself) and the
+        // normalization enters as a small correction w (1/|w| - 1), whose
+        // own rounding is ~eps times 1e-7. |w|^2 - 1 is taken in double,
+        // where the squares of floats are exact.
+        auto correction = [&](const std::array<Value*, 3>& w) {
+            MathEmitter& dm = doubleMath_;
+            std::array<Value*, 3> widened;
+            Value* len2 = checkedLength2(dm, w, widened);
+            Value* delta = fm.convert(dm.sub(len2, dm.c(1.0)), fm.type());
+            // (1 + delta)^(-1/2) - 1, the series of normalize() to delta^3:
+            // the rest, 0.28 delta^4 <= 5e-12 for |delta| <= 2e-3, is far
+            // below the float rounding of the corrected sums.
+            return fm.mul(delta, fm.poly(delta, {-1.0 / 2, 3.0 / 8, -5.0 / 16}));
+        };
+        Value *ci = correction(wi), *co = correction(wo);
+        for (int i = 0; i < 3; ++i) {
+            wiD[i] = fm.fma(wi[i], ci, wi[i]);
+            woD[i] = fm.fma(wo[i], co, wo[i]);
+            hD[i] = fm.add(fm.add(wi[i], wo[i]), fm.fma(wi[i], ci, fm.mul(wo[i], co)));
+            diff[i] = fm.add(fm.sub(wi[i], wo[i]), fm.fma(wi[i], ci, fm.neg(fm.mul(wo[i], co))));
+        }
+    } else {
+        normalize(wi, wiD, wiF);
+        normalize(wo, woD, woF);
+        hD = {pm.add(wiD[0], woD[0]), pm.add(wiD[1], woD[1]), pm.add(wiD[2], woD[2])};
+        diff = {pm.sub(wiD[0], woD[0]), pm.sub(wiD[1], woD[1]), pm.sub(wiD[2], woD[2])};
+    }
+    const std::array<Value*, 3> hU = hD;  // wi + wo, before normalization
+    Value* hlen2 = pm.fma(hD[0], hD[0], pm.fma(hD[1], hD[1], pm.mul(hD[2], hD[2])));
+    // hlen, cos, 1 - cos and sin^2 are in `halfMath`: the precise type, or
+    // float where the plan keeps the half angle in float.
+    const bool halfInFloat = body.halfVector == HalfVectorForm::InFloat;
+    MathEmitter& halfMath = halfInFloat ? fm : pm;
+    Value *hlen, *cosD, *oneMinusCos;
+    if (body.halfVector == HalfVectorForm::Estimated) {
+        // 1/|h| as one rsqrt estimate + Newton step (the estimates flag
+        // turns 1/sqrt into that), |h| = |h|^2/|h|: no square root and no
+        // division. 1 - cos then cancels near wi = wo, to an absolute error
+        // of ~2e-7, which the plan allows only for Fresnel terms that it
+        // cannot move visibly (none, or Schlick with f0 >= 1e-6: the error
+        // of F relative to itself peaks at 4 dq/q where q^5 = 4 f0).
+        Value* hinv = pm.div(pm.c(1.0), pm.sqrt(hlen2));
+        hlen = pm.mul(hlen2, hinv);
+        for (Value*& c : hD) c = pm.mul(c, hinv);
+        cosD = pm.minnum(pm.mul(hlen, pm.c(0.5)), pm.c(1.0));
+        oneMinusCos = pm.sub(pm.c(1.0), cosD);
+    } else {
+        // In float, |h|^2 >= FLT_MIN: below it (|wi + wo| < 1.1e-19) cos
+        // comes out as 5.4e-20 instead of 0..5.4e-20, where the float
+        // Fresnel terms use 1e-18 anyway (fresnelCos), and 1 - cos and sin^2
+        // stay 1 instead of 0 * Inf.
+        Value* len2 = halfInFloat ? fm.maxnum(fm.convert(hlen2, fm.type()), fm.c(FLT_MIN)) : hlen2;
+        hlen = halfMath.sqrt(len2);
+        // wi.h = wo.h = |wi + wo| / 2 for unit vectors: one value for both
+        // keeps f exactly reciprocal. 1 - cos = |wi - wo|^2 / (2 (2 + |wi + wo|))
+        // (from |wi + wo|^2 + |wi - wo|^2 = 4) has no cancellation at wi =
+        // wo; |wi - wo|^2 is summed in the precise type, where wi - wo is
+        // exact relative to itself.
+        cosD = halfMath.minnum(halfMath.mul(hlen, halfMath.c(0.5)), halfMath.c(1.0));
+        Value* diff2 =
+            halfMath.convert(pm.fma(diff[0], diff[0], pm.fma(diff[1], diff[1], pm.mul(diff[2], diff[2]))), halfMath.type());
+        // 1/hlen and 1/(2 (2 + hlen)) from one division.
+        Value* twoSum = halfMath.mul(halfMath.c(2.0), halfMath.add(halfMath.c(2.0), hlen));
+        Value* recip = halfMath.div(halfMath.c(1.0), halfMath.mul(hlen, twoSum));
+        if (halfInFloat) {
+            hD = {};  // no consumer of the unit h (the plan checked)
+        } else {
+            Value* hinv = pm.mul(twoSum, recip);
+            for (Value*& c : hD) c = pm.mul(c, hinv);
+        }
+        oneMinusCos = halfMath.mul(diff2, halfMath.mul(hlen, recip));
+        oneMinusCos = halfMath.minnum(oneMinusCos, halfMath.c(1.0));
+    }
+    // Guard: |wi + wo| >= 1e-4. h is accurate below that too, but
+    // |wi + wo|^2 could underflow in float where it does not in double.
+    // (On |wi + wo|^2 where hlen = 0 * Inf = NaN is possible.)
+    distrust(body.halfVector == HalfVectorForm::Estimated ? pm.lt(hlen2, pm.c(1e-8))
+                                                          : halfMath.lt(hlen, halfMath.c(1e-4)));
+    Value* sin2 = halfMath.mul(oneMinusCos, halfMath.add(halfMath.c(1.0), cosD));
+    LaneGeometry g;
+    g.hNonZero = pm.gt(hlen2, pm.c(0.0));
+    // Rounded once to the lane type.
+    for (int i = 0; i < 3; ++i) {
+        g.wi[i] = wiF[i] ? wiF[i] : fm.convert(wiD[i], fm.type());
+        g.wo[i] = woF[i] ? woF[i] : fm.convert(woD[i], fm.type());
+        g.h[i] = hD[i] ? fm.convert(hD[i], fm.type()) : nullptr;
+        g.hD[i] = hD[i] ? pm.convert(hD[i], pm.type()) : nullptr;
+        g.wiD[i] = pm.convert(wiD[i], pm.type());
+        g.woD[i] = pm.convert(woD[i], pm.type());
+    }
+    // The exponent NDFs need h only up to scale: in double they take u = wi
+    // + wo itself, which the half angle in float relies on (no unit h
+    // there). In float the unit h: a^2 uz^2 of near-opposite grazing
+    // directions would underflow where a^2 mz^2 does not.
+    if (pm.isDouble()) {
+        for (int i = 0; i < 3; ++i) g.slopeH[i] = pm.convert(hU[i], pm.type());
+        g.slopeHLen2 = pm.convert(hlen2, pm.type());
+    } else {
+        g.slopeH = g.hD;
+    }
+    g.cosD = pm.convert(cosD, pm.type());
+    g.oneMinusCosD = pm.convert(oneMinusCos, pm.type());
+    g.sin2D = pm.convert(sin2, pm.type());
+    return g;
+}
+
+std::array<Value*, 3> LaneEmitter::brdf(const LaneGeometry& geo) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& pm = preciseMath_;
+    llvm::IRBuilder<>& b = builder;
+    const std::array<Value*, 3>&wi = geo.wi, &wo = geo.wo;
+    Value *ci = wi[2], *co = wo[2];
+    Value* above = b.CreateAnd(fm.gt(ci, fm.c(0.0)), fm.gt(co, fm.c(0.0)));
+
+    // Specular lobe, F and the sum in the precise type (factors beyond
+    // float range whose product is not).
+    const NdfEmitter& ndf = emitters_.ndf;
+    NdfParams n = ndf.params(*this);
+    Value* spec;
+    if (ndf.traits.wholeLobe) {
+        spec = ndf.wholeLobe(*this, n, geo);
+    } else {
+        Value* quarterD = pm.mul(ndf.D(*this, n, geo), pm.c(0.25));
+        if (quarterD_.num) quarterD_.value = quarterD;
+        spec = emitters_.masking.overCosines(*this, ndf, n, geo, quarterD);
+    }
+    LVal F = emitters_.fresnel.F(*this, geo);
+    const bool hasDiffuse = emitters_.diffuse.present();
+    if (body.guarded()) {
+        // Guards of a guarded body, for lanes above the horizon (the others
+        // are 0 in both bodies):
+        // - both cosines >= 1e-6: the Smith sums and ci co stay far from
+        //   float's subnormal range;
+        // - the lobe D G / (4 ci co) within [1e-20, 1e20], so D itself
+        //   (>= 4e-32 given the cosines) was a normal float, and alpha^2 or
+        //   the Smith projections did not overflow (they give 0);
+        // - F >= 1e-8 per channel (Schlick with f0 = 0 near wi = wo
+        //   underflows in float), so F times the lobe stays normal; and
+        //   F <= 2 unless F <= 1 by construction (the exact terms are <= 1
+        //   too, but through divisions: the bound is checked rather than
+        //   argued). The plan drops the F guard where constant arguments
+        //   keep F >= 1e-6 at every angle.
+        // Every trusted lane's F times the lobe is then in [1e-28, 2e20]:
+        // finite and positive, so without a diffuse term (whose albedo is
+        // the user's expression, unbounded) the output needs no check.
+        Value* bad = b.CreateOr(fm.lt(ci, fm.c(1e-6)), fm.lt(co, fm.c(1e-6)));
+        bad = b.CreateOr(bad, b.CreateNot(b.CreateAnd(pm.ge(spec, pm.c(1e-20)), pm.le(spec, pm.c(1e20)))));
+        for (int ch = 0; plan.fresnel.rangeGuard && ch < (F.gray() ? 1 : 3); ++ch) {
+            Value* inRange = pm.ge(F.c[ch], pm.c(1e-8));
+            if (!plan.fresnel.atMostOne) inRange = b.CreateAnd(inRange, pm.le(F.c[ch], pm.c(2.0)));
+            bad = b.CreateOr(bad, b.CreateNot(inRange));
+        }
+        distrust(b.CreateAnd(above, bad));
+        internal_assert(!plan.compensatesEnergy) << "a guarded body with energy compensation";
+    }
+    LVal diffuse = hasDiffuse ? emitters_.diffuse.diffuse(*this) : LVal::scalar(pm.c(0.0));
+    LVal specV = LVal::scalar(spec);
+    // F = 0 (eta = 1: no interface) is 0 even where the lobe overflows (no
+    // 0 * Inf). (In a guarded body such a lane is untrusted.)
+    const bool zeroWhereFresnelVanishes = plan.fresnel.canVanish && !body.guarded();
+    LVal total = map({F, specV, diffuse}, true, [&](auto& x) {
+        Value* s = pm.mul(x[0], x[1]);
+        if (zeroWhereFresnelVanishes) s = pm.select(pm.eq(x[0], pm.c(0.0)), pm.c(0.0), s);
+        return hasDiffuse ? pm.add(s, x[2]) : s;
+    });
+    if (plan.compensatesEnergy) {
+        std::array<Value*, 3> ms = emitters_.energy.compensation(*this, ndf, n, emitters_.fresnel, ci, co);
+        for (int ch = 0; ch < 3; ++ch) total.c[ch] = pm.add(total.c[ch], ms[ch]);
+    }
+    // Below the horizon (or wi + wo = 0): f = 0, a valid lane.
+    Value* valid = b.CreateAnd(above, geo.hNonZero);
+    return map({total}, true, [&](auto& x) { return fm.select(valid, fm.convert(x[0], fm.type()), fm.c(0.0)); }).c;
+}
+
+}  // namespace facet

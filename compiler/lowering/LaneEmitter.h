@@ -1,0 +1,197 @@
+// LaneEmitter: one lane body of a kernel -- the BRDF of one lane (float) or
+// of a vector of lanes (<W x float>) as straight-line IR.
+//
+// It computes what every model shares (the checked, renormalized
+// directions and the half vector, the material's inputs and lets, the
+// validity of the lane) and assembles f = F D G / (4 ci co) + diffuse +
+// f_ms from the models' term emitters (TermEmitters.h). The model terms
+// are in the emitters; the decisions (precisions, guards, forms) are in the
+// plan's BodyPlan, which this class only reads.
+//
+// Arithmetic goes through three MathEmitters, named by the type they
+// compute in: floatMath() (the lane type), preciseMath() (double in an
+// exact plain body, float otherwise) and doubleMath() (always double). In
+// the emitters' code they are `fm`, `pm` and `dm`.
+//
+// Files: LaneEmitter.cpp (geometry, assembly), ExprLowering.cpp (the
+// material's expressions and parameters), LaneTerms.cpp (helpers several
+// model terms share, constant tables and their lookups).
+#pragma once
+
+#include "Diagnostics.h"
+#include "Lowering.h"
+#include "TermEmitters.h"
+#include "VectorMath.h"
+
+#include <llvm/IR/IRBuilder.h>
+#include <llvm/IR/Module.h>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace facet {
+
+constexpr double kPi = 3.141592653589793238462643383279502884;
+
+// A lowered expression value: one channel for float, three for rgb. When the
+// three channel Values are the same pointer the rgb is gray and every
+// operation on it is emitted once ("computed once" specialization).
+struct LVal {
+    std::array<llvm::Value*, 3> c{};
+    bool rgb = false;
+    bool gray() const { return c[0] == c[1] && c[1] == c[2]; }
+    static LVal scalar(llvm::Value* v) { return {{v, v, v}, false}; }
+};
+
+// Unit directions, half vector and wo.h of one lane.
+struct LaneGeometry {
+    std::array<llvm::Value*, 3> wi, wo, h;  // float
+    std::array<llvm::Value*, 3> hD;  // h in the precise type (h and hD are null where the half angle is in float)
+    // h up to scale for the exponent NDFs, precise type: wi + wo (with its
+    // squared length slopeHLen2) in double, the unit h (slopeHLen2 null) in float.
+    std::array<llvm::Value*, 3> slopeH;
+    llvm::Value* slopeHLen2 = nullptr;
+    std::array<llvm::Value*, 3> wiD, woD;  // the unit directions in the precise type
+    llvm::Value* cosD;          // wo.h = wi.h in [0, 1], precise type
+    llvm::Value* oneMinusCosD;  // 1 - wo.h = |wo - h|^2 / 2, precise type, without cancellation at wi = wo
+    llvm::Value* sin2D;         // 1 - (wo.h)^2 from the same, precise type
+    llvm::Value* hNonZero;
+};
+
+class LaneEmitter {
+public:
+    LaneEmitter(const CheckedMaterial& material, const LoweringPlan& plan, const BodyPlan& body,
+                const EnergyTable* energyTable, llvm::IRBuilder<>& builder, llvm::Type* laneType,
+                llvm::Module& module);
+
+    struct Result {
+        std::array<llvm::Value*, 3> rgb;
+        llvm::Value* invalid;
+        llvm::Value* untrusted;  // guarded body: lanes to recompute in the other body (includes invalid ones)
+    };
+    Result emit(std::array<llvm::Value*, 3> wi, std::array<llvm::Value*, 3> wo,
+                const std::vector<llvm::Value*>& slots);
+
+    // ---- what the term emitters use ----
+    const CheckedMaterial& material;
+    const LoweringPlan& plan;
+    const BodyPlan& body;
+    llvm::IRBuilder<>& builder;
+
+    MathEmitter& floatMath() { return floatMath_; }
+    MathEmitter& preciseMath() { return preciseMath_; }
+    MathEmitter& doubleMath() { return doubleMath_; }
+    // The emitter of the material's expressions (BodyPlan::expressions).
+    MathEmitter& expressionMath() {
+        return body.expressions == Precision::Double && !preciseMath_.isDouble() ? doubleMath_ : preciseMath_;
+    }
+    llvm::Module& module() { return module_; }
+    const EnergyTable* energyTable() const { return energyTable_; }
+
+    // Lane validity: `cond` lanes are invalid (value 0, counted).
+    void markInvalid(llvm::Value* cond);
+    // Guarded body only: `cond` lanes are recomputed in the kernel's other body.
+    void distrust(llvm::Value* cond);
+
+    // Model parameter p of `use`, clamped to the catalog domain (and to
+    // `capHi`); NaN, or infinite in float after clamping, marks the lane
+    // invalid. The result is float (floatResult) or the precise type.
+    llvm::Value* scalarParam(const ModelUse& use, int p, bool floatResult = true, double capHi = INFINITY);
+    LVal rgbParam(const ModelUse& use, int p, bool floatResult = true, double capHi = INFINITY);
+
+    // Applies `op` channel-wise, once for gray values.
+    template <typename Op>
+    LVal map(const std::vector<LVal>& args, bool rgb, Op op) {
+        LVal out;
+        out.rgb = rgb;
+        bool gray = true;
+        for (const LVal& a : args) gray &= a.gray();
+        for (int ch = 0; ch < 3; ++ch) {
+            if (gray && ch > 0) {
+                out.c[ch] = out.c[0];
+                continue;
+            }
+            std::vector<llvm::Value*> xs;
+            for (const LVal& a : args) xs.push_back(a.c[ch]);
+            out.c[ch] = op(xs);
+        }
+        return out;
+    }
+
+    // ---- shared pieces of model terms (LaneTerms.cpp) ----
+    // alpha_x = parameter px of `use` and alpha_y = py (or alpha_x), in the
+    // precise type; then roundAlphas() gives their float values.
+    NdfParams alphaParams(const ModelUse& use, int px, int py, bool isotropic);
+    void roundAlphas(NdfParams& n);
+    // Both, for an NDF whose only parameters are alpha_x = px, alpha_y = py
+    // (one alpha where the plan says the NDF is isotropic).
+    NdfParams roundedAlphaParams(const ModelUse& use, int px, int py) {
+        NdfParams n = alphaParams(use, px, py, plan.ndfIsotropic);
+        roundAlphas(n);
+        return n;
+    }
+    llvm::Value* intrinsic(llvm::Intrinsic::ID id, llvm::Value* a);
+    // exp(-e) for the NDF tails (e >= 0), 0 where it would leave the precise
+    // type's normal range.
+    llvm::Value* expTail(llvm::Value* e);
+    double expTailLimit() const { return preciseMath_.isDouble() ? 700.0 : 85.0; }
+    // expm1(y)/y, continuous at 0.
+    llvm::Value* expm1OverX(llvm::Value* y);
+    // mx^2/ax^2 + my^2/ay^2 (float; one division when isotropic).
+    llvm::Value* slope2(const NdfParams& n, const std::array<llvm::Value*, 3>& h);
+    // (mx^2/ax^2 + my^2/ay^2)/mz^2 in the precise type, of h or of any multiple of it.
+    llvm::Value* slopeExponent(const NdfParams& n, const std::array<llvm::Value*, 3>& h);
+    // alpha(v)^2 sin^2(theta_v) = (vx ax)^2 + (vy ay)^2, float.
+    llvm::Value* smithProjection(const NdfEmitter& ndf, const NdfParams& n, const std::array<llvm::Value*, 3>& v);
+    // The direction-correlation weight of Ashikhmin et al.: 4.41 phi / (4.41 phi + 1), precise type.
+    llvm::Value* azimuthWeight(const LaneGeometry& geo);
+    // x / y; when x is D/4 known as a fraction num/den (setQuarterD), num /
+    // (den y): one IEEE division instead of two in a guarded body.
+    llvm::Value* quarterDOver(llvm::Value* x, llvm::Value* y);
+    // x / (y z), in steps where the plan scales the masking sums.
+    llvm::Value* overProduct(llvm::Value* x, llvm::Value* y, llvm::Value* z);
+    void setQuarterDFraction(llvm::Value* num, llvm::Value* den) { quarterD_ = {nullptr, num, den}; }
+    // cos(theta_d) for the exact Fresnel terms in `math` (>= 1e-18 in float).
+    llvm::Value* fresnelCos(MathEmitter& math, const LaneGeometry& geo);
+    // Upper clamp of eta and k for the exact Fresnel terms (float: |N|^4 must stay finite).
+    double maxFresnelIndex() const { return body.precise == Precision::Double ? INFINITY : 1e9; }
+
+    // ---- constant tables (LaneTables.cpp) ----
+    llvm::GlobalVariable* floatTable(const std::vector<float>& data, const std::string& name);
+    llvm::GlobalVariable* doubleTable(const std::vector<double>& data, const std::string& name);
+    // table[index] for an integer-valued index in the precise type (a gather across lanes).
+    llvm::Value* fetch(llvm::GlobalVariable* table, llvm::Value* index);
+    // table[index] + t (table[index + 1] - table[index]).
+    llvm::Value* lerpFetch(llvm::GlobalVariable* table, llvm::Value* index, llvm::Value* t);
+    // Bilinear interpolation in a row-major table with `stride` entries per row.
+    llvm::Value* bilerpFetch(llvm::GlobalVariable* table, int stride, llvm::Value* row, llvm::Value* col,
+                             llvm::Value* tRow, llvm::Value* tCol);
+
+private:
+    llvm::Type* boolType();
+    LaneGeometry geometry(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo);
+    std::array<llvm::Value*, 3> brdf(const LaneGeometry& geo);
+
+    // ExprLowering.cpp
+    void lowerInputsAndLets(const std::vector<llvm::Value*>& slots);
+    LVal lower(const Expr& e);
+    llvm::Value* applyBuiltin(BuiltinFn fn, const std::vector<llvm::Value*>& a);
+    llvm::Value* powInt(llvm::Value* x, long k);
+    llvm::Value* clampParam(llvm::Value* x, double lo, double hi, bool floatResult);
+
+    const EnergyTable* energyTable_;
+    llvm::Module& module_;
+    MaterialEmitters emitters_;
+    MathEmitter floatMath_;
+    MathEmitter preciseMath_;
+    MathEmitter doubleMath_;
+    struct {
+        llvm::Value *value, *num, *den;
+    } quarterD_{nullptr, nullptr, nullptr};  // value = num / den
+    llvm::Value* invalid_ = nullptr;
+    llvm::Value* untrusted_ = nullptr;
+    std::vector<LVal> inputs_, lets_;
+};
+
+}  // namespace facet

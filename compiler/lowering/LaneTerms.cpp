@@ -1,0 +1,148 @@
+// LaneTerms: pieces several model emitters share (NDF tails, slope
+// ratios, the Smith projection, the direction-correlation weight, the
+// Fresnel cosine) and the constant tables kernels embed (Kulla-Conty,
+// F_avg, the Gaussian normalization) with their lookups.
+#include "LaneEmitter.h"
+
+#include <llvm/IR/Constants.h>
+
+namespace facet {
+
+using llvm::Value;
+
+NdfParams LaneEmitter::alphaParams(const ModelUse& use, int px, int py, bool isotropic) {
+    NdfParams n;
+    n.isotropic = isotropic;
+    n.axD = scalarParam(use, px, false);
+    n.ayD = isotropic ? n.axD : scalarParam(use, py, false);
+    return n;
+}
+
+void LaneEmitter::roundAlphas(NdfParams& n) {
+    n.ax = floatMath_.convert(n.axD, floatMath_.type());
+    n.ay = n.isotropic ? n.ax : floatMath_.convert(n.ayD, floatMath_.type());
+}
+
+Value* LaneEmitter::intrinsic(llvm::Intrinsic::ID id, Value* a) {
+    return builder.CreateIntrinsic(id, {a->getType()}, {a});
+}
+
+// Clamped to [-limit, limit], exp's argument is in expNormal's range, which
+// leaves out exp()'s own clamping, selects and two-step scaling. e >= 0 up
+// to rounding (blinn_phong's -E ln mz); a NaN e (an invalid lane) becomes
+// limit. The argument is clamped first because a subnormal result costs a
+// ~100-cycle microcode assist per operation, and random directions with
+// small alpha hit it in most lanes. The tail only ever multiplies into the
+// float BRDF value, so in double the shorter series (1e-11) serves.
+Value* LaneEmitter::expTail(Value* e) {
+    MathEmitter& pm = preciseMath_;
+    const double limit = expTailLimit();
+    Value* v = pm.expNormal(pm.neg(pm.maxnum(pm.minnum(e, pm.c(limit)), pm.c(-limit))), /*floatResult=*/true);
+    return pm.select(pm.gt(e, pm.c(limit)), pm.c(0.0), v);
+}
+
+// The series where exp(y) - 1 would cancel (|y| < 1e-5 in double, < 1e-2
+// in float), the quotient elsewhere.
+Value* LaneEmitter::expm1OverX(Value* y) {
+    MathEmitter& pm = preciseMath_;
+    Value* series = pm.poly(y, {1.0, 0.5, 1.0 / 6.0, 1.0 / 24.0, 1.0 / 120.0});
+    Value* direct = pm.div(pm.sub(pm.exp(y), pm.c(1.0)), y);
+    return pm.select(pm.lt(pm.abs(y), pm.c(pm.isDouble() ? 1e-5 : 1e-2)), series, direct);
+}
+
+Value* LaneEmitter::slope2(const NdfParams& n, const std::array<Value*, 3>& h) {
+    MathEmitter& fm = floatMath_;
+    Value *x2 = fm.mul(h[0], h[0]), *y2 = fm.mul(h[1], h[1]);
+    if (n.isotropic) return fm.div(fm.add(x2, y2), fm.mul(n.ax, n.ax));
+    return fm.add(fm.div(x2, fm.mul(n.ax, n.ax)), fm.div(y2, fm.mul(n.ay, n.ay)));
+}
+
+// It is the argument of exp() for the exponent NDFs, where its rounding
+// error is multiplied by its size (tens) in the result: precise type.
+Value* LaneEmitter::slopeExponent(const NdfParams& n, const std::array<Value*, 3>& h) {
+    MathEmitter& pm = preciseMath_;
+    Value *ax = n.axD, *ay = n.ayD;
+    Value *x2 = pm.mul(h[0], h[0]), *y2 = pm.mul(h[1], h[1]), *z2 = pm.mul(h[2], h[2]);
+    Value* s = n.isotropic ? pm.div(pm.add(x2, y2), pm.mul(ax, ax))
+                           : pm.add(pm.div(x2, pm.mul(ax, ax)), pm.div(y2, pm.mul(ay, ay)));
+    return pm.div(s, z2);
+}
+
+Value* LaneEmitter::smithProjection(const NdfEmitter& ndf, const NdfParams& n, const std::array<Value*, 3>& v) {
+    MathEmitter& fm = floatMath_;
+    Value *ax = nullptr, *ay = nullptr;
+    bool isotropic = false;
+    ndf.smithAlphas(*this, n, ax, ay, isotropic);
+    // Products with alpha first: alpha^2 may overflow float (alpha up to
+    // FLT_MAX is a valid parameter), and Inf * 0 at v = n would be NaN.
+    Value *px = fm.mul(v[0], ax), *py = fm.mul(v[1], isotropic ? ax : ay);
+    return fm.fma(px, px, fm.mul(py, py));
+}
+
+Value* LaneEmitter::azimuthWeight(const LaneGeometry& geo) {
+    MathEmitter& fm = floatMath_;
+    const std::array<Value*, 3>&wi = geo.wi, &wo = geo.wo;
+    Value* cross = fm.abs(fm.sub(fm.mul(wi[0], wo[1]), fm.mul(wi[1], wo[0])));
+    Value* dot = fm.fma(wi[0], wo[0], fm.mul(wi[1], wo[1]));
+    Value* phi = fm.mul(fm.c(4.41), fm.atan2(cross, dot));
+    return preciseMath_.convert(fm.div(phi, fm.add(phi, fm.c(1.0))), preciseMath_.type());
+}
+
+Value* LaneEmitter::quarterDOver(Value* x, Value* y) {
+    MathEmitter& pm = preciseMath_;
+    if (quarterD_.value && x == quarterD_.value) return pm.div(quarterD_.num, pm.mul(quarterD_.den, y));
+    return pm.div(x, y);
+}
+
+Value* LaneEmitter::overProduct(Value* x, Value* y, Value* z) {
+    MathEmitter& pm = preciseMath_;
+    return body.scaleMaskingSums ? pm.div(pm.div(x, y), z) : quarterDOver(x, pm.mul(y, z));
+}
+
+// Below 1e-18 F equals F(0) to float precision (its slope in c is O(|N|)),
+// and float-subnormal cosines would lose their bits in c gp, c^2.
+Value* LaneEmitter::fresnelCos(MathEmitter& math, const LaneGeometry& geo) {
+    Value* c = math.convert(geo.cosD, math.type());
+    return math.isDouble() ? c : math.maxnum(c, math.c(1e-18));
+}
+
+// ---- constant tables ----
+
+llvm::GlobalVariable* LaneEmitter::floatTable(const std::vector<float>& data, const std::string& name) {
+    if (llvm::GlobalVariable* gv = module_.getNamedGlobal(name)) return gv;
+    auto* arr = llvm::ConstantDataArray::get(module_.getContext(), data);
+    return new llvm::GlobalVariable(module_, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
+}
+
+llvm::GlobalVariable* LaneEmitter::doubleTable(const std::vector<double>& data, const std::string& name) {
+    if (llvm::GlobalVariable* gv = module_.getNamedGlobal(name)) return gv;
+    auto* arr = llvm::ConstantDataArray::get(module_.getContext(), data);
+    return new llvm::GlobalVariable(module_, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
+}
+
+Value* LaneEmitter::fetch(llvm::GlobalVariable* table, Value* index) {
+    MathEmitter& pm = preciseMath_;
+    llvm::Type* i32 = builder.getInt32Ty();
+    llvm::Type* idxTy = pm.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, pm.width()) : i32;
+    Value* ptr = builder.CreateGEP(builder.getFloatTy(), table, builder.CreateFPToSI(index, idxTy));
+    Value* v = pm.width() == 1 ? (Value*)builder.CreateLoad(builder.getFloatTy(), ptr)
+                               : (Value*)builder.CreateMaskedGather(floatMath_.type(), ptr, llvm::Align(4));
+    return pm.convert(v, pm.type());
+}
+
+Value* LaneEmitter::lerpFetch(llvm::GlobalVariable* table, Value* index, Value* t) {
+    MathEmitter& pm = preciseMath_;
+    Value* a = fetch(table, index);
+    return pm.fma(t, pm.sub(fetch(table, pm.add(index, pm.c(1.0))), a), a);
+}
+
+Value* LaneEmitter::bilerpFetch(llvm::GlobalVariable* table, int stride, Value* row, Value* col, Value* tRow,
+                                Value* tCol) {
+    MathEmitter& pm = preciseMath_;
+    Value* r0 = pm.fma(row, pm.c(double(stride)), col);
+    Value* lo = lerpFetch(table, r0, tCol);
+    Value* hi = lerpFetch(table, pm.add(r0, pm.c(double(stride))), tCol);
+    return pm.fma(tRow, pm.sub(hi, lo), lo);
+}
+
+}  // namespace facet

@@ -1,0 +1,65 @@
+// Lowering: a checked (and usually specialized) material to LLVM IR.
+//
+// Emits up to two entry points with a C ABI (SPEC section 4):
+//   void  <prefix>_scalar(const float wi[3], const float wo[3], const float* inputs, float rgb[3])
+//   int64 <prefix>_batch(int64 n, const float* const wi[3], const float* const wo[3],
+//                        const float* const* inputs, float* const rgb[3])
+// The batch kernel works on explicit LLVM vectors of `width` lanes (a main
+// loop over full vectors, then one masked remainder step) and returns the
+// number of invalid lanes. Both entry points are generated from the same
+// per-lane emitter, instantiated once with float and once with <W x float>,
+// so scalar and SIMD compute the same formulas -- except that a batch kernel
+// may have two bodies (MathVariant::floatFirst): exact, a guarded float body
+// for the well-conditioned lanes and the precise body for the others; fast
+// (isotropic GGX), a guarded body with unscaled Smith forms and the plain
+// fast body for the lanes its range guards reject. planLowering() decides
+// which (LoweringPlan.h).
+//
+// The per-lane formulas follow SPEC section 3 but are written for float:
+// sin^2 from components, Lambda forms that do not cancel, pow and the GTR
+// normalization through double-precision log/exp, and no libm calls.
+#pragma once
+
+#include "LoweringPlan.h"
+
+#include <llvm/IR/LLVMContext.h>
+#include <llvm/IR/Module.h>
+
+#include <memory>
+#include <string>
+
+namespace facet {
+
+class EnergyTable;
+
+struct LoweringOptions {
+    // energy = kulla_conty: the E table of the material's NDF x masking,
+    // embedded in the module as constant arrays (required for such materials).
+    const EnergyTable* energyTable = nullptr;
+    MathMode math = MathMode::Exact;
+    MathVariant variant = MathVariant::exact();
+    int width = 16;  // lanes of the batch kernel: 4, 8 or 16
+    bool emitScalar = true;
+    bool emitBatch = true;
+    // Whether the target is x86, whose MXCSR fast kernels set to flush
+    // subnormals (LoweringPlan::flushDenormals). The host's by default; an
+    // ahead-of-time build for another target sets its own.
+#if defined(__x86_64__) || defined(__i386__)
+    bool x86Target = true;
+#else
+    bool x86Target = false;
+#endif
+};
+
+struct LoweredModule {
+    std::unique_ptr<llvm::Module> module;
+    LoweringPlan plan;  // the decisions the module was lowered with
+    std::string scalarSymbol, batchSymbol;  // empty when not emitted
+};
+
+// `material` must be checked. Throws InternalError on a lowering bug (the
+// module is verified before it is returned).
+LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringOptions& options,
+                            llvm::LLVMContext& context, const std::string& symbolPrefix);
+
+}  // namespace facet

@@ -1,0 +1,289 @@
+// LoweringPlan: the decisions of the lowering, made once from the material,
+// the math variant and the models' lowering traits (see LoweringPlan.h).
+#include "LoweringPlan.h"
+
+#include "Diagnostics.h"
+#include "Specialize.h"
+#include "TermEmitters.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+namespace facet {
+
+const char* mathModeName(MathMode m) { return m == MathMode::Exact ? "exact" : "fast"; }
+
+std::string MathVariant::name() const {
+    std::string s = precise && !estimates && !shortPolynomials ? (floatFirst ? "exact" : "exact-double")
+                                                                : (!precise && estimates && shortPolynomials ? "fast" : "custom");
+    if (walterLambda) s += "+walter";
+    if (schlickDielectric) s += "+schlick";
+    return s;
+}
+
+const char* precisionName(Precision p) { return p == Precision::Float ? "float" : "double"; }
+
+const char* batchBodiesName(BatchBodies b) {
+    switch (b) {
+        case BatchBodies::Plain: return "plain";
+        case BatchBodies::FloatFirst: return "float-first";
+        case BatchBodies::GuardedFast: return "guarded-fast";
+    }
+    return "?";
+}
+
+const char* bodyRoleName(BodyRole r) {
+    switch (r) {
+        case BodyRole::Plain: return "plain";
+        case BodyRole::FloatGuarded: return "float-guarded";
+        case BodyRole::FastGuarded: return "fast-guarded";
+    }
+    return "?";
+}
+
+const char* halfVectorFormName(HalfVectorForm h) {
+    switch (h) {
+        case HalfVectorForm::Precise: return "precise";
+        case HalfVectorForm::InFloat: return "in-float";
+        case HalfVectorForm::Estimated: return "estimated";
+    }
+    return "?";
+}
+
+const char* lambdaFormName(LambdaForm l) {
+    switch (l) {
+        case LambdaForm::None: return "none";
+        case LambdaForm::RootSums: return "root-sums";
+        case LambdaForm::ClosedForm: return "closed-form";
+        case LambdaForm::WalterFit: return "walter-fit";
+    }
+    return "?";
+}
+
+std::optional<long> smallIntegerConstant(const Expr& e) {
+    if (e.kind != ExprKind::Number) return std::nullopt;
+    double v = static_cast<const NumberExpr&>(e).value;
+    if (v != std::floor(v) || std::fabs(v) > 64) return std::nullopt;
+    return long(v);
+}
+
+namespace {
+
+// Whether the NDF's two alphas are one: one alpha (the checker's flag;
+// specialization may have copied the shared expression), or equal
+// constants. The isotropic forms save divisions.
+bool ndfIsIsotropic(const ModelUse& use) {
+    if (use.isotropic) return true;
+    const int ax = paramIndex(*use.model, "alpha_x"), ay = paramIndex(*use.model, "alpha_y");
+    if (ax < 0 || ay < 0 || !use.has(ax) || !use.has(ay)) return false;
+    const Expr &x = *use.args[ax], &y = *use.args[ay];
+    return &x == &y ||
+           (isConstantExpr(x) && isConstantExpr(y) && constantValue(x)[0] == constantValue(y)[0]);
+}
+
+// A float body may evaluate the material's own expressions in float when
+// they only multiply (and take square roots, min/max, small integer
+// powers): each operation adds at most half an ulp of relative error, and
+// up to 8 of them bound it to 8 * 2^-24 = 4.8e-7. A sum can cancel and a
+// long chain drifts (a 20000-step let chain drifted 3e-5 in float), so
+// anything else stays in double.
+constexpr int kMaxFloatExpressionOperations = 8;
+
+bool onlyMultiplicativeExpressions(const CheckedMaterial& material) {
+    struct Scan : ExprVisitor {
+        bool additive = false;
+        int operations = 0;
+        void visitBinary(const BinaryExpr& e) override {
+            ++operations;
+            if (e.op == BinaryOp::Add || e.op == BinaryOp::Sub) additive = true;
+            if (e.op == BinaryOp::Pow && !smallPower(*e.rhs)) additive = true;
+            ExprVisitor::visitBinary(e);
+        }
+        void visitCall(const CallExpr& e) override {
+            ++operations;
+            switch (e.function->id) {
+                case BuiltinFn::Sqrt:
+                case BuiltinFn::Abs:
+                case BuiltinFn::Min:
+                case BuiltinFn::Max:
+                case BuiltinFn::Clamp:
+                case BuiltinFn::Rgb: break;
+                case BuiltinFn::Pow:
+                    if (!smallPower(*e.args[1].value)) additive = true;
+                    break;
+                default: additive = true;  // exp, log, mix, phong conversions (a subtraction)
+            }
+            ExprVisitor::visitCall(e);
+        }
+        // powInt squares repeatedly, doubling the relative error each
+        // time: up to |k| = 4 it stays within a few ulp.
+        static bool smallPower(const Expr& x) {
+            std::optional<long> k = smallIntegerConstant(x);
+            return k && std::labs(*k) <= 4;
+        }
+    } scan;
+    for (const CheckedLet& let : material.lets) scan.visit(*let.value);
+    for (const ModelUse* use : {&material.ndf, &material.masking, &material.fresnel, &material.diffuse, &material.energy})
+        for (const ExprPtr& arg : use->args)
+            if (arg) scan.visit(*arg);
+    return !scan.additive && scan.operations <= kMaxFloatExpressionOperations;
+}
+
+// The exact kernel's batch body is float-first when the NDF has a guarded
+// float body, the Fresnel term can be evaluated there (see each emitter's
+// floatFirstCapable), and no energy table is looked up.
+bool floatFirstApplies(const CheckedMaterial& material, const MaterialEmitters& em, const MathVariant& variant) {
+    if (!variant.precise || !variant.floatFirst || variant.estimates || variant.shortPolynomials) return false;
+    return em.ndf.traits.floatFirstBody && !material.compensatesEnergy() &&
+           em.fresnel.floatFirstCapable(material.fresnel);
+}
+
+// The fast kernel's batch body is guarded when the NDF has a guarded fast
+// body and is isotropic: an anisotropic D is not one fraction, so the
+// guarded body would save only the Smith divisions (measured 3% faster for
+// 5 ms more compile time: docs/perf-log.md).
+bool guardedFastApplies(const CheckedMaterial& material, const MaterialEmitters& em, const MathVariant& variant,
+                        bool ndfIsotropic) {
+    if (variant.precise || !variant.floatFirst || !variant.estimates || !variant.shortPolynomials) return false;
+    return em.ndf.traits.guardedFastBody && ndfIsotropic && !material.compensatesEnergy();
+}
+
+// One body of the kernel. `role` and `bodyVariant` (the variant the body
+// computes with: a float-first body is the exact variant without
+// `precise`) settle its types; the model traits settle its forms.
+BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, const LoweringPlan& plan,
+                  BodyRole role, const MathVariant& bodyVariant) {
+    BodyPlan body;
+    body.role = role;
+    body.precise = bodyVariant.precise && role == BodyRole::Plain ? Precision::Double : Precision::Float;
+    body.estimates = bodyVariant.estimates;
+    body.shortPolynomials = bodyVariant.shortPolynomials;
+    const bool inDouble = body.precise == Precision::Double;
+
+    // The guarded fast body takes 1 - wo.h as 1 - |wi + wo|/2 with |wi +
+    // wo| from an rsqrt estimate: the cancellation leaves an absolute error
+    // of ~2e-7 in q = 1 - cos, which moves Schlick's F relative to itself by
+    // at most 4 dq/q where q^5 = 4 f0: 1e-5 for f0 = 1e-6. So only for no
+    // Fresnel term or one that stays >= 1e-6; the exact terms need 1 - cos
+    // to relative precision near their critical angle and near eta = 1.
+    // A double body may keep the half angle in float when every consumer is
+    // well-conditioned in it: D from wi + wo (the exponent NDFs), a masking
+    // that neither divides by wo.h nor reads the unit h, and a Fresnel term
+    // that is fine with a float cos (docs/perf-log.md has the speed-ups).
+    if (body.guarded() && body.estimates && em.fresnel.atLeast(material.fresnel, 1e-6))
+        body.halfVector = HalfVectorForm::Estimated;
+    else if (inDouble && role == BodyRole::Plain && em.ndf.traits.dFromUnnormalizedHalf &&
+             !em.masking.traits.needsPreciseHalfAngle && em.fresnel.halfAngleInFloatOk(material.fresnel, plan.fresnel))
+        body.halfVector = HalfVectorForm::InFloat;
+
+    // In float, the masking sums are scaled; in double and in a guarded
+    // body (whose guards keep the sums in range) they need not be.
+    body.scaleMaskingSums = !(inDouble || body.guarded());
+
+    if (role == BodyRole::FloatGuarded)
+        body.expressions = onlyMultiplicativeExpressions(material) ? Precision::Float : Precision::Double;
+    else
+        body.expressions = body.precise;
+
+    // The guards bound a guarded body's value (F times the lobe) unless a
+    // diffuse term (the user's unbounded albedo) is added.
+    body.checkOutput = !(body.guarded() && !em.diffuse.present());
+    return body;
+}
+
+}  // namespace
+
+LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool x86Target) {
+    const MaterialEmitters em = termEmitters(material);
+    LoweringPlan plan;
+    plan.variant = variant;
+    plan.ndfIsotropic = ndfIsIsotropic(material.ndf);
+    plan.compensatesEnergy = material.compensatesEnergy();
+    // Fast kernels run with subnormals flushed (MXCSR FTZ/DAZ), as
+    // -ffast-math code does: a subnormal costs a ~100-cycle assist, and
+    // fast kernels produce them routinely in NDF and Smith tails. Exact
+    // kernels keep IEEE subnormals.
+    plan.flushDenormals = !variant.precise && x86Target;
+
+    if (!material.masking.model->smith)
+        plan.lambda = LambdaForm::None;
+    else if (em.ndf.traits.smithRootSums && !em.masking.traits.needsSeparateLambdas)
+        plan.lambda = LambdaForm::RootSums;
+    else if (variant.walterLambda && em.ndf.traits.beckmannProfileLambda)
+        plan.lambda = LambdaForm::WalterFit;
+    else
+        plan.lambda = LambdaForm::ClosedForm;
+
+    const FresnelEmitter& fresnel = em.fresnel;
+    plan.fresnel.substituteSchlick = variant.schlickDielectric && fresnel.substitutableBySchlick();
+    plan.fresnel.exactInFloat = !plan.fresnel.substituteSchlick && fresnel.evaluableInFloat(material.fresnel);
+    plan.fresnel.rangeGuard = !fresnel.atLeast(material.fresnel, 1e-6);
+    plan.fresnel.atMostOne = fresnel.atMostOne();
+    plan.fresnel.canVanish = fresnel.canVanish();
+
+    // The scalar kernel computes the plain body: per lane, float is no
+    // faster than double except for division and square root, and the
+    // guards would cost more than they save (docs/perf-log.md).
+    plan.scalarBody = planBody(material, em, plan, BodyRole::Plain, variant);
+    if (floatFirstApplies(material, em, variant)) {
+        plan.batchBodies = BatchBodies::FloatFirst;
+        MathVariant floatVariant = variant;
+        floatVariant.precise = false;
+        plan.batchBody = planBody(material, em, plan, BodyRole::FloatGuarded, floatVariant);
+        plan.fallbackBody = plan.scalarBody;
+    } else if (guardedFastApplies(material, em, variant, plan.ndfIsotropic)) {
+        plan.batchBodies = BatchBodies::GuardedFast;
+        plan.batchBody = planBody(material, em, plan, BodyRole::FastGuarded, variant);
+        plan.fallbackBody = plan.scalarBody;
+    } else {
+        plan.batchBodies = BatchBodies::Plain;
+        plan.batchBody = plan.scalarBody;
+    }
+    return plan;
+}
+
+namespace {
+
+void printBody(std::ostringstream& os, const char* what, const BodyPlan& body) {
+    os << what << ": role=" << bodyRoleName(body.role) << " precise=" << precisionName(body.precise)
+       << " expressions=" << precisionName(body.expressions) << " half-vector=" << halfVectorFormName(body.halfVector)
+       << " estimates=" << (body.estimates ? "yes" : "no")
+       << " short-polynomials=" << (body.shortPolynomials ? "yes" : "no")
+       << " scale-masking-sums=" << (body.scaleMaskingSums ? "yes" : "no")
+       << " check-output=" << (body.checkOutput ? "yes" : "no") << "\n";
+}
+
+}  // namespace
+
+std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan) {
+    std::ostringstream os;
+    auto yesNo = [](bool b) { return b ? "yes" : "no"; };
+    os << "material " << material.name << "\n";
+    os << "models: ndf=" << material.ndf.model->name << " masking=" << material.masking.model->name
+       << " fresnel=" << material.fresnel.model->name << " energy=" << material.energy.model->name
+       << " diffuse=" << material.diffuse.model->name << "\n";
+    os << "variant: " << plan.variant.name() << "\n";
+    os << "batch-bodies: " << batchBodiesName(plan.batchBodies) << "\n";
+    printBody(os, "scalar-body", plan.scalarBody);
+    printBody(os, "batch-body", plan.batchBody);
+    if (plan.fallbackBody) printBody(os, "fallback-body", *plan.fallbackBody);
+    os << "ndf-isotropic: " << yesNo(plan.ndfIsotropic) << "\n";
+    os << "smith-lambda: " << lambdaFormName(plan.lambda) << "\n";
+    os << "fresnel: substitute-schlick=" << yesNo(plan.fresnel.substituteSchlick)
+       << " exact-in-float=" << yesNo(plan.fresnel.exactInFloat) << " range-guard=" << yesNo(plan.fresnel.rangeGuard)
+       << " at-most-one=" << yesNo(plan.fresnel.atMostOne) << " can-vanish=" << yesNo(plan.fresnel.canVanish) << "\n";
+    os << "energy-compensation: " << yesNo(plan.compensatesEnergy) << "\n";
+    os << "flush-denormals: " << yesNo(plan.flushDenormals) << "\n";
+    return os.str();
+}
+
+bool walterLambdaApplies(const CheckedMaterial& material) {
+    return termEmitters(material).ndf.traits.beckmannProfileLambda && material.masking.model->smith;
+}
+
+bool schlickDielectricApplies(const CheckedMaterial& material) {
+    return termEmitters(material).fresnel.substitutableBySchlick();
+}
+
+}  // namespace facet

@@ -1,0 +1,149 @@
+// LoweringPlan: every decision the LLVM lowering makes about a material,
+// made once, before any IR exists.
+//
+// planLowering() is a pure function of the checked (specialized) material
+// and the math variant: which bodies the batch kernel has (plain, or a
+// guarded first body with a fallback), in which precision each body
+// computes geometry, expressions and the Fresnel term, which Smith form the
+// masking uses, which guards a guarded body needs. The per-model facts it
+// needs come from the models' lowering traits (TermEmitters.h), never from
+// a switch on model kinds. The emitters read the plan and re-derive
+// nothing; `facet ir --plan FILE` prints it (printPlan).
+#pragma once
+
+#include "Material.h"
+
+#include <optional>
+#include <string>
+
+namespace facet {
+
+enum class MathMode { Exact, Fast };
+const char* mathModeName(MathMode m);
+
+// Which approximations a kernel uses. `exact` keeps every term at full float
+// accuracy (double where float rounding would be amplified); `fast` computes
+// everything in float with shorter polynomials and lets the backend use
+// estimates refined by one Newton step where it can (see `estimates`). The
+// two model substitutions change the model the user named, so only a
+// tolerance may enable them.
+struct MathVariant {
+    bool precise = true;            // geometry, exponents, exact Fresnel, parameters in double
+    bool estimates = false;         // x/sqrt(y) by an rsqrt estimate + 1 Newton step
+    bool shortPolynomials = false;  // exp/log/atan2 polynomials for ~1e-6 instead of 1 ulp
+    bool walterLambda = false;      // Beckmann-profile Smith Lambda: Walter et al. 2007 rational fit
+    bool schlickDielectric = false; // dielectric(eta) evaluated as Schlick with f0 from eta
+    // With `precise`: evaluate each lane first in float (IEEE division and
+    // sqrt, the exact polynomials) and keep that value only where the lane is
+    // well-conditioned (the guards); every other lane is recomputed in the
+    // precise body. Without `precise` (fast): evaluate each lane first with
+    // the unscaled Smith forms and D G / (4 ci co) as one fraction, keep that
+    // value where the range guards show that no intermediate left float's
+    // normal range, and recompute the other lanes in the plain fast body.
+    // The plan decides per material whether either applies.
+    bool floatFirst = true;
+
+    static MathVariant exact() { return {}; }
+    static MathVariant fast() { return {false, true, true, false, false}; }
+    std::string name() const;  // e.g. "exact", "fast", "fast+walter"
+    bool operator==(const MathVariant&) const = default;
+};
+
+enum class Precision { Float, Double };
+const char* precisionName(Precision p);
+
+// The bodies of a batch kernel.
+enum class BatchBodies {
+    Plain,        // one body
+    FloatFirst,   // exact: a guarded float body, the precise body for untrusted lanes
+    GuardedFast,  // fast: a guarded body with unscaled Smith forms, the plain fast body for the rest
+};
+const char* batchBodiesName(BatchBodies b);
+
+// What one lane body is.
+enum class BodyRole {
+    Plain,         // every lane's value is final
+    FloatGuarded,  // the float body of a float-first exact kernel
+    FastGuarded,   // the guarded body of a fast kernel
+};
+const char* bodyRoleName(BodyRole r);
+
+// How |wi + wo|, wo.h, 1 - wo.h and sin^2 are computed.
+enum class HalfVectorForm {
+    Precise,    // in the body's precise type, cancellation-free 1 - cos
+    InFloat,    // in float inside a double body: every consumer is well-conditioned in them
+    Estimated,  // 1/|h| from an rsqrt estimate, 1 - cos = 1 - |h|/2 (guarded fast body)
+};
+const char* halfVectorFormName(HalfVectorForm h);
+
+// How the Smith masking gets its (n.v)(1 + Lambda(v)) terms.
+enum class LambdaForm {
+    None,       // the masking is not a Smith form
+    RootSums,   // from R(v) = sqrt((n.v)^2 + proj(v)) (the NDF's root form)
+    ClosedForm, // the NDF's closed-form (n.v) Lambda(v)
+    WalterFit,  // Walter et al. 2007's rational fit of the Beckmann-profile Lambda
+};
+const char* lambdaFormName(LambdaForm l);
+
+struct BodyPlan {
+    BodyRole role = BodyRole::Plain;
+    // The type of the quantities that need more than float in exact mode
+    // (D, the Smith sums, F and the lobe): double in an exact plain body,
+    // float otherwise.
+    Precision precise = Precision::Double;
+    bool estimates = false;         // reciprocal/rsqrt estimates allowed
+    bool shortPolynomials = false;  // the fast elementary functions
+    HalfVectorForm halfVector = HalfVectorForm::Precise;
+    // The masking forms in float are scaled by max(ci, co) and divide in
+    // steps, so that no sum of products falls into the subnormal range and
+    // an intermediate overflows only if the result does. Unneeded in double,
+    // and in a guarded body (its guards keep the sums in range).
+    bool scaleMaskingSums = false;
+    // The material's own expressions (inputs, lets, model arguments).
+    Precision expressions = Precision::Double;
+    // Whether the output needs the NaN/Inf/negative check: a guarded body
+    // without a diffuse term has its value bounded by its guards.
+    bool checkOutput = true;
+
+    bool guarded() const { return role != BodyRole::Plain; }
+};
+
+struct FresnelPlan {
+    bool substituteSchlick = false;  // the tolerance's Schlick substitution for a dielectric
+    bool exactInFloat = false;       // the exact term in float (well-conditioned constant parameters)
+    bool rangeGuard = true;          // guarded body: check 1e-8 <= F (and F <= 2 unless atMostOne)
+    bool atMostOne = false;          // F <= 1 by construction
+    bool canVanish = true;           // F can be 0 (every term but none)
+};
+
+struct LoweringPlan {
+    MathVariant variant;
+    BatchBodies batchBodies = BatchBodies::Plain;
+    BodyPlan scalarBody;                 // the scalar kernel: always plain
+    BodyPlan batchBody;                  // the batch kernel's (first) body
+    std::optional<BodyPlan> fallbackBody;  // for the lanes a guarded batch body distrusts
+    bool ndfIsotropic = false;           // one alpha, or equal constant alphas
+    LambdaForm lambda = LambdaForm::None;
+    FresnelPlan fresnel;
+    bool compensatesEnergy = false;
+    bool flushDenormals = false;  // fast kernels on x86: MXCSR FTZ/DAZ for the call
+};
+
+// `material` checked (and usually specialized). `x86Target`: the kernel's
+// target can flush subnormals through MXCSR.
+LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool x86Target);
+
+// The plan as text, one decision per line (`facet ir --plan`).
+std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan);
+
+// Whether the model substitutions of MathVariant can change this material:
+// a Smith masking on a Beckmann-profile Lambda for walterLambda, a
+// dielectric Fresnel term for schlickDielectric.
+bool walterLambdaApplies(const CheckedMaterial& material);
+bool schlickDielectricApplies(const CheckedMaterial& material);
+
+// The value of an integer-valued number literal with |k| <= 64 (pow with
+// such an exponent is lowered as repeated multiplication).
+std::optional<long> smallIntegerConstant(const Expr& e);
+
+}  // namespace facet

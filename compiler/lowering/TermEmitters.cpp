@@ -1,0 +1,89 @@
+// TermEmitters: the registry of model emitters (generated from
+// compiler/models/*/*Emitter.cpp) and the hooks' defaults.
+#include "TermEmitters.h"
+
+#include "Diagnostics.h"
+#include "LaneEmitter.h"
+
+#include <cstring>
+
+namespace facet {
+
+#define FACET_EMITTER_FILE(slot, stem) std::vector<TermEmitterEntry> facetEmitters_##slot##_##stem();
+#include "EmitterRegistry.inc"
+#undef FACET_EMITTER_FILE
+
+const std::vector<TermEmitterEntry>& termEmitterRegistry() {
+    static const std::vector<TermEmitterEntry> registry = [] {
+        std::vector<TermEmitterEntry> all;
+#define FACET_EMITTER_FILE(slot, stem)                             \
+    for (const TermEmitterEntry& e : facetEmitters_##slot##_##stem()) \
+        all.push_back(e);
+#include "EmitterRegistry.inc"
+#undef FACET_EMITTER_FILE
+        return all;
+    }();
+    return registry;
+}
+
+const void* findTermEmitter(const ModelInfo& model) {
+    for (const TermEmitterEntry& e : termEmitterRegistry())
+        if (e.slot == model.slot && std::strcmp(e.modelName, model.name) == 0) return e.emitter;
+    return nullptr;
+}
+
+namespace {
+
+template <typename Emitter>
+const Emitter& emitterOf(const ModelUse& use) {
+    internal_assert(use.model) << "a checked material without a model in one of its slots";
+    const void* e = findTermEmitter(*use.model);
+    internal_assert(e) << "model '" << use.model->name << "' has no emitter (compiler/models/*/*Emitter.cpp)";
+    return *static_cast<const Emitter*>(e);
+}
+
+}  // namespace
+
+MaterialEmitters termEmitters(const CheckedMaterial& material) {
+    return {emitterOf<NdfEmitter>(material.ndf), emitterOf<MaskingEmitter>(material.masking),
+            emitterOf<FresnelEmitter>(material.fresnel), emitterOf<DiffuseEmitter>(material.diffuse),
+            emitterOf<EnergyEmitter>(material.energy)};
+}
+
+// ---- defaults: a hook an emitter does not override must not be reached (the plan and the traits keep them apart) ----
+
+llvm::Value* NdfEmitter::D(LaneEmitter&, const NdfParams&, const LaneGeometry&) const {
+    internal_error << "D of a whole-lobe NDF";
+}
+
+llvm::Value* NdfEmitter::wholeLobe(LaneEmitter&, const NdfParams&, const LaneGeometry&) const {
+    internal_error << "wholeLobe of a microfacet NDF";
+}
+
+void NdfEmitter::smithAlphas(LaneEmitter&, const NdfParams& n, llvm::Value*& ax, llvm::Value*& ay,
+                             bool& isotropic) const {
+    ax = n.ax;
+    ay = n.ay;
+    isotropic = n.isotropic;
+}
+
+llvm::Value* NdfEmitter::cosLambda(LaneEmitter&, const NdfParams&, const std::array<llvm::Value*, 3>&) const {
+    internal_error << "Smith Lambda of an NDF without one (the checker refuses the pair)";
+}
+
+llvm::Value* NdfEmitter::smithRoot(LaneEmitter&, const NdfParams&, const std::array<llvm::Value*, 3>&) const {
+    internal_error << "Smith root form of an NDF without one (NdfLoweringTraits::smithRootSums)";
+}
+
+llvm::Value* NdfEmitter::energyAlpha(LaneEmitter&, const NdfParams& n) const { return n.axD; }
+
+FresnelAverageArgs FresnelEmitter::averageArgs(LaneEmitter&) const { return {}; }
+
+LVal DiffuseEmitter::diffuse(LaneEmitter&) const { internal_error << "diffuse term of `none`"; }
+
+std::array<llvm::Value*, 3> EnergyEmitter::compensation(LaneEmitter&, const NdfEmitter&, const NdfParams&,
+                                                        const FresnelEmitter&, llvm::Value*, llvm::Value*) const {
+    internal_error << "energy compensation of an entry that does not compensate";
+}
+
+}  // namespace facet

@@ -1,0 +1,175 @@
+// TermEmitters: the lowering hooks of the model catalog.
+//
+// Every catalog entry has, next to its reference formulas (the entry file
+// compiler/models/<slot>/<Stem>.cpp), an emitter in
+// compiler/models/<slot>/<Stem>Emitter.cpp: its terms written as IR for
+// float lanes (scalar or SIMD), plus the lowering traits the plan reads.
+// The two are written independently on purpose: the differential tests
+// compare them. The build lists the emitter files in a generated registry
+// (as it does the entries), and termEmitters() finds an entry's emitter by
+// the entry's name; a catalog test fails when an entry has none.
+//
+// The trait methods are pure (no IR); the emit methods append IR through
+// the LaneEmitter they are given, which holds the body's plan, its
+// arithmetic emitters, the lane's geometry and the material's parameters.
+#pragma once
+
+#include "CodegenIdentity.h"
+#include "LoweringPlan.h"
+
+#include <array>
+#include <string_view>
+#include <vector>
+
+namespace llvm {
+class Value;
+}
+
+namespace facet {
+
+class LaneEmitter;
+struct LaneGeometry;
+struct LVal;
+
+// The NDF's parameters for one lane: alphas (float, and in the precise
+// type), and up to three values of the model's own (documented by each
+// emitter: the Blinn-Phong exponent, GTR's gamma, ...).
+struct NdfParams {
+    llvm::Value *ax = nullptr, *ay = nullptr;    // float
+    llvm::Value *axD = nullptr, *ayD = nullptr;  // precise type
+    bool isotropic = false;
+    std::array<llvm::Value*, 3> own{};
+};
+
+struct NdfLoweringTraits {
+    // D needs h only up to scale (an exponent of slope ratios): a double
+    // body may keep the half angle in float and give D wi + wo.
+    bool dFromUnnormalizedHalf = false;
+    // The whole lobe is one formula (no D, no masking): wholeLobe().
+    bool wholeLobe = false;
+    // D and the Smith forms have a guarded float body (float-first exact
+    // kernels), and, isotropic, a guarded fast body (D as one fraction).
+    bool floatFirstBody = false;
+    bool guardedFastBody = false;
+    // Smith terms from R(v) = sqrt((n.v)^2 + proj(v)) (smithRoot).
+    bool smithRootSums = false;
+    // Its Smith Lambda has the Beckmann profile: Walter's fit can replace it.
+    bool beckmannProfileLambda = false;
+    // Always isotropic (one alpha parameter).
+    bool isotropicOnly = false;
+};
+
+class NdfEmitter {
+public:
+    virtual ~NdfEmitter() = default;
+    NdfLoweringTraits traits;
+
+    // Clamped parameters of the lane (in the lane's expression order).
+    virtual NdfParams params(LaneEmitter& lane) const = 0;
+    // D(h) in the precise type.
+    virtual llvm::Value* D(LaneEmitter& lane, const NdfParams& n, const LaneGeometry& geo) const;
+    // f without Fresnel for a whole-lobe NDF, precise type.
+    virtual llvm::Value* wholeLobe(LaneEmitter& lane, const NdfParams& n, const LaneGeometry& geo) const;
+    // The alphas of the Smith projection (vx ax)^2 + (vy ay)^2, float; iso
+    // set when they are one value.
+    virtual void smithAlphas(LaneEmitter& lane, const NdfParams& n, llvm::Value*& ax, llvm::Value*& ay,
+                             bool& isotropic) const;
+    // (n.v) Lambda(v), float.
+    virtual llvm::Value* cosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<llvm::Value*, 3>& v) const;
+    // R(v) = sqrt((n.v)^2 + proj(v)) = (n.v)(1 + 2 Lambda(v)), float (smithRootSums).
+    virtual llvm::Value* smithRoot(LaneEmitter& lane, const NdfParams& n, const std::array<llvm::Value*, 3>& v) const;
+    // The roughness the Kulla-Conty table is looked up with, precise type.
+    virtual llvm::Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const;
+};
+
+struct MaskingLoweringTraits {
+    // Reads the unit h or divides by wo.h: the half angle stays precise.
+    bool needsPreciseHalfAngle = false;
+    // Needs Lambda(wi) and Lambda(wo) apart (not only their root sums).
+    bool needsSeparateLambdas = false;
+};
+
+class MaskingEmitter {
+public:
+    virtual ~MaskingEmitter() = default;
+    MaskingLoweringTraits traits;
+    // D G / ((n.wi)(n.wo)) from `D` (D/4 in practice), precise type, formed
+    // without G and without dividing two underflowed values.
+    virtual llvm::Value* overCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
+                                     const LaneGeometry& geo, llvm::Value* D) const = 0;
+};
+
+// A Fresnel model's per-lane F_avg inputs (Kulla-Conty): what average()
+// needs, prepared once for the three channels.
+struct FresnelAverageArgs {
+    std::array<llvm::Value*, 3> a{}, b{};  // per channel, the model's own (f0; eta; eta and k)
+    bool constant = false;                 // every parameter a constant: folded per channel
+};
+
+class FresnelEmitter {
+public:
+    virtual ~FresnelEmitter() = default;
+    // Pure traits for the plan.
+    virtual bool atMostOne() const { return false; }
+    virtual bool canVanish() const { return true; }
+    // The exact formula is well-conditioned in float for these arguments.
+    virtual bool evaluableInFloat(const ModelUse&) const { return false; }
+    // A float-first body can evaluate it for these arguments.
+    virtual bool floatFirstCapable(const ModelUse& use) const { return evaluableInFloat(use); }
+    // The half angle may be in float for it (with this plan's choices).
+    virtual bool halfAngleInFloatOk(const ModelUse&, const FresnelPlan& plan) const {
+        return !plan.substituteSchlick && plan.exactInFloat;
+    }
+    // F >= bound at every angle, settled by constant arguments.
+    virtual bool atLeast(const ModelUse&, double) const { return false; }
+    // The Schlick substitution (MathVariant::schlickDielectric) applies.
+    virtual bool substitutableBySchlick() const { return false; }
+
+    // F per channel, precise type.
+    virtual LVal F(LaneEmitter& lane, const LaneGeometry& geo) const = 0;
+    virtual FresnelAverageArgs averageArgs(LaneEmitter& lane) const;
+    // F_avg of channel ch, precise type.
+    virtual llvm::Value* average(LaneEmitter& lane, const FresnelAverageArgs& args, int ch) const = 0;
+};
+
+class DiffuseEmitter {
+public:
+    virtual ~DiffuseEmitter() = default;
+    virtual bool present() const { return false; }
+    // f_diffuse per channel, precise type (present() only).
+    virtual LVal diffuse(LaneEmitter& lane) const;
+};
+
+class EnergyEmitter {
+public:
+    virtual ~EnergyEmitter() = default;
+    // f_ms per channel, precise type (only for an entry that compensates).
+    virtual std::array<llvm::Value*, 3> compensation(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
+                                                     const FresnelEmitter& fresnel, llvm::Value* ci,
+                                                     llvm::Value* co) const;
+};
+
+// One emitter of a registry file: the catalog entry's name and its emitter.
+struct TermEmitterEntry {
+    ModelSlot slot;
+    const char* modelName;
+    const void* emitter;  // the slot's emitter class
+    // The constant tables the emitter may embed (the cache key hashes them).
+    std::vector<EmbeddedTable> (*tables)() = nullptr;
+};
+
+// The emitters of one material's models (internal error when a model has none).
+struct MaterialEmitters {
+    const NdfEmitter& ndf;
+    const MaskingEmitter& masking;
+    const FresnelEmitter& fresnel;
+    const DiffuseEmitter& diffuse;
+    const EnergyEmitter& energy;
+};
+MaterialEmitters termEmitters(const CheckedMaterial& material);
+
+// Every registered emitter (catalog tests); nullptr where a model has none.
+const void* findTermEmitter(const ModelInfo& model);
+const std::vector<TermEmitterEntry>& termEmitterRegistry();
+
+}  // namespace facet

@@ -1,0 +1,31 @@
+// none, lambert: the diffuse base as IR (the reference is Diffuse.cpp).
+#include "lowering/LaneEmitter.h"
+
+namespace facet {
+namespace {
+
+constexpr int kAlbedo = 0;
+
+class NoDiffuseEmitter final : public DiffuseEmitter {};
+
+class LambertEmitter final : public DiffuseEmitter {
+public:
+    bool present() const override { return true; }
+    // albedo / pi per channel; the albedo is the user's expression, clamped
+    // to >= 0 and unbounded above (so the output keeps its range check).
+    LVal diffuse(LaneEmitter& lane) const override {
+        MathEmitter& pm = lane.preciseMath();
+        LVal albedo = lane.rgbParam(lane.material.diffuse, kAlbedo, false);
+        return lane.map({albedo}, true, [&](auto& x) { return pm.mul(x[0], pm.c(1.0 / kPi)); });
+    }
+};
+
+}  // namespace
+
+std::vector<TermEmitterEntry> facetEmitters_diffuse_DiffuseEmitter() {
+    static const NoDiffuseEmitter none;
+    static const LambertEmitter lambert;
+    return {{ModelSlot::Diffuse, "none", &none}, {ModelSlot::Diffuse, "lambert", &lambert}};
+}
+
+}  // namespace facet

@@ -1,0 +1,111 @@
+// ggx: the GGX NDF and its Smith terms as IR (the reference is Ggx.cpp).
+// Written for float lanes: D as one fraction, the Smith Lambda without
+// cancellation, and the root form R(v) = (n.v)(1 + 2 Lambda(v)) that turns
+// the height-correlated denominator into sums of positive terms.
+#include "lowering/LaneEmitter.h"
+
+namespace facet {
+namespace {
+
+constexpr int kAlphaX = 0, kAlphaY = 1;
+
+using llvm::Value;
+
+class GgxEmitter final : public NdfEmitter {
+public:
+    GgxEmitter() {
+        traits.floatFirstBody = true;
+        traits.guardedFastBody = true;
+        traits.smithRootSums = true;
+    }
+
+    NdfParams params(LaneEmitter& lane) const override {
+        return lane.roundedAlphaParams(lane.material.ndf, kAlphaX, kAlphaY);
+    }
+
+    // D(h) in the precise type; even the float value is carried on in it,
+    // because D can be far below float range where D G / (ci co) is not.
+    Value* D(LaneEmitter& lane, const NdfParams& n, const LaneGeometry& geo) const override {
+        const std::array<Value*, 3>&h = geo.h, &hD = geo.hD;
+        MathEmitter& fm = lane.floatMath();
+        MathEmitter& pm = lane.preciseMath();
+        internal_assert(h[0]) << "GGX needs the unit h, which the plan left out";
+        if (!lane.body.guarded() && lane.body.precise == Precision::Double) {
+            // The precise body of an exact kernel: D in double, so that an
+            // alpha beyond float range or alphas far apart (ggx(1e30),
+            // alpha_x = 1e30 with alpha_y = 1e-30), whose D or lobe can still
+            // be a normal float at grazing h, get the reference's value
+            // instead of a float 0 or Inf/Inf.
+            Value *x2 = pm.mul(hD[0], hD[0]), *y2 = pm.mul(hD[1], hD[1]), *z2 = pm.mul(hD[2], hD[2]);
+            if (n.isotropic) {
+                Value* a2 = pm.mul(n.axD, n.axD);
+                Value* t = pm.fma(a2, z2, pm.add(x2, y2));
+                return pm.div(pm.mul(a2, pm.c(1.0 / kPi)), pm.mul(t, t));
+            }
+            // 1 / (pi ax ay (x2/ax^2 + y2/ay^2 + z2)^2), scaled by ax ay so
+            // that nothing overflows for ax ay within double range.
+            Value* axy = pm.mul(n.axD, n.ayD);
+            Value* t = pm.add(pm.fma(pm.div(n.ayD, n.axD), x2, pm.mul(pm.div(n.axD, n.ayD), y2)), pm.mul(axy, z2));
+            return pm.div(pm.mul(axy, pm.c(1.0 / kPi)), pm.mul(t, t));
+        }
+        if (n.isotropic) {
+            // 1 / (pi a^2 (s2/a^2 + mz^2)^2) = a^2 / (pi (s2 + a^2 mz^2)^2): one division.
+            Value* a2 = fm.mul(n.ax, n.ax);
+            Value* t = fm.fma(a2, fm.mul(h[2], h[2]), fm.fma(h[0], h[0], fm.mul(h[1], h[1])));
+            Value* D = fm.div(fm.mul(a2, fm.c(1.0 / kPi)), fm.mul(t, t));
+            // Guarded body: D/4 also as a fraction, so that the lobe divides
+            // once (LaneEmitter::quarterDOver). a^2 = Inf there gives a NaN
+            // lobe, which the lobe range guard rejects.
+            if (lane.body.guarded()) lane.setQuarterDFraction(fm.mul(a2, fm.c(0.25 / kPi)), fm.mul(t, t));
+            // a^2 beyond float (alpha > 1.8e19): D < 1e-38 / mz^4 is 0, not Inf/Inf.
+            return pm.convert(fm.select(fm.isFinite(a2), D, fm.c(0.0)), pm.type());
+        }
+        if (lane.body.guarded()) {
+            // Guarded body: D = (ax ay / N)^2 ax ay / pi, N = ay^2 mx^2 + ax^2
+            // my^2 + (ax ay)^2 mz^2 (the form below times (ax ay)^2): one
+            // division instead of three. N >= min(ax, ay, ax ay)^2 / 3 is
+            // normal for alpha >= 1e-4; where r = ax ay / N or its square
+            // over- or underflows (alphas far apart or beyond ~1e9), or
+            // (ax ay)^2 overflows (NaN), D is Inf, NaN or below 1e-38, and
+            // the lobe range guard sends the lane to the other body.
+            Value* axy = fm.mul(n.ax, n.ay);
+            Value* N = fm.fma(fm.mul(axy, axy), fm.mul(h[2], h[2]),
+                              fm.fma(fm.mul(n.ay, n.ay), fm.mul(h[0], h[0]), fm.mul(fm.mul(n.ax, n.ax), fm.mul(h[1], h[1]))));
+            Value* r = fm.div(axy, N);
+            return pm.convert(fm.mul(fm.mul(r, r), fm.mul(axy, fm.c(1.0 / kPi))), pm.type());
+        }
+        Value* t = fm.fma(h[2], h[2], lane.slope2(n, h));
+        return pm.convert(fm.div(fm.c(1.0 / kPi), fm.mul(fm.mul(n.ax, n.ay), fm.mul(t, t))), pm.type());
+    }
+
+    // vz Lambda = vz (sqrt(1 + proj/vz^2) - 1)/2 = proj / (2 (vz + sqrt(vz^2 + proj))):
+    // no cancellation for small proj, no overflow for small vz. (proj = Inf
+    // for alpha beyond ~1e19: Lambda = Inf, G = 0, not Inf/Inf.)
+    Value* cosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
+        MathEmitter& fm = lane.floatMath();
+        Value* proj = lane.smithProjection(*this, n, v);
+        Value* vz = v[2];
+        Value* cl = fm.div(proj, fm.mul(fm.c(2.0), fm.add(vz, fm.sqrt(fm.fma(vz, vz, proj)))));
+        return fm.select(fm.isFinite(proj), cl, proj);
+    }
+
+    Value* smithRoot(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
+        MathEmitter& fm = lane.floatMath();
+        return fm.sqrt(fm.fma(v[2], v[2], lane.smithProjection(*this, n, v)));
+    }
+
+    // The table's roughness: sqrt(ax ay) for an anisotropic lobe.
+    Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const override {
+        MathEmitter& pm = lane.preciseMath();
+        return n.isotropic ? n.axD : pm.sqrt(pm.mul(n.axD, n.ayD));
+    }
+};
+
+}  // namespace
+
+std::vector<TermEmitterEntry> facetEmitters_ndf_GgxEmitter() {
+    static const GgxEmitter emitter;
+    return {{ModelSlot::Ndf, "ggx", &emitter}};
+}
+
+}  // namespace facet

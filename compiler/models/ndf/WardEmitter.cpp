@@ -1,0 +1,41 @@
+// ward: Ward's anisotropic lobe as IR (the reference is Ward.cpp): a whole
+// lobe with its own normalization, no D and no masking term.
+#include "lowering/LaneEmitter.h"
+
+namespace facet {
+namespace {
+
+using llvm::Value;
+
+constexpr int kAlphaX = 0, kAlphaY = 1;
+
+class WardEmitter final : public NdfEmitter {
+public:
+    WardEmitter() {
+        traits.wholeLobe = true;
+        traits.dFromUnnormalizedHalf = true;
+    }
+
+    NdfParams params(LaneEmitter& lane) const override {
+        return lane.roundedAlphaParams(lane.material.ndf, kAlphaX, kAlphaY);
+    }
+
+    // exp(-tan^2-weighted slope) / (4 pi ax ay sqrt(ci co)), precise type.
+    Value* wholeLobe(LaneEmitter& lane, const NdfParams& n, const LaneGeometry& geo) const override {
+        MathEmitter& pm = lane.preciseMath();
+        Value* e = lane.slopeExponent(n, geo.slopeH);
+        Value *ciD = geo.wiD[2], *coD = geo.woD[2];
+        // sqrt(ci) sqrt(co) in float: ci co underflows for float-subnormal cosines.
+        Value* root = pm.isDouble() ? pm.sqrt(pm.mul(ciD, coD)) : pm.mul(pm.sqrt(ciD), pm.sqrt(coD));
+        return pm.div(pm.div(lane.expTail(e), pm.mul(pm.c(4 * kPi), pm.mul(n.axD, n.ayD))), root);
+    }
+};
+
+}  // namespace
+
+std::vector<TermEmitterEntry> facetEmitters_ndf_WardEmitter() {
+    static const WardEmitter emitter;
+    return {{ModelSlot::Ndf, "ward", &emitter}};
+}
+
+}  // namespace facet

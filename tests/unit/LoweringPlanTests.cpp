@@ -1,0 +1,204 @@
+// The lowering's decisions, without LLVM code: planLowering() on small
+// materials (which bodies, which precisions, which forms), every catalog
+// entry having an emitter, and the codegen part of the cache key.
+#include "CodegenIdentity.h"
+#include "LoweringPlan.h"
+#include "TermEmitters.h"
+
+#include "Checker.h"
+#include "models/ModelCatalog.h"
+
+#include <doctest/doctest.h>
+#include <llvm/Support/SHA256.h>
+#include <llvm/ADT/StringExtras.h>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+using namespace facet;
+
+namespace {
+
+// The checked material of `body` (its statements), one per call.
+CheckedMaterial material(const std::string& body) {
+    DiagnosticEngine diags;
+    CheckedProgram program = loadProgramText("material m {\n" + body + "\n}\n", "plan.mat", diags);
+    INFO(diags.str());
+    REQUIRE(!diags.hasErrors());
+    REQUIRE(program.materials.size() == 1);
+    return program.materials[0];
+}
+
+LoweringPlan exactPlan(const std::string& body) { return planLowering(material(body), MathVariant::exact(), true); }
+LoweringPlan fastPlan(const std::string& body) { return planLowering(material(body), MathVariant::fast(), true); }
+
+}  // namespace
+
+TEST_SUITE("plan") {
+
+TEST_CASE("exact GGX with Schlick f0: a guarded float body and the double body for the rest") {
+    CheckedMaterial m = material("input r = 0.5; ndf = ggx(r * r); masking = smith_height_correlated; fresnel = schlick(f0 = 0.04);");
+    LoweringPlan p = planLowering(m, MathVariant::exact(), true);
+    CHECK(p.batchBodies == BatchBodies::FloatFirst);
+    CHECK(p.batchBody.role == BodyRole::FloatGuarded);
+    CHECK(p.batchBody.precise == Precision::Float);
+    CHECK(p.batchBody.expressions == Precision::Float);  // r * r: one multiplication
+    CHECK_FALSE(p.batchBody.checkOutput);                 // no diffuse: the guards bound the value
+    REQUIRE(p.fallbackBody);
+    CHECK(p.fallbackBody->role == BodyRole::Plain);
+    CHECK(p.fallbackBody->precise == Precision::Double);
+    CHECK(p.scalarBody.precise == Precision::Double);
+    CHECK(p.lambda == LambdaForm::RootSums);
+    CHECK_FALSE(p.fresnel.rangeGuard);  // f0 = 0.04 >= 1e-6 at every angle
+    CHECK(p.fresnel.atMostOne);
+    CHECK_FALSE(p.flushDenormals);
+    CHECK(printPlan(m, p).find("batch-bodies: float-first") != std::string::npos);
+}
+
+TEST_CASE("the float body keeps sums, long chains and exp in double") {
+    CHECK(exactPlan("input r = 0.5; ndf = ggx(r + 0.01); fresnel = schlick(f0 = 0.04);").batchBody.expressions ==
+          Precision::Double);
+    CHECK(exactPlan("input r = 0.5; ndf = ggx(exp(r)); fresnel = schlick(f0 = 0.04);").batchBody.expressions ==
+          Precision::Double);
+    CHECK(exactPlan("input r = 0.5; let a = r*r*r*r*r*r*r*r*r*r; ndf = ggx(a); fresnel = schlick(f0 = 0.04);")
+              .batchBody.expressions == Precision::Double);
+    CHECK(exactPlan("input r = 0.5; ndf = ggx(pow(r, 4)); fresnel = schlick(f0 = 0.04);").batchBody.expressions ==
+          Precision::Float);
+}
+
+TEST_CASE("no float-first body where float would lose accuracy or a table is read") {
+    // Schlick from eta: (eta - 1)/(eta + 1) cancels near 1 in float.
+    CHECK(exactPlan("ndf = ggx(0.3); fresnel = schlick(eta = 1.5);").batchBodies == BatchBodies::Plain);
+    // A per-lane dielectric eta may cross the critical angle.
+    CHECK(exactPlan("input eta = 1.5; ndf = ggx(0.3); fresnel = dielectric(eta);").batchBodies == BatchBodies::Plain);
+    CHECK(exactPlan("ndf = ggx(0.3); fresnel = dielectric(1.5);").batchBodies == BatchBodies::FloatFirst);
+    CHECK(exactPlan("ndf = ggx(0.3); masking = smith_height_correlated; energy = kulla_conty;").batchBodies ==
+          BatchBodies::Plain);
+    CHECK(exactPlan("ndf = beckmann(0.3); masking = smith_separable;").batchBodies == BatchBodies::Plain);
+    MathVariant doubleOnly = MathVariant::exact();
+    doubleOnly.floatFirst = false;
+    CHECK(planLowering(material("ndf = ggx(0.3);"), doubleOnly, true).batchBodies == BatchBodies::Plain);
+}
+
+TEST_CASE("a diffuse term keeps the output check of a guarded body") {
+    LoweringPlan p = exactPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04); diffuse = lambert(0.5);");
+    REQUIRE(p.batchBodies == BatchBodies::FloatFirst);
+    CHECK(p.batchBody.checkOutput);
+}
+
+TEST_CASE("fast GGX: a guarded body only when isotropic") {
+    LoweringPlan iso = fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
+    CHECK(iso.batchBodies == BatchBodies::GuardedFast);
+    CHECK(iso.batchBody.role == BodyRole::FastGuarded);
+    CHECK(iso.batchBody.halfVector == HalfVectorForm::Estimated);  // f0 >= 1e-6
+    CHECK_FALSE(iso.batchBody.scaleMaskingSums);
+    CHECK(iso.scalarBody.scaleMaskingSums);
+    CHECK(iso.flushDenormals);
+    CHECK_FALSE(planLowering(material("ndf = ggx(0.3);"), MathVariant::fast(), false).flushDenormals);
+    // Equal constant alphas are one alpha.
+    CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3);").ndfIsotropic);
+    CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3);").batchBodies == BatchBodies::GuardedFast);
+    CHECK_FALSE(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5);").ndfIsotropic);
+    CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5);").batchBodies == BatchBodies::Plain);
+    // An f0 that can reach 0 keeps the cancellation-free 1 - cos and the F guard.
+    LoweringPlan lanes = fastPlan("input f0 = 0.04; ndf = ggx(0.3); fresnel = schlick(f0 = f0);");
+    CHECK(lanes.batchBody.halfVector == HalfVectorForm::Precise);
+    CHECK(lanes.fresnel.rangeGuard);
+}
+
+TEST_CASE("the half angle in float: exponent NDFs with well-conditioned consumers") {
+    CHECK(exactPlan("ndf = beckmann(0.3); masking = smith_separable; fresnel = schlick(f0 = 0.04);")
+              .scalarBody.halfVector == HalfVectorForm::InFloat);
+    CHECK(exactPlan("ndf = beckmann(0.3); masking = cook_torrance;").scalarBody.halfVector == HalfVectorForm::Precise);
+    CHECK(exactPlan("ndf = ggx(0.3); masking = smith_separable;").scalarBody.halfVector == HalfVectorForm::Precise);
+    LoweringPlan constant = exactPlan("ndf = beckmann(0.3); fresnel = dielectric(1.5);");
+    CHECK(constant.fresnel.exactInFloat);
+    CHECK(constant.scalarBody.halfVector == HalfVectorForm::InFloat);
+    LoweringPlan perLane = exactPlan("input eta = 1.5; ndf = beckmann(0.3); fresnel = dielectric(eta);");
+    CHECK_FALSE(perLane.fresnel.exactInFloat);
+    CHECK(perLane.scalarBody.halfVector == HalfVectorForm::Precise);
+    // Fast bodies compute in float already.
+    CHECK(fastPlan("ndf = beckmann(0.3);").scalarBody.halfVector == HalfVectorForm::Precise);
+}
+
+TEST_CASE("the Smith Lambda form and the model substitutions") {
+    CHECK(exactPlan("ndf = ggx(0.3); masking = smith_separable;").lambda == LambdaForm::RootSums);
+    CHECK(exactPlan("ndf = ggx(0.3); masking = smith_height_direction_correlated;").lambda == LambdaForm::ClosedForm);
+    CHECK(exactPlan("ndf = beckmann(0.3); masking = smith_separable;").lambda == LambdaForm::ClosedForm);
+    CHECK(exactPlan("ndf = ggx(0.3); masking = neumann;").lambda == LambdaForm::None);
+    MathVariant walter = MathVariant::exact();
+    walter.walterLambda = true;
+    CHECK(planLowering(material("ndf = beckmann(0.3); masking = smith_separable;"), walter, true).lambda ==
+          LambdaForm::WalterFit);
+    CHECK(planLowering(material("ndf = ggx(0.3); masking = smith_separable;"), walter, true).lambda ==
+          LambdaForm::RootSums);
+    CHECK(walterLambdaApplies(material("ndf = blinn_phong(20); masking = smith_separable;")));
+    CHECK_FALSE(walterLambdaApplies(material("ndf = ggx(0.3); masking = smith_separable;")));
+    CHECK_FALSE(walterLambdaApplies(material("ndf = beckmann(0.3); masking = kelemen;")));
+    MathVariant schlick = MathVariant::exact();
+    schlick.schlickDielectric = true;
+    LoweringPlan p = planLowering(material("ndf = ggx(0.3); fresnel = dielectric(1.5);"), schlick, true);
+    CHECK(p.fresnel.substituteSchlick);
+    CHECK_FALSE(p.fresnel.exactInFloat);
+    CHECK(schlickDielectricApplies(material("ndf = ggx(0.3); fresnel = dielectric(1.5);")));
+    CHECK_FALSE(schlickDielectricApplies(material("ndf = ggx(0.3); fresnel = conductor(eta = 0.2, k = 3);")));
+}
+
+TEST_CASE("every catalog entry has an emitter") {
+    for (const ModelInfo* m : catalog()) {
+        CAPTURE(modelSlotName(m->slot));
+        CAPTURE(m->name);
+        CHECK(findTermEmitter(*m) != nullptr);
+    }
+    // ... and every emitter names a catalog entry of its slot.
+    for (const TermEmitterEntry& e : termEmitterRegistry()) {
+        CAPTURE(e.modelName);
+        CHECK(findModel(e.slot, e.modelName) != nullptr);
+    }
+}
+
+}  // TEST_SUITE
+
+TEST_SUITE("codegen_key") {
+
+TEST_CASE("the codegen identity changes with any embedded table value") {
+    std::vector<EmbeddedTable> tables = embeddedTables();
+    REQUIRE(tables.size() >= 3);  // the Gaussian normalization and the two F_avg tables
+    const std::string base = codegenIdentity(codegenSourceDigest(), tables);
+    CHECK(base == codegenIdentity());
+    for (size_t t = 0; t < tables.size(); ++t) {
+        CAPTURE(tables[t].name);
+        REQUIRE(tables[t].bytes > 0);
+        std::vector<unsigned char> copy(static_cast<const unsigned char*>(tables[t].data),
+                                        static_cast<const unsigned char*>(tables[t].data) + tables[t].bytes);
+        copy[copy.size() / 2] ^= 1;  // one bit of one entry
+        std::vector<EmbeddedTable> changed = tables;
+        changed[t].data = copy.data();
+        CHECK(codegenIdentity(codegenSourceDigest(), changed) != base);
+    }
+    CHECK(codegenIdentity("0000", tables) != base);
+    CHECK(base.find("llvm 19") != std::string::npos);
+}
+
+TEST_CASE("the source digest is the contents of the listed sources, recomputed here") {
+    // What cmake/HashSources.cmake does at build time, redone independently:
+    // two builds of the same sources give this digest wherever they are built.
+    std::istringstream list(codegenSourceList());
+    std::string rel, manifest;
+    int files = 0;
+    while (list >> rel) {
+        std::ifstream in(std::string(FACET_SOURCE_DIR) + "/" + rel, std::ios::binary);
+        REQUIRE_MESSAGE(in, rel);
+        std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        manifest += rel + "\n" + llvm::toHex(llvm::SHA256::hash(llvm::arrayRefFromStringRef(bytes)), true) + "\n";
+        ++files;
+    }
+    CHECK(files > 40);
+    CHECK(std::string(codegenSourceList()).find("compiler/lowering/KernelEntries.cpp") != std::string::npos);
+    CHECK(std::string(codegenSourceList()).find("compiler/models/ndf/GgxEmitter.cpp") != std::string::npos);
+    std::string digest = llvm::toHex(llvm::SHA256::hash(llvm::arrayRefFromStringRef(manifest)), true);
+    CHECK(digest == codegenSourceDigest());
+}
+
+}  // TEST_SUITE
