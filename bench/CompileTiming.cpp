@@ -135,14 +135,8 @@ int main(int argc, char** argv) {
                                                   ? FacetJit::Level::Optimized
                                                   : FacetJit::Level::Quick;
                 // The same compile in phases (what Compiler::compileObject does).
-                LoweringOptions lo;
-                lo.energyTable = kernel->energyTable().get();
-                lo.math = options.math;
-                lo.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
-                lo.variant.floatFirst = options.floatFirst;
-                lo.width = options.backend == Backend::Simd ? kernel->width() : 4;
-                lo.emitScalar = options.backend == Backend::Scalar;
-                lo.emitBatch = options.backend == Backend::Simd;
+                LoweringOptions lo = loweringOptionsFor(options, kernel->energyTable().get(),
+                                                        options.backend == Backend::Simd, kernel->width());
                 std::vector<double> tl, to, te;
                 for (int r = 0; r < runs; ++r) {
                     llvm::LLVMContext context;

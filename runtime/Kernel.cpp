@@ -42,10 +42,6 @@ const char* backendName(Backend b) {
     return "?";
 }
 
-namespace {
-
-// The lowering of a kernel with `options`: one entry point (scalar, or
-// batch of `width` lanes), the math mode's variant.
 LoweringOptions loweringOptionsFor(const CompileOptions& options, const EnergyTable* energyTable, bool simd, int width) {
     LoweringOptions lowering;
     lowering.energyTable = energyTable;
@@ -57,6 +53,8 @@ LoweringOptions loweringOptionsFor(const CompileOptions& options, const EnergyTa
     lowering.emitBatch = simd;
     return lowering;
 }
+
+namespace {
 
 std::optional<double> parseDouble(const std::string& s) {
     if (s.empty()) return std::nullopt;

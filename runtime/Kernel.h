@@ -89,6 +89,12 @@ struct CompileOptions {
     std::string canonical() const;  // stable text, part of the cache key
 };
 
+// The lowering options of a kernel compiled with `options`: one entry point
+// (scalar, or a batch of `width` lanes) and the math mode's variant. The one
+// mapping from compile options to lowering options (compiles, `facet ir`,
+// ahead-of-time builds and facet_compile_timing use it).
+LoweringOptions loweringOptionsFor(const CompileOptions& options, const EnergyTable* energyTable, bool simd, int width);
+
 using ScalarKernelFn = void (*)(const float*, const float*, const float*, float*);
 // The scalar kernel's twin that also reports whether the lane was invalid.
 using ScalarStatusFn = int32_t (*)(const float*, const float*, const float*, float*);
