@@ -75,7 +75,11 @@ llvm::Value* NdfEmitter::smithRoot(LaneEmitter&, const NdfParams&, const std::ar
     internal_error << "Smith root form of an NDF without one (NdfLoweringTraits::smithRootSums)";
 }
 
-llvm::Value* NdfEmitter::energyAlpha(LaneEmitter&, const NdfParams& n) const { return n.axD; }
+// The geometric mean of the alphas, as the reference's lookup (KullaContyEval.h).
+llvm::Value* NdfEmitter::energyAlpha(LaneEmitter& lane, const NdfParams& n) const {
+    MathEmitter& pm = lane.preciseMath();
+    return n.isotropic ? n.axD : pm.sqrt(pm.mul(n.axD, n.ayD));
+}
 
 FresnelAverageArgs FresnelEmitter::averageArgs(LaneEmitter&) const { return {}; }
 

@@ -78,7 +78,8 @@ public:
     virtual llvm::Value* cosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<llvm::Value*, 3>& v) const;
     // R(v) = sqrt((n.v)^2 + proj(v)) = (n.v)(1 + 2 Lambda(v)), float (smithRootSums).
     virtual llvm::Value* smithRoot(LaneEmitter& lane, const NdfParams& n, const std::array<llvm::Value*, 3>& v) const;
-    // The roughness the Kulla-Conty table is looked up with, precise type.
+    // The roughness the Kulla-Conty table is looked up with, precise type
+    // (default: alpha, or sqrt(ax ay) for an anisotropic lobe).
     virtual llvm::Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const;
 };
 

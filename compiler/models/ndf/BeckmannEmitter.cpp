@@ -77,11 +77,6 @@ public:
         // exp underflowed: 0, not 0/0 when mz^4 underflows too.
         return pm.select(pm.gt(e, pm.c(lane.expTailLimit())), pm.c(0.0), D);
     }
-
-    Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const override {
-        MathEmitter& pm = lane.preciseMath();
-        return n.isotropic ? n.axD : pm.sqrt(pm.mul(n.axD, n.ayD));
-    }
 };
 
 }  // namespace

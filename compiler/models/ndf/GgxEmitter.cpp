@@ -93,12 +93,6 @@ public:
         MathEmitter& fm = lane.floatMath();
         return fm.sqrt(fm.fma(v[2], v[2], lane.smithProjection(*this, n, v)));
     }
-
-    // The table's roughness: sqrt(ax ay) for an anisotropic lobe.
-    Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const override {
-        MathEmitter& pm = lane.preciseMath();
-        return n.isotropic ? n.axD : pm.sqrt(pm.mul(n.axD, n.ayD));
-    }
 };
 
 }  // namespace
