@@ -124,10 +124,14 @@ public:
     // precise type; then roundAlphas() gives their float values.
     NdfParams alphaParams(const ModelUse& use, int px, int py, bool isotropic);
     void roundAlphas(NdfParams& n);
-    // Both, for an NDF whose only parameters are alpha_x = px, alpha_y = py
-    // (one alpha where the plan says the NDF is isotropic).
-    NdfParams roundedAlphaParams(const ModelUse& use, int px, int py) {
-        NdfParams n = alphaParams(use, px, py, plan.ndfIsotropic);
+    // Both, for an NDF with alpha_x = px and alpha_y = py (px == py: one
+    // alpha; also one where the plan says the NDF is isotropic) and, in
+    // NdfParams::own in this order, the model's own parameters `own` in the
+    // precise type.
+    NdfParams roundedAlphaParams(const ModelUse& use, int px, int py, std::initializer_list<int> own = {}) {
+        NdfParams n = alphaParams(use, px, py, px == py || plan.ndfIsotropic);
+        int k = 0;
+        for (int p : own) n.own.at(k++) = scalarParam(use, p, false);
         roundAlphas(n);
         return n;
     }

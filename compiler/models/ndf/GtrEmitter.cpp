@@ -15,10 +15,7 @@ public:
     GtrEmitter() { traits.isotropicOnly = true; }
 
     NdfParams params(LaneEmitter& lane) const override {
-        NdfParams n = lane.alphaParams(lane.material.ndf, kAlpha, kAlpha, true);
-        n.own[kOwnGamma] = lane.scalarParam(lane.material.ndf, kGamma, false);
-        lane.roundAlphas(n);
-        return n;
+        return lane.roundedAlphaParams(lane.material.ndf, kAlpha, kAlpha, {kGamma});  // own[kOwnGamma]
     }
 
     // D = c / t^gamma, c = phi(L) / (pi phi((1 - gamma) L)), L = ln a^2,
