@@ -156,6 +156,12 @@ def ndf_D(ndf, p, m):
             c = (g - 1) * (a2 - 1) / (PI * (1 - a2 ** (1 - g)))
         # 1 + (a^2 - 1) mz^2 = a^2 mz^2 + sin^2: no cancellation near mz = 1.
         return c / (a2 * mz * mz + s2) ** g
+    if ndf == "student_t":
+        # Ribardiere et al. 2017: (1 + e/(g - 1))^-g / (pi ax ay mz^4),
+        # e = (mx^2/ax^2 + my^2/ay^2)/mz^2; the power taken as exp(-g log1p(.)).
+        ax, ay, g = p["alpha_x"], p["alpha_y"], p["gamma"]
+        e = (mx * mx / (ax * ax) + my * my / (ay * ay)) / (mz * mz)
+        return math.exp(-g * math.log1p(e / (g - 1))) / (PI * ax * ay * mz ** 4)
     if ndf == "gaussian":
         a = p["alpha"]
         theta = math.atan2(math.sqrt(s2), mz)  # = acos(mz), accurate near 0
@@ -505,6 +511,7 @@ MODELS = {
         "ward": [["alpha"], ["alpha_x", "alpha_y"]],
         "blinn_phong": [["exponent"]],
         "gtr": [["alpha", "gamma"]],
+        "student_t": [["alpha", "gamma"], ["alpha_x", "alpha_y", "gamma"]],
         "gaussian": [["alpha"]],
     },
     "masking": {name: [[]] for name in (
@@ -591,6 +598,8 @@ class Material:
         for key in ("alpha_x", "alpha_y"):
             if key in pn:
                 pn[key] = max(pn[key], MIN_ALPHA)
+        if self.models["ndf"] == "student_t":  # SPEC 3: gamma > 1.5 (clamped to [1.5, 1e4])
+            pn["gamma"] = min(max(pn["gamma"], 1.5), 1e4)
         return params
 
     def eval(self, wi, wo, values):

@@ -1,0 +1,61 @@
+// student_t: the Student's t-distribution of slopes as IR (the reference is
+// StudentT.cpp), in log form in the precise type, from u = wi + wo (h up to
+// scale): e is a ratio of u's components and mz^4 = uz^4 / |u|^4.
+#include "lowering/LaneEmitter.h"
+
+#include <cmath>
+
+namespace facet {
+namespace {
+
+using llvm::Value;
+
+constexpr int kAlphaX = 0, kAlphaY = 1, kGamma = 2;
+constexpr int kOwnGamma = 0;  // NdfParams::own: the clamped gamma, precise type
+
+class StudentTEmitter final : public NdfEmitter {
+public:
+    StudentTEmitter() { traits.dFromUnnormalizedHalf = true; }
+
+    NdfParams params(LaneEmitter& lane) const override {
+        return lane.roundedAlphaParams(lane.material.ndf, kAlphaX, kAlphaY, {kGamma});  // own[kOwnGamma]
+    }
+
+    // D = exp(-gamma log(1 + x) - 2 log mz^2) / (pi ax ay), x = s / ((gamma
+    // - 1) uz^2), s = ux^2/ax^2 + uy^2/ay^2, mz^2 = uz^2 / |u|^2. For x > 1,
+    // log(1 + x) = log(s / (gamma - 1)) - log uz^2 + log1p(1/x), and the
+    // powers of uz combine to (gamma - 2) log uz^2: no overflow of x or of
+    // the power toward the horizon (where D grows for gamma < 2). log uz^2
+    // is 2 log|uz|, so that a float uz^2 cannot underflow.
+    Value* D(LaneEmitter& lane, const NdfParams& n, const LaneGeometry& geo) const override {
+        MathEmitter& pm = lane.preciseMath();
+        const std::array<Value*, 3>& u = geo.slopeH;
+        Value* G = n.own[kOwnGamma];
+        Value* s = n.isotropic ? pm.div(pm.fma(u[0], u[0], pm.mul(u[1], u[1])), pm.mul(n.axD, n.axD))
+                               : pm.add(pm.div(pm.mul(u[0], u[0]), pm.mul(n.axD, n.axD)),
+                                        pm.div(pm.mul(u[1], u[1]), pm.mul(n.ayD, n.ayD)));
+        Value* gm1 = pm.sub(G, pm.c(1.0));
+        Value* x = pm.div(s, pm.mul(gm1, pm.mul(u[2], u[2])));
+        Value* logUz2 = pm.mul(pm.log(pm.abs(u[2])), pm.c(2.0));
+        Value* farTail = pm.fma(pm.sub(G, pm.c(2.0)), logUz2,
+                                pm.neg(pm.mul(G, pm.add(pm.log(pm.div(s, gm1)), pm.log1p(pm.div(pm.c(1.0), x))))));
+        Value* nearTail = pm.sub(pm.neg(pm.mul(G, pm.log1p(x))), pm.add(logUz2, logUz2));
+        Value* logD = pm.select(pm.gt(x, pm.c(1.0)), farTail, nearTail);
+        // |u|^2 (1 where slopeHLen2 is null, u = h): mz^-4 = |u|^4 / uz^4.
+        if (geo.slopeHLen2) logD = pm.add(logD, pm.mul(pm.log(geo.slopeHLen2), pm.c(2.0)));
+        // The normalization 1 / (pi ax ay) in the exponent too: ax ay may
+        // leave float's range where D does not.
+        Value* logNorm = n.isotropic ? pm.mul(pm.log(n.axD), pm.c(2.0)) : pm.add(pm.log(n.axD), pm.log(n.ayD));
+        logNorm = pm.add(logNorm, pm.c(std::log(kPi)));
+        return pm.exp(pm.sub(logD, logNorm));
+    }
+};
+
+}  // namespace
+
+std::vector<TermEmitterEntry> facetEmitters_ndf_StudentTEmitter() {
+    static const StudentTEmitter emitter;
+    return {{ModelSlot::Ndf, "student_t", &emitter}};
+}
+
+}  // namespace facet
