@@ -12,7 +12,14 @@
 // kernels a lane whose reference is a normal float in every channel (below
 // 1e38) is not marked and is within 2e-3 relative of it (the differential
 // tests' bound for every value).
-// Prints the executions and every finding; exit 1 if there was one.
+// Each material gets a batch of L-31..L lanes (L = --lanes, default 256), so
+// that SIMD kernels of every width also run a partial last chunk, and every
+// array a kernel reads or writes ends where an inaccessible page begins
+// (GuardedArray): the kernels are machine code that no sanitizer
+// instruments, and a read or write past the last lane faults there.
+// Prints every finding (the first 50) and, at the end, the totals: materials,
+// kernels, lanes (summed over kernels), findings and wall time. Exit 1 if
+// there was a finding, 2 on a usage error.
 #include "DiffHarness.h"
 #include "RandomMaterial.h"
 
@@ -20,13 +27,20 @@
 #include "Kernel.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cfloat>
+#include <chrono>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fmt/format.h>
+#include <memory>
 #include <random>
 #include <string>
+#include <sys/mman.h>
+#include <unistd.h>
 
 using namespace facet;
 using namespace facet::test;
@@ -58,6 +72,36 @@ void addHostileLanes(Sample& s, std::mt19937_64& rng) {
     }
 }
 
+// A copy of n values of T that ends exactly where a PROT_NONE page begins.
+template <typename T>
+class GuardedArray {
+public:
+    GuardedArray(const T* values, size_t n) {
+        const size_t page = size_t(sysconf(_SC_PAGESIZE)), bytes = n * sizeof(T);
+        const size_t span = (bytes + page - 1) / page * page;
+        length_ = span + page;
+        void* p = mmap(nullptr, length_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        if (p == MAP_FAILED) fail("mmap");
+        base_ = static_cast<char*>(p);
+        if (mprotect(base_ + span, page, PROT_NONE) != 0) fail("mprotect");
+        data_ = reinterpret_cast<T*>(base_ + span - bytes);
+        if (bytes) std::memcpy(data_, values, bytes);
+    }
+    GuardedArray(const GuardedArray&) = delete;
+    GuardedArray& operator=(const GuardedArray&) = delete;
+    ~GuardedArray() { munmap(base_, length_); }
+    T* data() const { return data_; }
+
+private:
+    [[noreturn]] static void fail(const char* call) {
+        std::fprintf(stderr, "facet_jit_fuzz: %s: %s\n", call, std::strerror(errno));
+        std::exit(1);
+    }
+    char* base_ = nullptr;
+    size_t length_ = 0;
+    T* data_ = nullptr;
+};
+
 struct Counters {
     long materials = 0, kernels = 0, lanes = 0, findings = 0;
 };
@@ -68,15 +112,25 @@ void finding(Counters& c, const std::string& what) {
 
 void checkKernel(const Kernel& k, const std::string& label, const Sample& s, bool exact, Counters& c) {
     const size_t n = s.size();
-    std::vector<const float*> inputs;
-    for (int slot = 0; slot < k.inputCount(); ++slot) inputs.push_back(s.slots[slot].data());
-    std::vector<float> out[3];
-    for (auto& o : out) o.assign(n, -1);
-    float* rgb[3] = {out[0].data(), out[1].data(), out[2].data()};
-    const float* wi[3] = {s.dir[0].data(), s.dir[1].data(), s.dir[2].data()};
-    const float* wo[3] = {s.dir[3].data(), s.dir[4].data(), s.dir[5].data()};
-    std::vector<uint8_t> status(n, 7);
-    int64_t invalid = k.evalBatch(int64_t(n), wi, wo, inputs.empty() ? nullptr : inputs.data(), rgb, status.data());
+    std::vector<std::unique_ptr<GuardedArray<float>>> arrays;  // directions, then slots
+    for (const auto& d : s.dir) arrays.push_back(std::make_unique<GuardedArray<float>>(d.data(), n));
+    std::vector<const float*> slotPointers;
+    for (int slot = 0; slot < k.inputCount(); ++slot) {
+        arrays.push_back(std::make_unique<GuardedArray<float>>(s.slots[slot].data(), n));
+        slotPointers.push_back(arrays.back()->data());
+    }
+    GuardedArray<const float*> inputsArray(slotPointers.data(), slotPointers.size());
+    const float* const* inputs = slotPointers.empty() ? nullptr : inputsArray.data();
+    const std::vector<float> unwritten(n, -1);
+    GuardedArray<float> outArrays[3] = {{unwritten.data(), n}, {unwritten.data(), n}, {unwritten.data(), n}};
+    float* rgb[3] = {outArrays[0].data(), outArrays[1].data(), outArrays[2].data()};
+    const float* out[3] = {rgb[0], rgb[1], rgb[2]};
+    const float* wi[3] = {arrays[0]->data(), arrays[1]->data(), arrays[2]->data()};
+    const float* wo[3] = {arrays[3]->data(), arrays[4]->data(), arrays[5]->data()};
+    const std::vector<uint8_t> unmarked(n, 7);
+    GuardedArray<uint8_t> statusArray(unmarked.data(), n);
+    const uint8_t* status = statusArray.data();
+    int64_t invalid = k.evalBatch(int64_t(n), wi, wo, inputs, rgb, statusArray.data());
     ++c.kernels;
     c.lanes += long(n);
     int64_t marked = 0;
@@ -116,22 +170,34 @@ void checkKernel(const Kernel& k, const std::string& label, const Sample& s, boo
     if (marked != invalid) finding(c, fmt::format("{}: returned {} invalid lanes, status marks {}", label, invalid, marked));
 }
 
+// A whole decimal number, at least `min`, into `out`; false for anything else.
+bool parseCount(const char* text, unsigned long long min, unsigned long long& out) {
+    if (!*text || *text == '-' || *text == '+') return false;
+    char* end = nullptr;
+    errno = 0;
+    out = std::strtoull(text, &end, 10);
+    return errno == 0 && *end == '\0' && out >= min;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    uint64_t seed = 1;
-    long count = 100;
-    size_t lanes = 256;
+    unsigned long long seed = 1, count = 100, lanes = 256;
     for (int i = 1; i < argc; ++i) {
         std::string a = argv[i];
-        if (i + 1 < argc && a == "--seed") seed = std::strtoull(argv[++i], nullptr, 10);
-        else if (i + 1 < argc && a == "--count") count = std::strtol(argv[++i], nullptr, 10);
-        else if (i + 1 < argc && a == "--lanes") lanes = size_t(std::strtoul(argv[++i], nullptr, 10));
-        else {
-            std::fprintf(stderr, "usage: facet_jit_fuzz [--seed S] [--count N] [--lanes L]\n");
+        bool ok = i + 1 < argc;
+        if (ok && a == "--seed") ok = parseCount(argv[++i], 0, seed);
+        else if (ok && a == "--count") ok = parseCount(argv[++i], 0, count) && count <= INT_MAX;
+        else if (ok && a == "--lanes") ok = parseCount(argv[++i], 1, lanes) && lanes <= (1u << 20);
+        else ok = false;
+        if (!ok) {
+            std::fprintf(stderr, "facet_jit_fuzz: bad argument '%s'\n"
+                                 "usage: facet_jit_fuzz [--seed S] [--count N] [--lanes L] (L in 1..1048576)\n",
+                         argv[i]);
             return 2;
         }
     }
+    const auto start = std::chrono::steady_clock::now();
     Compiler compiler;
     compiler.setCacheDir("");
     Counters c;
@@ -140,7 +206,7 @@ int main(int argc, char** argv) {
                                                {"simd", "backend=simd;codegen=quick;cache=off"},
                                                {"simd/ff-off", "backend=simd;float_first=off;codegen=quick;cache=off"},
                                                {"simd/fast", "backend=simd;math=fast;codegen=quick;cache=off"}};
-    for (long m = 0; m < count; ++m) {
+    for (long m = 0; m < long(count); ++m) {
         RandomMaterial rm = randomMaterial(seed, int(m));
         DiagnosticEngine d;
         CheckedProgram program = loadProgramText(rm.text, "random.mat", d);
@@ -149,7 +215,9 @@ int main(int argc, char** argv) {
             continue;
         }
         ++c.materials;
-        Sample s = randomSample(program.materials[0], lanes, seed * 1000003 + uint64_t(m));
+        // L-31..L lanes: every remainder modulo 4, 8 and 16 occurs.
+        const size_t batch = size_t(lanes - rng() % std::min(lanes, 32ull));
+        Sample s = randomSample(program.materials[0], batch, seed * 1000003 + uint64_t(m));
         addHostileLanes(s, rng);
         for (const auto& [name, options] : kBackends) {
             CompileOptions o;
@@ -165,7 +233,8 @@ int main(int argc, char** argv) {
                         std::string(name).find("fast") == std::string::npos, c);
         }
     }
-    std::printf("facet_jit_fuzz: seed %llu: %ld materials, %ld kernels, %ld lanes, %ld findings\n",
-                (unsigned long long)seed, c.materials, c.kernels, c.lanes, c.findings);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::printf("facet_jit_fuzz: seed %llu: %ld materials, %ld kernels, %ld lanes, %ld findings, %.1f s\n", seed,
+                c.materials, c.kernels, c.lanes, c.findings, seconds);
     return c.findings ? 1 : 0;
 }
