@@ -1,7 +1,11 @@
 // RandomMaterial: see RandomMaterial.h.
 #include "RandomMaterial.h"
 
+#include "models/ModelCatalog.h"
+
 #include <fmt/format.h>
+
+#include <algorithm>
 #include <vector>
 
 namespace facet::test {
@@ -9,29 +13,35 @@ namespace facet::test {
 namespace {
 
 struct Combo {
-    const char* ndf;
-    const char* masking;
-    const char* fresnel;
+    const NdfEntry* ndf;
+    bool anisotropic;  // alpha_x and alpha_y apart (NDFs that have both)
+    const ModelInfo* masking;
+    const char* fresnel;  // a Fresnel model and the range of its values
     const char* diffuse;
 };
 
+bool hasAlphaXY(const NdfEntry& ndf) { return paramIndex(ndf, "alpha_x") >= 0 && paramIndex(ndf, "alpha_y") >= 0; }
+
+// Every NDF (isotropic, and anisotropic where it has alpha_x and alpha_y) x
+// masking of the catalog that the checker accepts (a whole lobe takes masking
+// none only; a Smith masking needs an NDF with a Smith Lambda), x the Fresnel
+// value ranges below x diffuse.
 std::vector<Combo> combinations() {
-    const char* ndfs[] = {"ggx", "ggx_aniso", "beckmann", "beckmann_aniso", "blinn_phong", "gtr", "gaussian", "ward"};
-    const char* maskings[] = {"none", "implicit", "cook_torrance", "kelemen", "neumann", "schlick_smith",
-                              "smith_separable", "smith_height_correlated", "smith_direction_correlated",
-                              "smith_height_direction_correlated"};
     const char* fresnels[] = {"none", "schlick_f0", "schlick_eta", "dielectric", "dielectric_tir", "conductor"};
     const char* diffuses[] = {"none", "lambert"};
     std::vector<Combo> out;
-    for (const char* n : ndfs)
-        for (const char* m : maskings) {
-            std::string ns = n, ms = m;
-            bool smith = ms.rfind("smith_", 0) == 0;
-            if (ns == "ward" && ms != "none") continue;
-            if ((ns == "gtr" || ns == "gaussian") && smith) continue;
-            for (const char* f : fresnels)
-                for (const char* d : diffuses) out.push_back({n, m, f, d});
+    for (const ModelInfo* n : catalogSlot(ModelSlot::Ndf)) {
+        const NdfEntry& ndf = ndfEntry(*n);
+        for (bool aniso : {false, true}) {
+            if (aniso && !hasAlphaXY(ndf)) continue;
+            for (const ModelInfo* m : catalogSlot(ModelSlot::Masking)) {
+                if (ndf.wholeLobe && std::string(m->name) != "none") continue;
+                if (m->smith && !ndf.smith) continue;
+                for (const char* f : fresnels)
+                    for (const char* d : diffuses) out.push_back({&ndf, aniso, m, f, d});
+            }
         }
+    }
     return out;
 }
 
@@ -106,21 +116,30 @@ RandomMaterial randomMaterial(uint64_t seed, int i) {
         body += fmt::format("    let l0 = {};\n", g.unit());
         g.floatInputs.push_back("l0");  // lets are usable like inputs from here on
     }
-    std::string ndf = c.ndf;
-    if (ndf == "ggx") body += fmt::format("    ndf = ggx({});\n", g.ranged(0.02, 1.0));
-    else if (ndf == "ggx_aniso")
-        body += fmt::format("    ndf = ggx(alpha_x = {}, alpha_y = {});\n", g.ranged(0.02, 1.0), g.ranged(0.02, 1.0));
-    else if (ndf == "beckmann") body += fmt::format("    ndf = beckmann({});\n", g.ranged(0.02, 1.0));
-    else if (ndf == "beckmann_aniso")
-        body += fmt::format("    ndf = beckmann({}, {});\n", g.ranged(0.02, 1.0), g.ranged(0.02, 1.0));
-    else if (ndf == "blinn_phong")
-        body += g.pick(2) ? fmt::format("    ndf = blinn_phong(beckmann_to_phong({}));\n", g.ranged(0.05, 1.0))
-                          : fmt::format("    ndf = blinn_phong({});\n", g.ranged(1, 2000));
-    else if (ndf == "gtr") body += fmt::format("    ndf = gtr({}, {});\n", g.ranged(0.02, 1.0), g.ranged(0.5, 3.0));
-    else if (ndf == "gaussian") body += fmt::format("    ndf = gaussian({});\n", g.ranged(0.05, 1.0));
-    else body += fmt::format("    ndf = ward({}, {});\n", g.ranged(0.05, 0.6), g.ranged(0.05, 0.6));
+    // The NDF's parameters: roughnesses as random expressions in [0.02, 1]
+    // ([0.05, 0.6] for a whole lobe), shape parameters around their typical
+    // value, anything else (Blinn-Phong's exponent) from a random roughness.
+    const NdfEntry& ndf = *c.ndf;
+    std::vector<double> shape;
+    for (int p : ndf.tableShapeParams) shape.push_back(ndf.canonical[p].typical);
+    ModelArgs<double> atAlpha = ndf.argsAtAlpha(g.uniform(0.05, 1.0), shape);
+    const double alphaLo = ndf.wholeLobe ? 0.05 : 0.02, alphaHi = ndf.wholeLobe ? 0.6 : 1.0;
+    std::string args;
+    for (size_t p = 0; p < ndf.canonical.size(); ++p) {
+        const ModelParam& param = ndf.canonical[p];
+        std::string name = param.name, value;
+        if (name == "alpha_y" && !c.anisotropic) continue;
+        bool isShape = std::find(ndf.tableShapeParams.begin(), ndf.tableShapeParams.end(), int(p)) !=
+                       ndf.tableShapeParams.end();
+        if (name.rfind("alpha", 0) == 0) value = g.ranged(alphaLo, alphaHi);
+        else if (isShape) value = g.ranged(std::max(param.lo, 0.5 * param.typical), 1.5 * param.typical);
+        else value = fmt::format("{:.9g}", atAlpha[int(p)]);
+        if (name == "alpha_x" && !c.anisotropic) name = "alpha";
+        args += (args.empty() ? "" : ", ") + name + " = " + value;
+    }
+    body += fmt::format("    ndf = {}({});\n", ndf.name, args);
 
-    std::string masking = c.masking;
+    std::string masking = c.masking->name;
     if (masking == "schlick_smith") body += fmt::format("    masking = schlick_smith({});\n", g.ranged(0, 1));
     else body += fmt::format("    masking = {};\n", masking);
 
@@ -134,7 +153,7 @@ RandomMaterial randomMaterial(uint64_t seed, int i) {
     if (std::string(c.diffuse) == "lambert") body += fmt::format("    diffuse = lambert({});\n", g.rgbRanged(0, 1));
 
     RandomMaterial out;
-    out.combination = fmt::format("{}/{}/{}/{}", c.ndf, c.masking, c.fresnel, c.diffuse);
+    out.combination = fmt::format("{}{}/{}/{}/{}", ndf.name, c.anisotropic ? "_aniso" : "", masking, c.fresnel, c.diffuse);
     out.text = fmt::format("material random_{} {{\n{}}}\n", i, body);
     return out;
 }

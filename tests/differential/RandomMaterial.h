@@ -1,6 +1,7 @@
 // RandomMaterial: a generator of random, valid materials for differential
-// testing. Covers every NDF x masking x Fresnel x diffuse combination the
-// checker accepts, with constant and input-driven parameters built from
+// testing. Covers every NDF x masking of the model catalog the checker
+// accepts (a new catalog entry is included without an edit here), x Fresnel
+// value ranges x diffuse, with constant and input-driven parameters built from
 // random well-conditioned expressions (so that float-vs-double differences
 // measure the kernels, not cancellation in the user's arithmetic).
 #pragma once
