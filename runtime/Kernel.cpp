@@ -526,7 +526,7 @@ std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& materia
                                                : "";
     std::string keyText = fmt::format("{}|{}|w{}|{}|{}|{}|{}|{}|{}", printMaterial(kernel->material_),
                                       options.canonical(), lowering.width, LLVM_VERSION_STRING, jit_->cpuName(),
-                                      jit_->cpuFeatures(), codegenIdentity(), FacetJit::kPipelineId, tableId);
+                                      jit_->cpuFeatures(), codegenIdentity(kernel->material_), FacetJit::kPipelineId, tableId);
     auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(keyText));
     std::string key = llvm::toHex(digest, true);
     std::string prefix = "facet_" + key.substr(0, 16);

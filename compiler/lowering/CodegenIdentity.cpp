@@ -17,15 +17,11 @@ namespace facet {
 const char* codegenSourceDigest() { return kCodegenSourceDigest; }
 const char* codegenSourceList() { return kCodegenSourceList; }
 
-std::vector<EmbeddedTable> embeddedTables() {
+std::vector<EmbeddedTable> embeddedTables(const CheckedMaterial& material) {
     std::vector<EmbeddedTable> all;
-    for (const TermEmitterEntry& e : termEmitterRegistry())
-        if (e.tables)
-            for (const EmbeddedTable& t : e.tables()) {
-                bool seen = false;  // entries of one file may share a table
-                for (const EmbeddedTable& a : all) seen |= a.name == t.name;
-                if (!seen) all.push_back(t);
-            }
+    for (const ModelUse* use : {&material.ndf, &material.masking, &material.fresnel, &material.diffuse, &material.energy})
+        if (const TermEmitterEntry* e = use->model ? findTermEmitterEntry(*use->model) : nullptr; e && e->tables)
+            for (const EmbeddedTable& t : e->tables(material)) all.push_back(t);
     return all;
 }
 
@@ -43,9 +39,8 @@ std::string codegenIdentity(std::string_view sourceDigest, const std::vector<Emb
                        llvm::toHex(digest, true), LLVM_VERSION_STRING);
 }
 
-const std::string& codegenIdentity() {
-    static const std::string identity = codegenIdentity(kCodegenSourceDigest, embeddedTables());
-    return identity;
+std::string codegenIdentity(const CheckedMaterial& material) {
+    return codegenIdentity(kCodegenSourceDigest, embeddedTables(material));
 }
 
 }  // namespace facet

@@ -7,7 +7,8 @@
 // the model catalog and emitters, the lowering, the JIT's pipeline), taken
 // at build time from their contents, so two builds of the same source agree
 // and any edit changes it; the SHA-256 of every constant table the lowering
-// embeds (the models' emitters list theirs); and the LLVM version. The
+// embeds for the material (the models' emitters list theirs); and the LLVM
+// version. The
 // kernel cache adds the CPU and the material (runtime/Kernel.cpp).
 #pragma once
 
@@ -16,6 +17,8 @@
 #include <vector>
 
 namespace facet {
+
+struct CheckedMaterial;
 
 // Bump when a cached object's ABI or meaning changes without a source change
 // that the digest would catch.
@@ -28,8 +31,9 @@ struct EmbeddedTable {
     size_t bytes = 0;
 };
 
-// The tables of every registered emitter (TermEmitterEntry::tables).
-std::vector<EmbeddedTable> embeddedTables();
+// The tables the kernel of `material` embeds (TermEmitterEntry::tables of
+// its models' emitters).
+std::vector<EmbeddedTable> embeddedTables(const CheckedMaterial& material);
 
 // SHA-256 (hex) of the codegen sources, computed at build time
 // (cmake/HashSources.cmake); codegenSourceList() names the files, relative
@@ -39,7 +43,7 @@ const char* codegenSourceList();
 
 // "codegen v<N>; sources <sha>; tables <sha>; llvm <version>".
 std::string codegenIdentity(std::string_view sourceDigest, const std::vector<EmbeddedTable>& tables);
-// The identity of this build (computed once per process).
-const std::string& codegenIdentity();
+// The identity of this build's code generator for the kernel of `material`.
+std::string codegenIdentity(const CheckedMaterial& material);
 
 }  // namespace facet

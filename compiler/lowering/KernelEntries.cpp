@@ -17,6 +17,8 @@
 #include <llvm/IR/Verifier.h>
 #include <llvm/Support/raw_ostream.h>
 
+#include <algorithm>
+
 namespace facet {
 namespace {
 
@@ -388,6 +390,18 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringOptio
     if (options.emitBatch) {
         out.batchSymbol = symbolPrefix + "_batch";
         emitBatchEntry(k, *out.module, out.batchSymbol);
+    }
+    // Every constant table in the module is part of the cache key: the
+    // energy tables through their own key (runtime/Kernel.cpp), the others
+    // through embeddedTables(), whose per-material hooks must agree with
+    // what the emitters embedded.
+    std::vector<EmbeddedTable> keyed = embeddedTables(material);
+    for (const llvm::GlobalVariable& gv : out.module->globals()) {
+        std::string name = gv.getName().str();
+        if (name.rfind(symbolPrefix, 0) == 0 || name.rfind("facet_energy_", 0) == 0) continue;  // defaults, E tables
+        bool inKey = std::any_of(keyed.begin(), keyed.end(), [&](const EmbeddedTable& t) { return t.name == name; });
+        internal_assert(inKey) << "table '" << name << "' is embedded but not hashed into the cache key "
+                               << "(TermEmitterEntry::tables of its model)";
     }
     std::string errors;
     llvm::raw_string_ostream os(errors);

@@ -26,10 +26,15 @@ const std::vector<TermEmitterEntry>& termEmitterRegistry() {
     return registry;
 }
 
-const void* findTermEmitter(const ModelInfo& model) {
+const TermEmitterEntry* findTermEmitterEntry(const ModelInfo& model) {
     for (const TermEmitterEntry& e : termEmitterRegistry())
-        if (e.slot == model.slot && std::strcmp(e.modelName, model.name) == 0) return e.emitter;
+        if (e.slot == model.slot && std::strcmp(e.modelName, model.name) == 0) return &e;
     return nullptr;
+}
+
+const void* findTermEmitter(const ModelInfo& model) {
+    const TermEmitterEntry* e = findTermEmitterEntry(model);
+    return e ? e->emitter : nullptr;
 }
 
 namespace {

@@ -155,8 +155,10 @@ struct TermEmitterEntry {
     ModelSlot slot;
     const char* modelName;
     const void* emitter;  // the slot's emitter class
-    // The constant tables the emitter may embed (the cache key hashes them).
-    std::vector<EmbeddedTable> (*tables)() = nullptr;
+    // The constant tables the emitter embeds in the kernel of `material`
+    // (the cache key hashes them). Per material, because building a table
+    // can cost more than a compile: only kernels that embed it pay.
+    std::vector<EmbeddedTable> (*tables)(const CheckedMaterial& material) = nullptr;
 };
 
 // The emitters of one material's models (internal error when a model has none).
@@ -170,6 +172,7 @@ struct MaterialEmitters {
 MaterialEmitters termEmitters(const CheckedMaterial& material);
 
 // Every registered emitter (catalog tests); nullptr where a model has none.
+const TermEmitterEntry* findTermEmitterEntry(const ModelInfo& model);
 const void* findTermEmitter(const ModelInfo& model);
 const std::vector<TermEmitterEntry>& termEmitterRegistry();
 

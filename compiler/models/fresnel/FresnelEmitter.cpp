@@ -352,11 +352,16 @@ std::vector<TermEmitterEntry> facetEmitters_fresnel_FresnelEmitter() {
     static const SchlickEmitter schlick;
     static const DielectricEmitter dielectric;
     static const ConductorEmitter conductor;
-    auto dielectricTables = []() -> std::vector<EmbeddedTable> {
+    // The F_avg tables only where energy compensation needs F_avg of
+    // per-lane parameters (averageArgs: constant ones are folded).
+    auto dielectricTables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {
+        if (!material.compensatesEnergy() || constantArg(material.fresnel, kEta)) return {};
         const std::vector<float>& t = fresnelAverageTables().dielectric;
         return {{"facet_favg_dielectric", t.data(), t.size() * sizeof(float)}};
     };
-    auto conductorTables = []() -> std::vector<EmbeddedTable> {
+    auto conductorTables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {
+        if (!material.compensatesEnergy() || (constantArg(material.fresnel, kEta) && constantArg(material.fresnel, kK)))
+            return {};
         const std::vector<float>& t = fresnelAverageTables().conductor;
         return {{"facet_favg_conductor", t.data(), t.size() * sizeof(float)}};
     };

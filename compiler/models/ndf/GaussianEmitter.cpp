@@ -108,7 +108,9 @@ public:
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_GaussianEmitter() {
     static const GaussianEmitter emitter;
-    auto tables = []() -> std::vector<EmbeddedTable> {
+    // The normalization table only where alpha is known per lane (params()).
+    auto tables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {
+        if (isConstantExpr(*material.ndf.args[kAlpha])) return {};
         const std::vector<double>& q = GaussianNormTable::get().q;
         return {{"facet_gaussian_norm_table", q.data(), q.size() * sizeof(double)}};
     };
