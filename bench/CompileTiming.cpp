@@ -23,7 +23,7 @@
 #include "Checker.h"
 #include "Jit.h"
 #include "Kernel.h"
-#include "Lowering.h"
+#include "Pipeline.h"
 
 #include <llvm/IR/LLVMContext.h>
 
@@ -134,20 +134,24 @@ int main(int argc, char** argv) {
                 const FacetJit::Level level = options.codegen == CompileOptions::Codegen::Optimized
                                                   ? FacetJit::Level::Optimized
                                                   : FacetJit::Level::Quick;
-                // The same compile in phases (what Compiler::compileObject does).
-                LoweringOptions lo = loweringOptionsFor(options, kernel->energyTable().get(),
-                                                        options.backend == Backend::Simd, kernel->width());
+                // The same compile in phases: the pipeline's stages, timed as they end.
                 std::vector<double> tl, to, te;
                 for (int r = 0; r < runs; ++r) {
-                    llvm::LLVMContext context;
-                    double t0 = nowNs();
-                    LoweredModule lowered = lowerMaterial(m, lo, context, "facet_timing");
-                    double t1 = nowNs();
-                    compiler.jit().optimize(*lowered.module, level);
-                    double t2 = nowNs();
-                    compiler.jit().emitObject(*lowered.module, level);
-                    double t3 = nowNs();
-                    tl.push_back((t1 - t0) * 1e-6), to.push_back((t2 - t1) * 1e-6), te.push_back((t3 - t2) * 1e-6);
+                    PipelineRun run = PipelineRun::fromChecked(m, options);
+                    PipelineControl control;
+                    control.symbolPrefix = "facet_timing";
+                    double planned = 0, lowered = 0, optimized = 0, emitted = 0;
+                    control.afterStage = [&](PipelineStage stage, const PipelineRun&) {
+                        double now = nowNs();
+                        if (stage == PipelineStage::Planned) planned = now;
+                        if (stage == PipelineStage::Lowered) lowered = now;
+                        if (stage == PipelineStage::Optimized) optimized = now;
+                        if (stage == PipelineStage::Emitted) emitted = now;
+                    };
+                    if (!compiler.runPipeline(run, control, level, diags))
+                        return std::fprintf(stderr, "%s", diags.str().c_str()), 1;
+                    tl.push_back((lowered - planned) * 1e-6), to.push_back((optimized - lowered) * 1e-6);
+                    te.push_back((emitted - optimized) * 1e-6);
                 }
                 double ns = 0;
                 if (speed && options.backend == Backend::Scalar) {

@@ -37,13 +37,4 @@ std::string DiagnosticEngine::str() const {
     return out;
 }
 
-namespace detail {
-InternalErrorReporter::InternalErrorReporter(const char* file, int line, const char* cond) {
-    msg_ << "internal error (a bug in Facet, please report it) at " << file << ":" << line;
-    if (cond) msg_ << ": condition failed: " << cond;
-    msg_ << ": ";
-}
-InternalErrorReporter::~InternalErrorReporter() noexcept(false) { throw InternalError(msg_.str()); }
-}  // namespace detail
-
 }  // namespace facet

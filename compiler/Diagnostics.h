@@ -57,10 +57,16 @@ public:
 
 namespace detail {
 // Collects a message with operator<< and throws InternalError when destroyed.
+// Header-only, so that the libraries below the front end (compiler/numeric)
+// report their invariants the same way without linking it.
 class InternalErrorReporter {
 public:
-    InternalErrorReporter(const char* file, int line, const char* cond);
-    [[noreturn]] ~InternalErrorReporter() noexcept(false);
+    InternalErrorReporter(const char* file, int line, const char* cond) {
+        msg_ << "internal error (a bug in Facet, please report it) at " << file << ":" << line;
+        if (cond) msg_ << ": condition failed: " << cond;
+        msg_ << ": ";
+    }
+    [[noreturn]] ~InternalErrorReporter() noexcept(false) { throw InternalError(msg_.str()); }
     template <typename T>
     InternalErrorReporter& operator<<(const T& v) {
         msg_ << v;

@@ -13,9 +13,9 @@
 
 #include "Builtins.h"
 #include "ExprEval.h"
+#include "GaussianNormalization.h"
 #include "KullaConty.h"
 #include "Material.h"
-#include "models/ndf/GaussianNorm.h"
 
 #include <array>
 #include <memory>

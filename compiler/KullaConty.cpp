@@ -2,6 +2,7 @@
 #include "KullaConty.h"
 
 #include "ExprEval.h"
+#include "Interpolation.h"
 #include "Interpreter.h"
 #include "Quadrature.h"
 
@@ -194,16 +195,6 @@ double constantOf(const Expr& e, const CheckedMaterial& m) {
 }
 
 std::string shortNumber(double x) { return fmt::format("{}", x); }
-
-// Bilinear interpolation in a row-major float grid of rows of `rowLength`:
-// between columns col, col + 1 at fraction s and rows row, row + 1 at fraction t.
-double bilinear(const float* grid, int rowLength, int row, int col, double s, double t) {
-    const float* r0 = &grid[size_t(row) * rowLength + col];
-    const float* r1 = r0 + rowLength;
-    double a = r0[0] + (double(r0[1]) - r0[0]) * s;
-    double b = r1[0] + (double(r1[1]) - r1[0]) * s;
-    return a + (b - a) * t;
-}
 
 }  // namespace
 
@@ -405,96 +396,6 @@ std::shared_ptr<EnergyTable> buildEnergyTable(const EnergyTableKey& key, const E
     t->buildMillis = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     t->origin = "built";
     return t;
-}
-
-// ---- Fresnel averages -------------------------------------------------------
-
-namespace {
-
-// 2 Int_0^1 F(mu) mu dmu for the reference Fresnel `model` with index
-// eta + i k (channel 0).
-double fresnelAverageOf(const char* model, double eta, double k) {
-    ResolvedMaterial<double> r;
-    r.fresnel = &fresnelEntry(*findModel(ModelSlot::Fresnel, model));
-    r.fresnelArgs.set(0, eta);
-    r.fresnelArgs.set(1, k);
-    std::vector<double> br = fresnelAverageBreaks(eta, k);
-    return 2 * integratePanels([&](double mu) { return r.F(mu, 0) * mu; }, br, gaussLegendre<double>(12));
-}
-
-}  // namespace
-
-std::vector<double> fresnelAverageBreaks(double eta, double k) {
-    double mag = std::hypot(eta, k);  // no overflow to inf (h0 = 0) for huge eta or k
-    std::vector<GradePoint> sp = {{0, std::min(1.0, 1 / std::max(mag, 1e-12)) / 64}};
-    if (eta < 1) sp.push_back({std::sqrt((1 - eta) * (1 + eta)), 1e-6});
-    return gradedBreaks(0, 1, sp, 1.0 / 16);
-}
-
-double fresnelAverageDielectric(double eta) {
-    if (std::isinf(eta)) return 1;
-    return fresnelAverageOf("dielectric", std::max(eta, kMinEta), 0);
-}
-
-double fresnelAverageConductor(double eta, double k) {
-    if (std::isinf(eta) || std::isinf(k)) return 1;
-    return fresnelAverageOf("conductor", std::max(eta, kMinEta), std::max(k, 0.0));
-}
-
-double conductorSchlickAverage(double eta, double k) {
-    if (std::isinf(eta) || std::isinf(k)) return 1;
-    double f0 = ((eta - 1) * (eta - 1) + k * k) / ((eta + 1) * (eta + 1) + k * k);
-    return fresnelAverageSchlick(f0);
-}
-
-double FresnelAverageTables::dielectricAt(double eta) const {
-    if (!(eta > 0)) eta = kMinEta;
-    auto lookup = [&](double e) {  // e >= 1
-        double s = std::isinf(e) ? 1 : (e - 1) / (e + 1);
-        double u = std::clamp(s, 0.0, 1.0) * (kDielectricCount - 1);
-        int i = std::min(int(u), kDielectricCount - 2);
-        double t = u - i;
-        return dielectric[i] + (double(dielectric[i + 1]) - dielectric[i]) * t;
-    };
-    if (eta >= 1) return lookup(eta);
-    return 1 - eta * eta * (1 - lookup(1 / eta));
-}
-
-double FresnelAverageTables::conductorAt(double eta, double k) const {
-    eta = std::max(eta, kMinEta);
-    k = std::max(k, 0.0);
-    auto coord = [](double x) {
-        double a = std::isinf(x) ? 1 : x / (x + 1);
-        return std::clamp(a, 0.0, 1.0) * (kConductorCount - 1);
-    };
-    double u = coord(eta), v = coord(std::sqrt(k));
-    int i = std::min(int(u), kConductorCount - 2), j = std::min(int(v), kConductorCount - 2);
-    double residual = bilinear(conductor.data(), kConductorCount, j, i, u - i, v - j);
-    return std::min(1.0, conductorSchlickAverage(eta, k) + residual);
-}
-
-const FresnelAverageTables& fresnelAverageTables() {
-    static const FresnelAverageTables tables = [] {
-        FresnelAverageTables t;
-        t.dielectric.resize(FresnelAverageTables::kDielectricCount);
-        for (int i = 0; i < FresnelAverageTables::kDielectricCount; ++i) {
-            double s = double(i) / (FresnelAverageTables::kDielectricCount - 1);
-            t.dielectric[i] = s >= 1 ? 1.0f : float(fresnelAverageDielectric((1 + s) / (1 - s)));
-        }
-        const int n = FresnelAverageTables::kConductorCount;
-        t.conductor.resize(size_t(n) * n);
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i) {
-                double a = double(i) / (n - 1), b = double(j) / (n - 1);
-                double eta = a / (1 - a), rk = b / (1 - b);  // eta, sqrt(k)
-                double v = (a >= 1 || b >= 1)
-                               ? 0.0
-                               : fresnelAverageConductor(eta, rk * rk) - conductorSchlickAverage(eta, rk * rk);
-                t.conductor[size_t(j) * n + i] = float(v);
-            }
-        return t;
-    }();
-    return tables;
 }
 
 // ---- the interpreter's table slot -------------------------------------------

@@ -7,6 +7,7 @@
 #include "Interpreter.h"
 #include "Jit.h"
 #include "KullaConty.h"
+#include "Pipeline.h"
 #include "TableCache.h"
 
 #include <llvm/Config/llvm-config.h>
@@ -485,38 +486,49 @@ std::unique_ptr<Kernel> Compiler::compileFile(const std::string& path, const std
 std::unique_ptr<Kernel> Compiler::compileText(const std::string& text, const std::string& path,
                                               const std::string& name, const CompileOptions& options,
                                               DiagnosticEngine& diags) {
-    CheckedProgram program = loadProgramText(text, path, diags);
-    if (diags.hasErrors()) return nullptr;
-    const CheckedMaterial* material = program.find(name);
-    if (!material) {
-        diags.error({std::make_shared<const std::string>(path), 0, 0},
-                    fmt::format("no material named '{}'", name));
-        return nullptr;
-    }
-    return compileMaterial(*material, options, diags);
+    PipelineRun run = PipelineRun::fromText(text, path, name, options);
+    return compile(run, diags);
 }
 
 std::unique_ptr<Kernel> Compiler::compileMaterial(const CheckedMaterial& material, const CompileOptions& options,
                                                   DiagnosticEngine& diags) {
+    PipelineRun run = PipelineRun::fromChecked(material, options);
+    return compile(run, diags);
+}
+
+PipelineTarget Compiler::jitTarget(FacetJit::Level level) const {
+    PipelineTarget target;
+    target.jit = jit_.get();
+    target.level = level;
+    target.naturalWidth = jit_->hostVectorWidth();
+    return target;
+}
+
+bool Compiler::runPipeline(PipelineRun& run, const PipelineControl& control, FacetJit::Level level,
+                           DiagnosticEngine& diags) {
+    return runKernelPipeline(run, control, jitTarget(level), *tables_, diags);
+}
+
+std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& diags) {
     auto start = std::chrono::steady_clock::now();
-    CheckedMaterial specialized = specializeMaterial(material, options.bindings, diags);
-    if (diags.hasErrors()) return nullptr;
+    const CompileOptions& options = run.options;
+    // Up to the plan's inputs: what the cache key needs.
+    PipelineControl keyed;
+    keyed.stopAfter = options.backend == Backend::Interp ? PipelineStage::Specialized : PipelineStage::Planned;
+    if (!runPipeline(run, keyed, FacetJit::Level::Optimized, diags)) return nullptr;
 
     std::unique_ptr<Kernel> kernel(new Kernel());
-    kernel->material_ = std::move(specialized);
+    kernel->material_ = run.specialized;
     kernel->backend_ = options.backend;
-    if (kernel->material_.compensatesEnergy())
-        kernel->energyTable_ = tables_->getFor(kernel->material_);
+    kernel->energyTable_ = run.energyTable;
     for (int s = 0; s < kernel->material_.slotCount; ++s) kernel->slotNames_.push_back(kernel->material_.slotName(s));
     if (options.backend == Backend::Interp) {
         kernel->origin_ = "interpreter";
         kernel->compileMillis_ = millisSince(start);
         return kernel;
     }
-    kernel->width_ = options.backend == Backend::Simd ? resolveWidth(options) : 1;
-
-    LoweringOptions lowering = loweringOptionsFor(options, kernel->energyTable_.get(), options.backend == Backend::Simd,
-                                                  kernel->width_);
+    kernel->width_ = run.simd ? run.lowering.width : 1;
+    LoweringOptions lowering = run.lowering;
 
     // The cache key: what the kernel computes (the specialized material,
     // printed), how (options incl. tolerance, width), and with what (LLVM,
@@ -628,10 +640,13 @@ void Compiler::tierUp(const TierUpJob& job, bool closing) {
 
 std::string Compiler::compileObject(const CheckedMaterial& material, const LoweringOptions& lowering,
                                     const std::string& prefix, FacetJit::Level level) {
-    llvm::LLVMContext context;
-    LoweredModule lowered = lowerMaterial(material, lowering, context, prefix);
-    jit_->optimize(*lowered.module, level);
-    return jit_->emitObject(*lowered.module, level)->getBuffer().str();
+    PipelineRun run = PipelineRun::fromSpecialized(material, nullptr);
+    PipelineControl control;
+    control.symbolPrefix = prefix;
+    control.lowering = lowering;
+    DiagnosticEngine diags;  // a specialized material has no user errors left
+    internal_assert(runPipeline(run, control, level, diags)) << diags.str();
+    return std::move(run.object);
 }
 
 void Compiler::link(KernelCode& code, const std::string& object, const std::string& prefix,
@@ -686,73 +701,76 @@ std::optional<AotKernel> Compiler::compileAot(const CheckedMaterial& material, c
                                               llvm::TargetMachine& target, int width, const std::string& prefix,
                                               AotOutput output, DiagnosticEngine& diags) {
     internal_assert(options.backend != Backend::Interp) << "an ahead-of-time build needs a compiled backend";
+    PipelineTarget aotTarget;
+    aotTarget.machine = &target;
+    aotTarget.aotOutput = output;
+    aotTarget.naturalWidth = width;
+    PipelineRun run = PipelineRun::fromChecked(material, options);
+    PipelineControl control;
+    control.symbolPrefix = prefix;
+    control.aotEntryPoints = true;
+    control.stopAfter = PipelineStage::Planned;
+    if (!runKernelPipeline(run, control, aotTarget, *tables_, diags)) return std::nullopt;
     AotKernel aot;
-    aot.material = specializeMaterial(material, options.bindings, diags);
-    if (diags.hasErrors()) return std::nullopt;
-    std::shared_ptr<const EnergyTable> table;
-    if (aot.material.compensatesEnergy()) table = tables_->getFor(aot.material);
-    const bool simd = options.backend == Backend::Simd;
-    aot.width = simd ? (options.width ? options.width : width) : 1;
-    LoweringOptions lowering = loweringOptionsFor(options, table.get(), simd, aot.width);
-    lowering.x86Target = target.getTargetTriple().isX86();
-    aot.variant = lowering.variant.name();
+    aot.material = run.specialized;
+    aot.width = run.simd ? run.lowering.width : 1;
+    aot.variant = run.lowering.variant.name();
     if (options.tolerance) {
         // The variant compileMaterial chooses for the host: the same search,
         // measuring JIT kernels of the host's width against the interpreter.
-        LoweringOptions host = loweringOptionsFor(options, table.get(), simd, resolveWidth(options));
+        LoweringOptions host = loweringOptionsFor(options, run.energyTable.get(), run.simd, resolveWidth(options));
         MathVariant chosen = host.variant;
-        CachedKernel probe = searchVariants(aot.material, host, *options.tolerance, "facet_aot_probe",
+        CachedKernel probe = searchVariants(run.specialized, host, *options.tolerance, "facet_aot_probe",
                                             FacetJit::Level::Quick, chosen);
+        LoweringOptions lowering = run.lowering;
         lowering.variant = chosen;
         aot.variant = probe.variant;
         aot.measuredError = probe.measuredError;
+        run.rewindTo(PipelineStage::Specialized);
+        control.lowering = lowering;
     }
-    llvm::LLVMContext context;
-    LoweredModule lowered = lowerMaterial(aot.material, lowering, context, prefix);
-    addAotEntryPoints(lowered, aot.material, prefix);
-    optimizeKernelModule(*lowered.module, target, FacetJit::Level::Optimized);
-    aot.output = writeAotOutput(*lowered.module, target, output);
+    control.stopAfter = PipelineStage::Emitted;
+    if (!runKernelPipeline(run, control, aotTarget, *tables_, diags)) return std::nullopt;
+    aot.output = std::move(run.object);
     return aot;
 }
 
 std::string Compiler::irText(const std::string& path, const std::string& name, const CompileOptions& options,
                              bool simd, IrOutput output, DiagnosticEngine& diags) {
-    CheckedProgram program = loadProgramFile(path, diags);
-    if (diags.hasErrors()) return "";
-    const CheckedMaterial* material = program.find(name);
-    if (!material) {
-        diags.error({std::make_shared<const std::string>(path), 0, 0}, fmt::format("no material named '{}'", name));
-        return "";
-    }
-    CheckedMaterial specialized = specializeMaterial(*material, options.bindings, diags);
-    if (diags.hasErrors()) return "";
-    std::shared_ptr<const EnergyTable> table;
-    if (specialized.compensatesEnergy()) table = tables_->getFor(specialized);
-    LoweringOptions lowering = loweringOptionsFor(options, table.get(), simd, resolveWidth(options));
-    LoweringPlan plan = planLowering(specialized, lowering.variant, lowering.x86Target);
-    if (output == IrOutput::Plan) return printPlan(specialized, plan);
-    const bool stages = output == IrOutput::Stages;
+    PipelineRun run = PipelineRun::fromFile(path, name, options);
+    run.simd = simd;
+    PipelineControl control;
+    control.stopAfter = output == IrOutput::Plan ? PipelineStage::Planned : PipelineStage::Optimized;
     std::string out;
-    llvm::raw_string_ostream os(out);
-    if (stages) {
-        os << "; ==== stage 1: checked material\n" << printMaterial(*material);
-        os << "; ==== stage 2: specialized material (" << options.bindings.size() << " inputs bound)\n"
-           << printMaterial(specialized);
-        os << "; ==== stage 3: lowering plan\n";
-        std::string planText = printPlan(specialized, plan);
-        for (size_t start = 0; start < planText.size();) {
-            size_t end = planText.find('\n', start);
-            os << "; " << planText.substr(start, end - start) << "\n";
-            start = end == std::string::npos ? planText.size() : end + 1;
-        }
+    if (output == IrOutput::Stages) {
+        control.afterStage = [&](PipelineStage stage, const PipelineRun& r) {
+            std::string text = pipelineStageText(stage, r);
+            switch (stage) {
+                case PipelineStage::Checked: out += "; ==== stage 1: checked material\n"; break;
+                case PipelineStage::Specialized:
+                    out += fmt::format("; ==== stage 2: specialized material ({} inputs bound)\n",
+                                       r.options.bindings.size());
+                    break;
+                case PipelineStage::Planned:
+                    out += "; ==== stage 3: lowering plan\n";
+                    // As IR comments, so that the whole dump stays one IR-like text.
+                    for (size_t start = 0; start < text.size();) {
+                        size_t end = text.find('\n', start);
+                        out += "; " + text.substr(start, end - start) + "\n";
+                        start = end == std::string::npos ? text.size() : end + 1;
+                    }
+                    return;
+                case PipelineStage::Lowered: out += "; ==== stage 4: lowered IR (verified, unoptimized)\n"; break;
+                case PipelineStage::Optimized: out += "; ==== stage 5: optimized IR\n"; break;
+                default: return;
+            }
+            out += text;
+        };
     }
-    llvm::LLVMContext context;
-    LoweredModule lowered = lowerMaterial(specialized, lowering, context, "facet_" + specialized.name);
-    if (stages) os << "; ==== stage 4: lowered IR (verified, unoptimized)\n" << *lowered.module;
-    jit_->optimize(*lowered.module);
-    if (stages) os << "; ==== stage 5: optimized IR\n";
-    os << *lowered.module;
-    return os.str();
+    if (!runPipeline(run, control, FacetJit::Level::Optimized, diags)) return "";
+    if (output == IrOutput::Plan) return pipelineStageText(PipelineStage::Planned, run);
+    if (output == IrOutput::Optimized) return pipelineStageText(PipelineStage::Optimized, run);
+    return out;
 }
 
 }  // namespace facet

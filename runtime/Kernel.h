@@ -44,6 +44,9 @@ namespace facet {
 
 class Kernel;
 struct KernelCode;
+struct PipelineRun;
+struct PipelineControl;
+struct PipelineTarget;
 class TierUpWorker;
 class EnergyTable;
 class TableCache;
@@ -213,7 +216,13 @@ public:
     // The warning given when the disk cache was refused (CacheFiles.h), or "".
     std::string cacheWarning() const;
 
+    // Runs the kernel pipeline (Pipeline.h) on this Compiler's JIT and
+    // tables; for the timing tool and tests that look at its stages.
+    bool runPipeline(PipelineRun& run, const PipelineControl& control, FacetJit::Level level, DiagnosticEngine& diags);
+
 private:
+    std::unique_ptr<Kernel> compile(PipelineRun& run, DiagnosticEngine& diags);
+    PipelineTarget jitTarget(FacetJit::Level level) const;
     std::string compileObject(const CheckedMaterial& material, const LoweringOptions& lowering,
                               const std::string& prefix, FacetJit::Level level);
     // Links `object` into a fresh dylib and installs its entry points in

@@ -16,7 +16,7 @@ for mat in "${materials[@]}"; do
   for config in "simd exact" "simd fast" "scalar exact"; do
     set -- $config
     prefix=${name}_$1_$2
-    "$build/compiler/facet" build "$mat" --backend "$1" --math "$2" --prefix "$prefix" -o "$work/$prefix.o" --header "$work/$prefix.h"
+    "$build/bin/facet" build "$mat" --backend "$1" --math "$2" --prefix "$prefix" -o "$work/$prefix.o" --header "$work/$prefix.h"
     cc -std=c99 -O2 -D_POSIX_C_SOURCE=200112L -DAOT_PREFIX="$prefix" -include "$work/$prefix.h" -Iruntime/include bench/aot_vs_jit.c "$work/$prefix.o" \
       -L"$build/runtime" -lfacet -Wl,-rpath,"$build/runtime" -lm -o "$work/$prefix"
     lanes=65536 runs=31

@@ -8,7 +8,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-docs/gallery}
-facet=build/compiler/facet
+facet=build/bin/facet
 mkdir -p "$out"
 for m in materials/*.mat; do
   name=$(basename "$m" .mat)

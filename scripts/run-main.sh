@@ -9,7 +9,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
 scripts/build.sh
-facet=build/compiler/facet
+facet=build/bin/facet
 $facet check materials/*.mat
 echo "all $(ls materials/*.mat | wc -l) materials check"
 $facet bench materials/*.mat bench/models/*.mat --out build/bench

@@ -1,6 +1,6 @@
 // KernelEntries: the scalar and batch entry points of a kernel module
-// around the lane bodies (LaneEmitter), and lowerMaterial(), which plans the
-// material and emits both.
+// around the lane bodies (LaneEmitter), and lowerMaterial(), which emits
+// both as its plan says.
 //
 // The batch entry loops over vectors of `width` lanes; the lane bodies are
 // the plan's (LoweringPlan::batchBodies): one plain body, or a guarded first
@@ -375,12 +375,12 @@ void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::str
 
 }  // namespace
 
-LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringOptions& options,
+LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan& plan, const LoweringOptions& options,
                             llvm::LLVMContext& context, const std::string& symbolPrefix) {
     internal_assert(options.width == 4 || options.width == 8 || options.width == 16)
         << "unsupported vector width " << options.width;
     LoweredModule out;
-    out.plan = planLowering(material, options.variant, options.x86Target);
+    out.plan = plan;
     const KernelContext k{material, out.plan, options};
     out.module = std::make_unique<llvm::Module>(symbolPrefix, context);
     if (options.emitScalar) {

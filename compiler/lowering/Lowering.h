@@ -57,9 +57,11 @@ struct LoweredModule {
     std::string scalarSymbol, batchSymbol;  // empty when not emitted
 };
 
-// `material` must be checked. Throws InternalError on a lowering bug (the
-// module is verified before it is returned).
-LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringOptions& options,
+// `material` must be checked (and is usually specialized); `plan` is
+// planLowering(material, options.variant, options.x86Target). Throws
+// InternalError on a lowering bug (the module is verified before it is
+// returned). runKernelPipeline (runtime/Pipeline.h) is the caller.
+LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan& plan, const LoweringOptions& options,
                             llvm::LLVMContext& context, const std::string& symbolPrefix);
 
 }  // namespace facet

@@ -12,7 +12,7 @@
 //   facet_aot_reference against-interpreter FILE.mat MATERIAL OPTIONS RANDOM OUTPUTS.bin
 //       checks aot_run's outputs (of an object for another target) against
 //       the double interpreter as the hard-case tests check the host JIT
-//       (compiler/Verify.h: bound, ill-conditioning allowance, no NaN, Inf
+//       (apps/verify/Verify.h: bound, ill-conditioning allowance, no NaN, Inf
 //       or negative output, invalid lanes 0 and counted), and checks the
 //       host JIT kernel of the same options the same way, for comparison.
 // Exit 0 when the check passes, 1 when it fails, 2 on a usage or I/O error.

@@ -9,7 +9,7 @@
 # message only if that is impossible.
 set -euo pipefail
 build=$1 source=$2
-facet=$build/compiler/facet reference=$build/tests/aot/facet_aot_reference
+facet=$build/bin/facet reference=$build/tests/aot/facet_aot_reference
 packages="gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user"
 if ! command -v aarch64-linux-gnu-gcc >/dev/null || ! command -v qemu-aarch64 >/dev/null; then
   sudo_cmd=""

@@ -6,7 +6,7 @@
 # Also the other outputs (--emit) and the header as C99 and C++.
 set -euo pipefail
 build=$1 source=$2
-facet=$build/compiler/facet
+facet=$build/bin/facet
 gold=$source/materials/gold.mat
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

@@ -8,7 +8,7 @@
 # Also: the objects reference no symbol outside themselves but libm's.
 set -euo pipefail
 build=$1 source=$2
-facet=$build/compiler/facet reference=$build/tests/aot/facet_aot_reference
+facet=$build/bin/facet reference=$build/tests/aot/facet_aot_reference
 cc=${CC:-cc}
 random=100000
 work=$(mktemp -d)

@@ -12,7 +12,7 @@
 //     relative, except at ill-conditioned inputs (error within 16 kappa u,
 //     kappa estimated in __float128), which are listed with kappa;
 //   - the exact-mode JIT against the double interpreter within the bound of
-//     compiler/Verify.h at well-conditioned inputs, and no valid lane
+//     apps/verify/Verify.h at well-conditioned inputs, and no valid lane
 //     reported invalid (fast mode: measured and printed).
 // Everything is computed once (two worker threads) and asserted by the test
 // cases below; the numbers quoted in docs/numerics.md are printed here.
@@ -363,7 +363,7 @@ TEST_CASE("hard cases: JIT kernels never output NaN, Inf or negative values, and
 // The JIT's accuracy on the hard cases. Exact mode is enforced: every
 // valid lane stays valid (unless float cannot hold the reference value or a
 // parameter) and agrees with the double interpreter within the bound of
-// compiler/Verify.h. Fast mode computes geometry, D and G in float, so at
+// apps/verify/Verify.h. Fast mode computes geometry, D and G in float, so at
 // float-subnormal cosines, near-opposite grazing directions with small alpha
 // and Beckmann tails it loses accuracy or drops lanes (docs/numerics.md,
 // "Fast mode"): its numbers are printed, not asserted here (its NaN/Inf/

@@ -7,6 +7,7 @@
 #include "Jit.h"
 #include "Kernel.h"
 #include "Lowering.h"
+#include "Pipeline.h"
 #include "Specialize.h"
 
 #include <doctest/doctest.h>
@@ -115,12 +116,8 @@ TwoBodyRun runTwoBodies(const Kernel& twoBody, const Kernel& oneBody, const char
 // Instructions of the optimized module's kernel functions.
 size_t optimizedInstructionCount(const std::string& text, const InputBindings& bindings, bool simd) {
     DiagnosticEngine d;
-    CheckedProgram p = loadProgramText(text, "t.mat", d);
-    REQUIRE_MESSAGE(!d.hasErrors(), d.str());
-    CheckedMaterial m = specializeMaterial(p.materials[0], bindings, d);
-    REQUIRE(!d.hasErrors());
-    auto jit = FacetJit::Create();
-    llvm::LLVMContext ctx;
+    CompileOptions options;
+    options.bindings = bindings;
     LoweringOptions lo;
     // One body: a float-first kernel adds the float body once the bound
     // inputs make the material qualify, which is not what is measured here.
@@ -128,8 +125,13 @@ size_t optimizedInstructionCount(const std::string& text, const InputBindings& b
     lo.emitScalar = !simd;
     lo.emitBatch = simd;
     lo.width = 16;
-    LoweredModule mod = lowerMaterial(m, lo, ctx, "k");
-    jit->optimize(*mod.module);
+    Compiler compiler;
+    PipelineRun run = PipelineRun::fromText(text, "t.mat", "", options);
+    PipelineControl control;
+    control.lowering = lo;
+    control.stopAfter = PipelineStage::Optimized;
+    REQUIRE_MESSAGE(compiler.runPipeline(run, control, FacetJit::Level::Optimized, d), d.str());
+    const LoweredModule& mod = run.lowered;
     size_t count = 0;
     for (llvm::Function& f : *mod.module)
         if (!f.isDeclaration())

@@ -1,4 +1,4 @@
-// Tests of the `facet render --plot lobe|ndf` plots (runtime/preview/Plots.*)
+// Tests of the `facet render --plot lobe|ndf` plots (apps/preview/Plots.*)
 // and their drawing surface (PlotCanvas): the numbers the plots report
 // against independent computations, the images they write read back through
 // OpenImageIO, and errors that come back as messages.

@@ -1,4 +1,4 @@
-// Tests of the lit-sphere preview (runtime/preview/SphereRender): image size
+// Tests of the lit-sphere preview (apps/preview/SphereRender): image size
 // and values, the highlight where the mirror geometry puts it, the SIMD and
 // scalar kernels' renders against the interpreter's, the sky estimator
 // against an independent quadrature of the directional albedo, determinism

@@ -6,7 +6,7 @@
 // amplitudes that do not cancel as N -> 1, sharing one division.
 #include "lowering/LaneEmitter.h"
 
-#include "KullaConty.h"
+#include "FresnelAverage.h"
 #include "Specialize.h"
 
 #include <algorithm>

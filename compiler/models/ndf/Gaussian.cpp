@@ -1,43 +1,13 @@
 // gaussian: an NDF Gaussian in the polar angle, exp(-theta^2/alpha^2) / N(alpha),
 // normalized by quadrature (gaussianNdfNorm). No closed-form Smith Lambda.
 #include "QuadMath.h"
-#include "models/ndf/GaussianNorm.h"
+#include "GaussianNormalization.h"
 
-#include "Quadrature.h"
 #include "models/ModelMath.h"
 
 #include <fmt/format.h>
 
-namespace facet {
-
-template <typename Real>
-Real gaussianNdfNorm(Real alpha) {
-    using std::cos; using std::exp; using std::min; using std::sin;
-    using models::kPi;
-    // A small memo per thread: resolve() runs for every evaluation and a
-    // sample mostly shares a few alphas, while the quadrature costs 512
-    // exp/cos/sin (milliseconds in __float128).
-    constexpr int kMemo = 4;
-    thread_local Real memoAlpha[kMemo] = {-1, -1, -1, -1}, memoNorm[kMemo] = {};
-    thread_local int memoNext = 0;
-    for (int i = 0; i < kMemo; ++i)
-        if (memoAlpha[i] == alpha) return memoNorm[i];
-    // The integrand is negligible beyond 8 alpha (exp(-64)).
-    Real upper = min(kPi<Real> / 2, 8 * alpha);
-    auto f = [&](Real t) { return exp(-t * t / (alpha * alpha)) * cos(t) * sin(t); };
-    static const quadrature::GaussLegendre<Real>& gl8 = quadrature::gaussLegendre<Real>(8);
-    Real norm = 2 * kPi<Real> * quadrature::integrateUniform(f, Real(0), upper, 64, gl8);
-    memoAlpha[memoNext] = alpha;
-    memoNorm[memoNext] = norm;
-    memoNext = (memoNext + 1) % kMemo;
-    return norm;
-}
-
-template double gaussianNdfNorm<double>(double);
-template long double gaussianNdfNorm<long double>(long double);
-template __float128 gaussianNdfNorm<__float128>(__float128);
-
-namespace models {
+namespace facet::models {
 namespace {
 
 constexpr int kAlpha = 0;
@@ -78,5 +48,4 @@ std::vector<const ModelInfo*> facetModels_ndf_Gaussian() {
     return {&entry};
 }
 
-}  // namespace models
-}  // namespace facet
+}  // namespace facet::models

@@ -1,11 +1,12 @@
 // gaussian: the Gaussian NDF in theta as IR (the reference is
 // Gaussian.cpp). Its normalization N(alpha) has no closed form: a constant
 // alpha folds it at compile time, a per-lane alpha interpolates a table of
-// ln N over ln alpha embedded in the kernel.
+// ln N over ln alpha embedded in the kernel (both from the neutral
+// numeric/GaussianNormalization.h).
 #include "lowering/LaneEmitter.h"
 
+#include "GaussianNormalization.h"
 #include "Specialize.h"
-#include "models/ndf/GaussianNorm.h"
 
 #include <llvm/IR/Constants.h>
 
@@ -19,28 +20,9 @@ using llvm::Value;
 constexpr int kAlpha = 0;
 constexpr int kOwnNorm = 0;  // NdfParams::own: N(alpha), precise type
 
-// q(x) = ln N(e^x) over x = ln alpha in [ln 1e-4, ln 1e4]. Cubic (4-point
-// Lagrange) interpolation keeps the relative error < 1e-8.
-struct GaussianNormTable {
-    static constexpr int kSize = 1024;
-    static constexpr double kX0 = -9.210340371976184;  // ln 1e-4
-    static constexpr double kX1 = 9.210340371976184;   // ln 1e4
-    std::vector<double> q;
-    GaussianNormTable() : q(kSize) {
-        for (int i = 0; i < kSize; ++i) {
-            double x = kX0 + (kX1 - kX0) * i / (kSize - 1);
-            q[i] = std::log(gaussianNdfNorm<double>(std::exp(x)));
-        }
-    }
-    static const GaussianNormTable& get() {
-        static const GaussianNormTable table;  // immutable data, built once per process
-        return table;
-    }
-};
-
 // N(alpha) per lane: 4-point Lagrange in double, entries fetched with gathers.
 Value* normLookup(LaneEmitter& lane, Value* alpha) {
-    const GaussianNormTable& t = GaussianNormTable::get();
+    const GaussianNormTable& t = gaussianNormTable();
     MathEmitter& dm = lane.doubleMath();
     llvm::IRBuilder<>& b = lane.builder;
     llvm::GlobalVariable* gv = lane.doubleTable(t.q, "facet_gaussian_norm_table");
@@ -111,7 +93,7 @@ std::vector<TermEmitterEntry> facetEmitters_ndf_GaussianEmitter() {
     // The normalization table only where alpha is known per lane (params()).
     auto tables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {
         if (isConstantExpr(*material.ndf.args[kAlpha])) return {};
-        const std::vector<double>& q = GaussianNormTable::get().q;
+        const std::vector<double>& q = gaussianNormTable().q;
         return {{"facet_gaussian_norm_table", q.data(), q.size() * sizeof(double)}};
     };
     return {{ModelSlot::Ndf, "gaussian", &emitter, tables}};

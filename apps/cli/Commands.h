@@ -17,7 +17,7 @@ int cmdLut(const std::vector<std::string>& args);
 // facet bench FILE... [--out DIR] [--json] [--quick]  (BenchCommand.cpp, bench/)
 int cmdBench(const std::vector<std::string>& args);
 
-// facet render FILE -o OUT [--plot lobe|ndf] ...  (RenderCommand.cpp, runtime/preview/)
+// facet render FILE -o OUT [--plot lobe|ndf] ...  (RenderCommand.cpp, apps/preview/)
 int cmdRender(const std::vector<std::string>& args);
 
 // facet build FILE -o OUT.o [--header OUT.h] [--target T] ...  (BuildCommand.cpp, runtime/Aot.h)

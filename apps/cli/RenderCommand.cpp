@@ -1,4 +1,4 @@
-// facet render: pictures of a material (runtime/preview/).
+// facet render: pictures of a material (apps/preview/).
 //
 //   facet render FILE -o OUT.png|OUT.exr [--material NAME] [--size N]
 //                [--light THETA,PHI] [--view THETA,PHI] [--irradiance E]

@@ -5,11 +5,11 @@
 //      and on the JIT kernels (scalar and SIMD at the host width, math exact
 //      and fast): every output finite and >= 0, invalid inputs give 0 and are
 //      counted (the batch return value), JIT against the interpreter within
-//      the stated bound (compiler/Verify.h) on valid finite lanes;
+//      the stated bound (apps/verify/Verify.h) on valid finite lanes;
 //   2. the double interpreter against the __float128 one on the same
 //      sample: within 1e-12 relative, or within 16 kappa u where the input is
 //      ill-conditioned (kappa: condition number estimated in __float128);
-//   3. the physics checks by quadrature (compiler/PhysicsChecks.h).
+//   3. the physics checks by quadrature (apps/verify/PhysicsChecks.h).
 // Prints one table per material and the worst cases with their inputs.
 // Exit: 0 all passed, 1 a check failed, 2 usage, 65 a material file error.
 #include "Commands.h"

@@ -1,0 +1,180 @@
+// Pipeline: runs the stages of a kernel compile in order (Pipeline.h).
+#include "Pipeline.h"
+
+#include "Checker.h"
+#include "Diagnostics.h"
+#include "Specialize.h"
+#include "TableCache.h"
+
+#include <llvm/IR/LLVMContext.h>
+#include <llvm/Support/raw_ostream.h>
+
+#include <fmt/format.h>
+
+namespace facet {
+
+const char* pipelineStageName(PipelineStage stage) {
+    switch (stage) {
+        case PipelineStage::Source: return "source";
+        case PipelineStage::Checked: return "checked";
+        case PipelineStage::Specialized: return "specialized";
+        case PipelineStage::Planned: return "planned";
+        case PipelineStage::Lowered: return "lowered";
+        case PipelineStage::Optimized: return "optimized";
+        case PipelineStage::Emitted: return "emitted";
+    }
+    return "?";
+}
+
+PipelineRun::PipelineRun() = default;
+PipelineRun::~PipelineRun() {
+    // The module belongs to the context: release it first.
+    lowered.module.reset();
+}
+PipelineRun::PipelineRun(PipelineRun&&) noexcept = default;
+
+PipelineRun PipelineRun::fromFile(std::string path, std::string name, const CompileOptions& options) {
+    PipelineRun run;
+    run.path = std::move(path), run.name = std::move(name), run.readFile = true;
+    run.options = options;
+    run.simd = options.backend == Backend::Simd;
+    return run;
+}
+
+PipelineRun PipelineRun::fromText(std::string text, std::string path, std::string name, const CompileOptions& options) {
+    PipelineRun run = fromFile(std::move(path), std::move(name), options);
+    run.text = std::move(text), run.readFile = false;
+    return run;
+}
+
+PipelineRun PipelineRun::fromChecked(const CheckedMaterial& material, const CompileOptions& options) {
+    PipelineRun run = fromFile("", material.name, options);
+    run.readFile = false;
+    run.checked = material;
+    run.reached = PipelineStage::Checked;
+    return run;
+}
+
+PipelineRun PipelineRun::fromSpecialized(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> table) {
+    PipelineRun run = fromChecked(material, CompileOptions{});
+    run.specialized = material;
+    run.energyTable = std::move(table);
+    run.reached = PipelineStage::Specialized;
+    return run;
+}
+
+void PipelineRun::rewindTo(PipelineStage stage) {
+    if (stage >= reached) return;
+    if (stage < PipelineStage::Emitted) object.clear();
+    if (stage < PipelineStage::Lowered) {
+        lowered = LoweredModule{};
+        context.reset();
+    }
+    if (stage < PipelineStage::Planned) lowering = LoweringOptions{}, plan = LoweringPlan{};
+    if (stage < PipelineStage::Specialized) specialized = CheckedMaterial{}, energyTable.reset();
+    internal_assert(stage >= PipelineStage::Checked || readFile || !text.empty())
+        << "a pipeline run given a checked material cannot rewind to its source";
+    reached = stage;
+}
+
+namespace {
+
+// One stage's work; false on a user error.
+bool check(PipelineRun& run, DiagnosticEngine& diags) {
+    CheckedProgram program =
+        run.readFile ? loadProgramFile(run.path, diags) : loadProgramText(run.text, run.path, diags);
+    if (diags.hasErrors()) return false;
+    const CheckedMaterial* material = program.find(run.name);
+    if (!material) {
+        diags.error({std::make_shared<const std::string>(run.path), 0, 0},
+                    fmt::format("no material named '{}'", run.name));
+        return false;
+    }
+    run.checked = *material;
+    return true;
+}
+
+bool specialize(PipelineRun& run, TableCache& tables, DiagnosticEngine& diags) {
+    run.specialized = specializeMaterial(run.checked, run.options.bindings, diags);
+    if (diags.hasErrors()) return false;
+    if (run.specialized.compensatesEnergy()) run.energyTable = tables.getFor(run.specialized);
+    return true;
+}
+
+void plan(PipelineRun& run, const PipelineControl& control, const PipelineTarget& target) {
+    if (control.lowering) {
+        run.lowering = *control.lowering;
+    } else {
+        int width = run.options.width ? run.options.width : target.naturalWidth;
+        run.lowering = loweringOptionsFor(run.options, run.energyTable.get(), run.simd, width);
+    }
+    if (!target.jit) run.lowering.x86Target = target.machine->getTargetTriple().isX86();
+    internal_assert(!run.specialized.compensatesEnergy() || run.lowering.energyTable)
+        << "energy compensation planned without its table";
+    run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.x86Target);
+}
+
+void lower(PipelineRun& run, const PipelineControl& control) {
+    run.context = std::make_unique<llvm::LLVMContext>();
+    const std::string prefix = control.symbolPrefix.empty() ? "facet_" + run.specialized.name : control.symbolPrefix;
+    run.lowered = lowerMaterial(run.specialized, run.plan, run.lowering, *run.context, prefix);
+    if (control.aotEntryPoints) addAotEntryPoints(run.lowered, run.specialized, prefix);
+}
+
+void optimize(PipelineRun& run, const PipelineTarget& target) {
+    if (target.jit)
+        target.jit->optimize(*run.lowered.module, target.level);
+    else
+        optimizeKernelModule(*run.lowered.module, *target.machine, target.level);
+}
+
+void emit(PipelineRun& run, const PipelineTarget& target) {
+    run.object = target.jit ? target.jit->emitObject(*run.lowered.module, target.level)->getBuffer().str()
+                            : writeAotOutput(*run.lowered.module, *target.machine, target.aotOutput);
+}
+
+}  // namespace
+
+bool runKernelPipeline(PipelineRun& run, const PipelineControl& control, const PipelineTarget& target,
+                       TableCache& tables, DiagnosticEngine& diags) {
+    internal_assert(target.jit || target.machine) << "a pipeline run needs a JIT or a target machine";
+    while (run.reached < control.stopAfter) {
+        auto next = PipelineStage(int(run.reached) + 1);
+        switch (next) {
+            case PipelineStage::Source: break;
+            case PipelineStage::Checked:
+                if (!check(run, diags)) return false;
+                break;
+            case PipelineStage::Specialized:
+                if (!specialize(run, tables, diags)) return false;
+                break;
+            case PipelineStage::Planned: plan(run, control, target); break;
+            case PipelineStage::Lowered: lower(run, control); break;
+            case PipelineStage::Optimized: optimize(run, target); break;
+            case PipelineStage::Emitted: emit(run, target); break;
+        }
+        run.reached = next;
+        if (control.afterStage) control.afterStage(next, run);
+    }
+    return true;
+}
+
+std::string pipelineStageText(PipelineStage stage, const PipelineRun& run) {
+    switch (stage) {
+        case PipelineStage::Checked: return printMaterial(run.checked);
+        case PipelineStage::Specialized: return printMaterial(run.specialized);
+        case PipelineStage::Planned: return printPlan(run.specialized, run.plan);
+        case PipelineStage::Lowered:
+        case PipelineStage::Optimized: {
+            std::string out;
+            llvm::raw_string_ostream os(out);
+            os << *run.lowered.module;
+            return os.str();
+        }
+        case PipelineStage::Source:
+        case PipelineStage::Emitted: return "";
+    }
+    return "";
+}
+
+}  // namespace facet
