@@ -16,6 +16,11 @@ namespace {
 
 using llvm::Value;
 
+// The neutral F_avg library cannot see the catalog; its clamp of eta must be
+// the catalog's domain, or folded and tabulated averages would disagree
+// with the interpreter's at the domain's edge.
+static_assert(kFresnelAverageMinEta == kMinEta, "F_avg clamps eta to the catalog's domain");
+
 constexpr int kF0 = 0, kSchlickEta = 1;  // schlick: exactly one is given
 constexpr int kEta = 0, kK = 1;          // dielectric(eta), conductor(eta, k)
 
