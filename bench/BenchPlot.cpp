@@ -1,11 +1,8 @@
-// BenchPlot: a log-log scatter plot drawn pixel by pixel (see BenchPlot.h).
+// BenchPlot: the log-log scatter plot of `facet bench` (see BenchPlot.h),
+// drawn on the same PlotCanvas as the `facet render` plots.
 #include "BenchPlot.h"
 
-#include "BitmapFont.h"
-#include "ImageFiles.h"
-
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imageio.h>
+#include "PlotCanvas.h"
 
 #include <algorithm>
 #include <cmath>
@@ -15,108 +12,56 @@ namespace facet::bench {
 
 namespace {
 
-struct Rgb {
-    uint8_t r, g, b;
-};
-constexpr Rgb kWhite{255, 255, 255}, kBlack{0, 0, 0}, kGrid{225, 225, 225}, kMinorGrid{242, 242, 242},
-    kText{40, 40, 40}, kLeader{150, 150, 150};
+using preview::HAlign;
+using preview::PlotCanvas;
+using preview::Rgb;
+using preview::Stroke;
+using preview::VAlign;
+using PlotPoint = preview::Point;
+
+constexpr Rgb rgb8(int r, int g, int b) { return {float(r) / 255, float(g) / 255, float(b) / 255}; }
+const Rgb kWhite = rgb8(255, 255, 255), kBlack = rgb8(0, 0, 0), kGrid = rgb8(225, 225, 225),
+          kMinorGrid = rgb8(242, 242, 242), kText = rgb8(40, 40, 40), kLeader = rgb8(150, 150, 150);
 // Material colours (colour-blind friendly, Okabe & Ito 2008), cycled.
-constexpr Rgb kPalette[] = {{0, 114, 178}, {213, 94, 0},  {0, 158, 115}, {204, 121, 167},
-                            {230, 159, 0}, {86, 180, 233}, {120, 120, 120}, {0, 0, 0}};
+const Rgb kPalette[] = {rgb8(0, 114, 178), rgb8(213, 94, 0),  rgb8(0, 158, 115),   rgb8(204, 121, 167),
+                        rgb8(230, 159, 0), rgb8(86, 180, 233), rgb8(120, 120, 120), rgb8(0, 0, 0)};
+Rgb materialColor(size_t material) { return kPalette[material % std::size(kPalette)]; }
+
+// Text sizes (nominal glyph height, output pixels).
+constexpr double kFont = 17, kTitleFont = 26;
 
 enum class Shape { Circle, Square, Triangle, Diamond };
-
-class Canvas {
-public:
-    Canvas(int w, int h) : w_(w), h_(h), px_(size_t(w) * h * 3, 255) {}
-    int width() const { return w_; }
-    int height() const { return h_; }
-    const uint8_t* data() const { return px_.data(); }
-
-    void set(int x, int y, Rgb c) {
-        if (x < 0 || y < 0 || x >= w_ || y >= h_) return;
-        uint8_t* p = &px_[(size_t(y) * w_ + x) * 3];
-        p[0] = c.r, p[1] = c.g, p[2] = c.b;
-    }
-    void fillRect(int x0, int y0, int x1, int y1, Rgb c) {
-        for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x) set(x, y, c);
-    }
-    void rect(int x0, int y0, int x1, int y1, Rgb c) {
-        line(x0, y0, x1, y0, c), line(x1, y0, x1, y1, c), line(x1, y1, x0, y1, c), line(x0, y1, x0, y0, c);
-    }
-    // Bresenham; `dash` > 0 draws dashes of that many pixels.
-    void line(int x0, int y0, int x1, int y1, Rgb c, int dash = 0) {
-        int dx = std::abs(x1 - x0), dy = -std::abs(y1 - y0), sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
-        int err = dx + dy;
-        for (int step = 0;; ++step) {
-            if (!dash || (step / dash) % 2 == 0) set(x0, y0, c);
-            if (x0 == x1 && y0 == y1) break;
-            int e2 = 2 * err;
-            if (e2 >= dy) err += dy, x0 += sx;
-            if (e2 <= dx) err += dx, y0 += sy;
-        }
-    }
-    // A marker of radius r: filled, or a 2-pixel outline.
-    void marker(int cx, int cy, int r, Shape shape, Rgb c, bool filled) {
-        auto inside = [&](double dx, double dy, double rr) {
-            switch (shape) {
-                case Shape::Circle: return dx * dx + dy * dy <= rr * rr;
-                case Shape::Square: return std::fabs(dx) <= rr * 0.85 && std::fabs(dy) <= rr * 0.85;
-                case Shape::Diamond: return std::fabs(dx) + std::fabs(dy) <= rr * 1.15;
-                case Shape::Triangle: {  // pointing up, centred
-                    double top = -rr, bottom = rr * 0.75;
-                    if (dy < top || dy > bottom) return false;
-                    double half = (dy - top) / (bottom - top) * rr * 1.05;
-                    return std::fabs(dx) <= half;
-                }
-            }
-            return false;
-        };
-        for (int y = -r - 1; y <= r + 1; ++y)
-            for (int x = -r - 1; x <= r + 1; ++x)
-                if (inside(x, y, r) && (filled || !inside(x, y, r - 2))) set(cx + x, cy + y, c);
-    }
-    // Text with its top-left corner at (x, y), glyph pixels scaled by `scale`.
-    void text(int x, int y, const std::string& s, int scale, Rgb c) {
-        for (char ch : s) {
-            const auto& rows = glyph(ch);
-            for (int row = 0; row < kGlyphHeight; ++row)
-                for (int col = 0; col < kGlyphWidth; ++col)
-                    if (rows[row] & (0x10 >> col)) fillRect(x + col * scale, y + row * scale, x + (col + 1) * scale - 1,
-                                                            y + (row + 1) * scale - 1, c);
-            x += kCellWidth * scale;
-        }
-    }
-    // Text rotated a quarter turn counter-clockwise (reads bottom to top),
-    // with the bottom-left of its first glyph at (x, y).
-    void textUp(int x, int y, const std::string& s, int scale, Rgb c) {
-        for (char ch : s) {
-            const auto& rows = glyph(ch);
-            for (int row = 0; row < kGlyphHeight; ++row)
-                for (int col = 0; col < kGlyphWidth; ++col)
-                    if (rows[row] & (0x10 >> col)) {
-                        int px = x + row * scale, py = y - (col + 1) * scale;
-                        fillRect(px, py, px + scale - 1, py + scale - 1, c);
-                    }
-            y -= kCellWidth * scale;
-        }
-    }
-    static int textWidth(const std::string& s, int scale) {
-        return s.empty() ? 0 : int(s.size()) * kCellWidth * scale - scale;
-    }
-    static int textHeight(int scale) { return kGlyphHeight * scale; }
-
-private:
-    int w_, h_;
-    std::vector<uint8_t> px_;
-};
 
 Shape shapeOf(const std::string& backend) {
     if (backend == "simd") return Shape::Circle;
     if (backend == "scalar") return Shape::Square;
     if (backend == "interp") return Shape::Triangle;
     return Shape::Diamond;  // aot
+}
+
+// A marker of radius r centred on c: filled, or a 2-pixel outline.
+void marker(PlotCanvas& canvas, PlotPoint c, double r, Shape shape, Rgb color, bool filled) {
+    std::vector<PlotPoint> outline;
+    switch (shape) {
+        case Shape::Circle:
+            for (int i = 0; i < 24; ++i)
+                outline.push_back({c.x + r * std::cos(i * M_PI / 12), c.y + r * std::sin(i * M_PI / 12)});
+            break;
+        case Shape::Square: {
+            double h = 0.85 * r;
+            outline = {{c.x - h, c.y - h}, {c.x + h, c.y - h}, {c.x + h, c.y + h}, {c.x - h, c.y + h}};
+            break;
+        }
+        case Shape::Triangle:  // pointing up, centred
+            outline = {{c.x, c.y - r}, {c.x + 1.05 * r, c.y + 0.75 * r}, {c.x - 1.05 * r, c.y + 0.75 * r}};
+            break;
+        case Shape::Diamond: {
+            double h = 1.15 * r;
+            outline = {{c.x, c.y - h}, {c.x + h, c.y}, {c.x, c.y + h}, {c.x - h, c.y}};
+            break;
+        }
+    }
+    canvas.polygon(outline, color, filled, 2);
 }
 
 std::string shortMode(const std::string& mode) {
@@ -134,32 +79,120 @@ std::string decadeLabel(int k) {
 }
 
 struct Box {
-    int x0, y0, x1, y1;
+    double x0, y0, x1, y1;
     bool overlaps(const Box& o) const { return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1; }
 };
 
 struct Point {
-    int material;
+    size_t material;
     std::string backend, label;
     double ns, maxRel, p999;
-    int x = 0, y = 0, yp = 0;
+    double x = 0, y = 0, yp = 0;
     bool clippedTop = false;
 };
 
+// Places each point group's label at the first free spot among candidates
+// around the point, at growing distances (with a leader line once it is
+// not adjacent), inside the plot area and clear of markers and other labels.
+struct LabelGroup {
+    double x, y;
+    size_t material;
+    std::string text;
+};
+void drawLabels(PlotCanvas& canvas, const std::vector<LabelGroup>& groups, std::vector<Box> occupied, Box area) {
+    const double th = kFont;
+    for (const LabelGroup& g : groups) {
+        double tw = canvas.textWidth(g.text, kFont);
+        std::vector<PlotPoint> candidates;  // top-left corners
+        for (double d : {12, 30, 52, 80, 115})
+            for (auto [ux, uy] : std::initializer_list<std::pair<int, int>>{
+                     {1, 0}, {-1, 0}, {1, -1}, {1, 1}, {-1, -1}, {-1, 1}, {0, -1}, {0, 1}}) {
+                double x = ux > 0 ? g.x + d : ux < 0 ? g.x - d - tw : g.x - tw / 2;
+                double y = uy > 0 ? g.y + d - th / 2 : uy < 0 ? g.y - d - th / 2 : g.y - th / 2;
+                if (uy != 0 && ux == 0) y = uy > 0 ? g.y + d : g.y - d - th;
+                candidates.push_back({x, y});
+            }
+        Box chosen{};
+        bool found = false;
+        for (PlotPoint c : candidates) {
+            Box b{c.x - 3, c.y - 3, c.x + tw + 3, c.y + th + 3};
+            if (b.x0 < area.x0 + 2 || b.x1 > area.x1 - 2 || b.y0 < area.y0 + 2 || b.y1 > area.y1 - 2) continue;
+            if (std::any_of(occupied.begin(), occupied.end(), [&](const Box& o) { return o.overlaps(b); })) continue;
+            chosen = b;
+            found = true;
+            break;
+        }
+        if (!found) {  // crowded: right of the point, clamped into the plot
+            double x = std::clamp(g.x + 12, area.x0 + 4, area.x1 - tw - 4);
+            double y = std::clamp(g.y - th / 2, area.y0 + 4, area.y1 - th - 4);
+            chosen = {x - 3, y - 3, x + tw + 3, y + th + 3};
+        }
+        double cx = std::clamp(g.x, chosen.x0, chosen.x1), cy = std::clamp(g.y, chosen.y0, chosen.y1);
+        if (std::hypot(cx - g.x, cy - g.y) > 14) canvas.line({g.x, g.y}, {cx, cy}, {kLeader});
+        canvas.box({chosen.x0, chosen.y0}, {chosen.x1, chosen.y1}, kWhite, true);
+        canvas.text({chosen.x0 + 3, chosen.y0 + 3}, g.text, kFont, materialColor(g.material), HAlign::Left, VAlign::Top);
+        occupied.push_back(chosen);
+    }
+}
+
+// Legend right of the plot area: materials (colour), backends (shape), the
+// two error markers, the label abbreviations.
+void drawLegend(PlotCanvas& canvas, const BenchReport& report, double lx, double ly) {
+    const double row = 1.45 * kFont, gap = 0.9 * kFont;
+    auto heading = [&](const std::string& s) {
+        canvas.text({lx, ly}, s, kFont, kBlack, HAlign::Left, VAlign::Top);
+        ly += row + 2;
+    };
+    auto entry = [&](const std::string& s) {
+        canvas.text({lx + 26, ly}, s, kFont, kText, HAlign::Left, VAlign::Top);
+        ly += row;
+    };
+    heading("materials");
+    for (size_t mi = 0; mi < report.materials.size(); ++mi) {
+        canvas.box({lx, ly}, {lx + 16, ly + 14}, materialColor(mi), true);
+        std::string name = report.materials[mi].material;
+        if (name.size() > 26) name = name.substr(0, 25) + "~";
+        entry(name);
+    }
+    ly += gap;
+    heading("backends");
+    for (auto [b, what] : {std::pair{"simd", "simd (JIT)"}, {"scalar", "scalar (JIT)"},
+                           {"interp", "interp (reference)"}, {"aot", "aot (hand-written)"}}) {
+        marker(canvas, {lx + 8, ly + 7}, 7, shapeOf(b), kText, true);
+        entry(what);
+    }
+    ly += gap;
+    heading("y: regular sample");
+    marker(canvas, {lx + 8, ly + 7}, 7, Shape::Circle, kText, true);
+    entry("max rel. error");
+    marker(canvas, {lx + 8, ly + 7}, 6, Shape::Circle, kText, false);
+    entry("p99.9 rel. error");
+    canvas.text({lx, ly}, fmt::format("errors < {:g} drawn", kPlotErrorFloor), kFont, kText, HAlign::Left, VAlign::Top);
+    ly += row;
+    canvas.text({lx, ly}, "on the floor; ^ = off scale", kFont, kText, HAlign::Left, VAlign::Top);
+    ly += row + gap;
+    heading("labels: backend mode");
+    canvas.text({lx, ly}, "t1e-3 = tolerance=1e-3", kFont, kText, HAlign::Left, VAlign::Top);
+    ly += row + gap;
+    if (report.settings.quick) canvas.text({lx, ly}, "QUICK RUN (noisy)", kFont, rgb8(200, 0, 0), HAlign::Left, VAlign::Top);
+}
+
 }  // namespace
 
-std::string writeScatterPlot(const BenchReport& report, const std::string& path) {
-    const int W = kPlotWidth, H = kPlotHeight;
-    const int left = 130, right = W - 400, top = 80, bottom = H - 110;  // the plot area
-    Canvas cv(W, H);
+std::string writeScatterPlot(const BenchReport& report, const std::string& path, std::string* warning) {
+    const double W = kPlotWidth, H = kPlotHeight;
+    const double left = 130, right = W - 400, top = 90, bottom = H - 110;  // the plot area
+    std::string font = preview::findPlotFont();
+    PlotCanvas canvas(kPlotWidth, kPlotHeight, font);
+    if (warning) *warning = preview::noTextWarning(canvas, font);
 
     // Points: one per row; rows of one material and backend that land on
-    // the same pixel share a label ("simd exact/fast").
+    // the same spot share a label ("simd exact/fast").
     std::vector<Point> points;
     for (size_t mi = 0; mi < report.materials.size(); ++mi)
         for (const BenchRow& r : report.materials[mi].rows)
             if (r.nsPerEval > 0 && std::isfinite(r.nsPerEval))
-                points.push_back({int(mi), r.backend, shortMode(r.mode), r.nsPerEval, r.regular.maxRel, r.regular.p999Rel});
+                points.push_back({mi, r.backend, shortMode(r.mode), r.nsPerEval, r.regular.maxRel, r.regular.p999Rel});
 
     // Axis ranges in decades.
     double xlo = 0, xhi = 1, ylo = std::log10(kPlotErrorFloor), yhi = -2;
@@ -173,41 +206,42 @@ std::string writeScatterPlot(const BenchReport& report, const std::string& path)
         xhi = std::ceil(std::log10(mx) + 0.05);
         yhi = std::clamp(std::ceil(std::log10(std::max(emax, kPlotErrorFloor)) + 0.05), ylo + 2, 3.0);
     }
-    auto X = [&](double ns) { return left + int(std::lround((std::log10(ns) - xlo) / (xhi - xlo) * (right - left))); };
+    auto X = [&](double ns) { return left + (std::log10(ns) - xlo) / (xhi - xlo) * (right - left); };
     auto Y = [&](double e, bool* clipped = nullptr) {
         double l = std::log10(std::max(e, kPlotErrorFloor));
         if (!std::isfinite(e) || l > yhi) {
             if (clipped) *clipped = true;
             l = yhi;
         }
-        return bottom - int(std::lround((l - ylo) / (yhi - ylo) * (bottom - top)));
+        return bottom - (l - ylo) / (yhi - ylo) * (bottom - top);
     };
 
     // Grid, ticks and tick labels.
     for (int k = int(xlo); k <= int(xhi); ++k) {
-        for (int m = 2; m <= 9 && k < int(xhi); ++m) cv.line(X(m * std::pow(10.0, k)), top, X(m * std::pow(10.0, k)), bottom, kMinorGrid);
-        int x = X(std::pow(10.0, k));
-        cv.line(x, top, x, bottom, kGrid);
-        cv.line(x, bottom, x, bottom + 8, kBlack);
-        std::string t = decadeLabel(k);
-        cv.text(x - Canvas::textWidth(t, 2) / 2, bottom + 14, t, 2, kText);
+        for (int m = 2; m <= 9 && k < int(xhi); ++m) {
+            double x = X(m * std::pow(10.0, k));
+            canvas.line({x, top}, {x, bottom}, {kMinorGrid});
+        }
+        double x = X(std::pow(10.0, k));
+        canvas.line({x, top}, {x, bottom}, {kGrid});
+        canvas.line({x, bottom}, {x, bottom + 8}, {kBlack, 1.5});
+        canvas.text({x, bottom + 14}, decadeLabel(k), kFont, kText, HAlign::Center, VAlign::Top);
     }
     for (int k = int(ylo); k <= int(yhi); ++k) {
-        int y = Y(std::pow(10.0, k));
-        cv.line(left, y, right, y, kGrid);
-        cv.line(left - 8, y, left, y, kBlack);
+        double y = Y(std::pow(10.0, k));
+        canvas.line({left, y}, {right, y}, {kGrid});
+        canvas.line({left - 8, y}, {left, y}, {kBlack, 1.5});
         std::string t = k == int(ylo) ? "<=" + decadeLabel(k) : decadeLabel(k);
-        cv.text(left - 14 - Canvas::textWidth(t, 2), y - 7, t, 2, kText);  // centred on the 7-row body
+        canvas.text({left - 14, y}, t, kFont, kText, HAlign::Right, VAlign::Center);
     }
-    cv.rect(left, top, right, bottom, kBlack);
+    canvas.box({left, top}, {right, bottom}, kBlack, false, 1.5);
 
-    // Titles.
-    std::string title = "facet bench: speed vs error";
-    cv.text((left + right) / 2 - Canvas::textWidth(title, 3) / 2, 22, title, 3, kBlack);
-    std::string xt = "ns per evaluation (log scale; lower is faster)";
-    cv.text((left + right) / 2 - Canvas::textWidth(xt, 2) / 2, bottom + 50, xt, 2, kText);
-    std::string yt = "relative error vs double interpreter (log)";
-    cv.textUp(22, (top + bottom) / 2 + Canvas::textWidth(yt, 2) / 2, yt, 2, kText);
+    // Titles; the y-axis title sits above the axis, where it reads left to right.
+    canvas.text({(left + right) / 2, 12}, "facet bench: speed vs error", kTitleFont, kBlack, HAlign::Center, VAlign::Top);
+    canvas.text({(left + right) / 2, bottom + 50}, "ns per evaluation (log scale; lower is faster)", kFont, kText,
+                HAlign::Center, VAlign::Top);
+    canvas.text({left - 14, top - 12}, "relative error vs double interpreter (log scale)", kFont, kText, HAlign::Left,
+                VAlign::Bottom);
 
     // Points: positions, then groups of coinciding points.
     for (Point& p : points) {
@@ -215,15 +249,10 @@ std::string writeScatterPlot(const BenchReport& report, const std::string& path)
         p.y = Y(p.maxRel, &p.clippedTop);
         p.yp = Y(p.p999);
     }
-    struct Group {
-        int x, y, material;
-        std::string text;
-    };
-    std::vector<Group> groups;
-    for (size_t i = 0; i < points.size(); ++i) {
-        const Point& p = points[i];
+    std::vector<LabelGroup> groups;
+    for (const Point& p : points) {
         bool merged = false;
-        for (Group& g : groups)
+        for (LabelGroup& g : groups)
             if (g.material == p.material && std::abs(g.x - p.x) <= 10 && std::abs(g.y - p.y) <= 10 &&
                 g.text.rfind(p.backend, 0) == 0) {
                 if (!p.label.empty() && p.backend != "interp") g.text += "/" + p.label;
@@ -236,101 +265,22 @@ std::string writeScatterPlot(const BenchReport& report, const std::string& path)
     }
 
     // p99.9 markers and their links first, so that the max markers sit on top.
-    for (const Point& p : points) {
-        Rgb c = kPalette[p.material % std::size(kPalette)];
-        if (p.yp != p.y) {
-            cv.line(p.x, p.y, p.x, p.yp, c, 3);
-            cv.marker(p.x, p.yp, 6, shapeOf(p.backend), c, false);
+    for (const Point& p : points)
+        if (std::abs(p.yp - p.y) >= 1) {
+            Rgb c = materialColor(p.material);
+            canvas.line({p.x, p.y}, {p.x, p.yp}, {c, 1.5, 3, 3});
+            marker(canvas, {p.x, p.yp}, 6, shapeOf(p.backend), c, false);
         }
-    }
     std::vector<Box> occupied;
     for (const Point& p : points) {
-        Rgb c = kPalette[p.material % std::size(kPalette)];
-        cv.marker(p.x, p.y, 7, shapeOf(p.backend), c, true);
-        if (p.clippedTop) cv.text(p.x - 5, p.y - 22, "^", 2, c);
+        Rgb c = materialColor(p.material);
+        marker(canvas, {p.x, p.y}, 7, shapeOf(p.backend), c, true);
+        if (p.clippedTop) canvas.text({p.x, p.y - 10}, "^", kFont, c, HAlign::Center, VAlign::Bottom);
         occupied.push_back({p.x - 8, p.y - 8, p.x + 8, p.y + 8});
     }
-
-    // Labels: the first free spot among candidates around the point, at
-    // growing distances (with a leader line once it is not adjacent).
-    const int scale = 2, th = Canvas::textHeight(scale);
-    for (const Group& g : groups) {
-        int tw = Canvas::textWidth(g.text, scale);
-        std::vector<std::pair<int, int>> candidates;  // top-left corners
-        for (int d : {12, 30, 52, 80, 115})
-            for (auto [ux, uy] : std::initializer_list<std::pair<int, int>>{
-                     {1, 0}, {-1, 0}, {1, -1}, {1, 1}, {-1, -1}, {-1, 1}, {0, -1}, {0, 1}}) {
-                int x = ux > 0 ? g.x + d : ux < 0 ? g.x - d - tw : g.x - tw / 2;
-                int y = uy > 0 ? g.y + d - th / 2 : uy < 0 ? g.y - d - th / 2 : g.y - th / 2;
-                if (uy != 0 && ux == 0) y = uy > 0 ? g.y + d : g.y - d - th;
-                candidates.push_back({x, y});
-            }
-        Box chosen{};
-        bool found = false;
-        for (auto [x, y] : candidates) {
-            Box b{x - 2, y - 2, x + tw + 2, y + th + 2};
-            if (b.x0 < left + 2 || b.x1 > right - 2 || b.y0 < top + 2 || b.y1 > bottom - 2) continue;
-            if (std::any_of(occupied.begin(), occupied.end(), [&](const Box& o) { return o.overlaps(b); })) continue;
-            chosen = b;
-            found = true;
-            break;
-        }
-        if (!found) {  // crowded: right of the point, clamped into the plot
-            int x = std::clamp(g.x + 12, left + 4, right - tw - 4), y = std::clamp(g.y - th / 2, top + 4, bottom - th - 4);
-            chosen = {x - 2, y - 2, x + tw + 2, y + th + 2};
-        }
-        int cx = std::clamp(g.x, chosen.x0, chosen.x1), cy = std::clamp(g.y, chosen.y0, chosen.y1);
-        if (std::hypot(cx - g.x, cy - g.y) > 14) cv.line(g.x, g.y, cx, cy, kLeader);
-        cv.fillRect(chosen.x0, chosen.y0, chosen.x1, chosen.y1, kWhite);
-        cv.text(chosen.x0 + 2, chosen.y0 + 2, g.text, scale, kPalette[g.material % std::size(kPalette)]);
-        occupied.push_back(chosen);
-    }
-
-    // Legend: materials (colour), backends (shape), the two error markers.
-    int lx = right + 30, ly = top;
-    cv.text(lx, ly, "materials", 2, kBlack);
-    ly += 26;
-    for (size_t mi = 0; mi < report.materials.size(); ++mi) {
-        Rgb c = kPalette[mi % std::size(kPalette)];
-        cv.fillRect(lx, ly, lx + 16, ly + 14, c);
-        std::string name = report.materials[mi].material;
-        if (name.size() > 26) name = name.substr(0, 25) + "~";
-        cv.text(lx + 26, ly, name, 2, kText);
-        ly += 24;
-    }
-    ly += 16;
-    cv.text(lx, ly, "backends", 2, kBlack);
-    ly += 26;
-    for (auto [b, what] : {std::pair{"simd", "simd (JIT)"}, {"scalar", "scalar (JIT)"},
-                           {"interp", "interp (reference)"}, {"aot", "aot (hand-written)"}}) {
-        cv.marker(lx + 8, ly + 7, 7, shapeOf(b), kText, true);
-        cv.text(lx + 26, ly, what, 2, kText);
-        ly += 24;
-    }
-    ly += 16;
-    cv.text(lx, ly, "y: regular sample", 2, kBlack);
-    ly += 26;
-    cv.marker(lx + 8, ly + 7, 7, Shape::Circle, kText, true);
-    cv.text(lx + 26, ly, "max rel. error", 2, kText);
-    ly += 24;
-    cv.marker(lx + 8, ly + 7, 6, Shape::Circle, kText, false);
-    cv.text(lx + 26, ly, "p99.9 rel. error", 2, kText);
-    ly += 24;
-    cv.text(lx, ly, fmt::format("errors < {:g} drawn", kPlotErrorFloor), 2, kText);
-    ly += 20;
-    cv.text(lx, ly, "on the floor; ^ = off scale", 2, kText);
-    ly += 36;
-    cv.text(lx, ly, "labels: backend mode", 2, kBlack);
-    ly += 24;
-    cv.text(lx, ly, "t1e-3 = tolerance=1e-3", 2, kText);
-    ly += 20;
-    if (report.settings.quick) cv.text(lx, ly + 10, "QUICK RUN (noisy)", 2, Rgb{200, 0, 0});
-
-    // Write through OpenImageIO.
-    OIIO::ImageSpec spec(W, H, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("Software", "facet bench");
-    OIIO::ImageBuf image(spec, const_cast<uint8_t*>(cv.data()));  // wraps the canvas
-    return writeImageFile(image, path, OIIO::TypeDesc::UINT8);
+    drawLabels(canvas, groups, occupied, {left, top, right, bottom});
+    drawLegend(canvas, report, right + 30, top);
+    return canvas.write(path);
 }
 
 }  // namespace facet::bench

@@ -5,9 +5,9 @@
 // it), with the p99.9 relative error as a hollow marker joined by a thin
 // line. Both axes are logarithmic. Colour = material, marker shape =
 // backend; each point is labelled with its backend and math mode (points
-// that coincide share one label). Axes, ticks and text are drawn into a
-// pixel buffer with the built-in bitmap font and written through
-// OpenImageIO, so the picture needs no plotting library.
+// that coincide share one label). Drawn on the PlotCanvas of the `facet
+// render` plots (apps/preview/PlotCanvas.h): without a TrueType font the
+// plot is drawn without text.
 #pragma once
 
 #include "BenchRunner.h"
@@ -20,7 +20,8 @@ constexpr int kPlotWidth = 1600, kPlotHeight = 1000;
 constexpr double kPlotErrorFloor = 1e-9;
 
 // Writes the plot to `path` (any format OpenImageIO writes; the bench uses
-// PNG). Returns "" or an error message.
-std::string writeScatterPlot(const BenchReport& report, const std::string& path);
+// PNG). Returns "" or an error message; `warning`, when given, receives ""
+// or why the plot has no text.
+std::string writeScatterPlot(const BenchReport& report, const std::string& path, std::string* warning = nullptr);
 
 }  // namespace facet::bench

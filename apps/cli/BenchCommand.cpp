@@ -112,11 +112,13 @@ int cmdBench(const std::vector<std::string>& args) {
     if (!writeOutput((dir / "bench.md").string(), bench::markdown(report)) ||
         !writeOutput((dir / "bench.json").string(), bench::json(report)))
         return kExitFailed;
-    std::string plotError = bench::writeScatterPlot(report, (dir / "bench.png").string());
+    std::string plotWarning;
+    std::string plotError = bench::writeScatterPlot(report, (dir / "bench.png").string(), &plotWarning);
     if (!plotError.empty()) {
         std::fprintf(stderr, "facet bench: %s\n", plotError.c_str());
         return kExitFailed;
     }
+    if (!plotWarning.empty()) std::fprintf(stderr, "facet bench: warning: %s\n", plotWarning.c_str());
     if (!asJson) std::printf("\nwrote %s/bench.md, bench.json, bench.png\n", outDir.c_str());
     return materialErrors ? kExitMaterialError : kExitOk;
 }

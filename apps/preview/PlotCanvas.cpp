@@ -63,6 +63,14 @@ std::string findPlotFont(bool monospace) {
     return "";
 }
 
+std::string noTextWarning(const PlotCanvas& canvas, const std::string& font) {
+    if (canvas.hasFont()) return "";
+    if (font.empty())
+        return "no TrueType font found (install fonts-dejavu-core or set FACET_FONT to a .ttf file): "
+               "the plot is drawn without text";
+    return "cannot draw text with font '" + font + "': the plot is drawn without text";
+}
+
 PlotCanvas::PlotCanvas(int width, int height, const std::string& fontPath, Rgb background, int supersample)
     : width_(std::max(width, 1)), height_(std::max(height, 1)), ss_(std::max(supersample, 1)) {
     if (static_cast<long long>(width_) * height_ * ss_ * ss_ > kMaxSupersampledPixels) ss_ = 1;
@@ -181,6 +189,42 @@ void PlotCanvas::box(Point a, Point b, Rgb color, bool fill, double width) {
     int n = std::max(1, int(std::lround(width * ss_)));
     for (int k = 0; k < n && x0 + k <= x1 - k && y0 + k <= y1 - k; ++k)
         IBA::render_box(buf_, x0 + k, y0 + k, x1 - k, y1 - k, c, false);
+}
+
+void PlotCanvas::polygon(const std::vector<Point>& vertices, Rgb color, bool fill, double width) {
+    if (vertices.size() < 3) return;
+    if (!fill) {
+        std::vector<Point> closed = vertices;
+        closed.push_back(vertices.front());
+        // The closing vertex is an inner vertex too: no notch where the outline starts.
+        closed.push_back(vertices[1]);
+        polyline(closed, {color, width});
+        return;
+    }
+    // Even-odd scanline fill in the supersampled grid: each pixel row whose
+    // centre crosses the polygon gets one horizontal render_line per span.
+    const float c[3] = {color.r, color.g, color.b};
+    double ymin = INFINITY, ymax = -INFINITY;
+    for (const Point& v : vertices) ymin = std::min(ymin, v.y * ss_), ymax = std::max(ymax, v.y * ss_);
+    if (!std::isfinite(ymin) || !std::isfinite(ymax)) return;
+    int row0 = std::max(0, int(std::floor(ymin))), row1 = std::min(height_ * ss_ - 1, int(std::ceil(ymax)));
+    std::vector<double> crossings;
+    for (int row = row0; row <= row1; ++row) {
+        double y = row + 0.5;
+        crossings.clear();
+        for (size_t i = 0; i < vertices.size(); ++i) {
+            Point a = vertices[i], b = vertices[(i + 1) % vertices.size()];
+            double ay = a.y * ss_, by = b.y * ss_;
+            if ((ay <= y) == (by <= y)) continue;  // the edge does not cross this row
+            crossings.push_back((a.x + (b.x - a.x) * (y - ay) / (by - ay)) * ss_);
+        }
+        std::sort(crossings.begin(), crossings.end());
+        for (size_t i = 0; i + 1 < crossings.size(); i += 2) {
+            int x0 = int(std::lround(std::clamp(crossings[i], -1e6, 1e6)));
+            int x1 = int(std::lround(std::clamp(crossings[i + 1], -1e6, 1e6))) - 1;
+            if (x1 >= x0) IBA::render_line(buf_, x0, row, x1, row, c);
+        }
+    }
 }
 
 void PlotCanvas::arc(Point center, double radius, double a0, double a1, const Stroke& stroke) {

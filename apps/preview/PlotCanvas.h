@@ -1,5 +1,6 @@
 // PlotCanvas: a small drawing surface for the diagnostic plots of
-// `facet render` (Plots.cpp), over an OpenImageIO ImageBuf.
+// `facet render` (Plots.cpp) and the scatter plot of `facet bench`
+// (bench/BenchPlot.cpp), over an OpenImageIO ImageBuf.
 //
 // Everything is drawn with ImageBufAlgo (render_line, render_box,
 // render_text) into an RGB float buffer at `supersample` times the output
@@ -46,6 +47,11 @@ struct Stroke {
 // (monospace: DejaVuSansMono first). "" when there is none.
 std::string findPlotFont(bool monospace = false);
 
+class PlotCanvas;
+// Why a plot drawn on `canvas` with `font` (findPlotFont's answer or a
+// requested file) has no text, or "" when the canvas draws text.
+std::string noTextWarning(const PlotCanvas& canvas, const std::string& font);
+
 class PlotCanvas {
 public:
     // A width x height (output pixels) canvas filled with `background`.
@@ -68,6 +74,9 @@ public:
     void polyline(const std::vector<Point>& points, const Stroke& stroke);
     // Axis-aligned box with corners a and b; filled or a one-`width` outline.
     void box(Point a, Point b, Rgb color, bool fill, double width = 1);
+    // Closed polygon through `vertices`: filled (even-odd rule), or a
+    // one-`width` outline.
+    void polygon(const std::vector<Point>& vertices, Rgb color, bool fill, double width = 1);
     // Circular arc around `center`, radius r (output pixels), from angle a0
     // to a1 in radians measured counter-clockwise from +x (y up on screen).
     void arc(Point center, double radius, double a0, double a1, const Stroke& stroke);

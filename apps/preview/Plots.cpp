@@ -83,19 +83,8 @@ std::string checkSize(int width, int height) {
     return "";
 }
 
-// The font for a plot's canvas, and the warning when there is none.
-std::string chooseFont(const std::string& requested, std::string& warning) {
-    std::string font = requested.empty() ? findPlotFont() : requested;
-    if (font.empty())
-        warning = "no TrueType font found (install fonts-dejavu-core or set FACET_FONT to a .ttf file): "
-                  "the plot is drawn without text";
-    return font;
-}
-
-void noteUnusableFont(const PlotCanvas& canvas, const std::string& font, std::string& warning) {
-    if (!canvas.hasFont() && warning.empty())
-        warning = "cannot draw text with font '" + font + "': the plot is drawn without text";
-}
+// The font for a plot's canvas.
+std::string chooseFont(const std::string& requested) { return requested.empty() ? findPlotFont() : requested; }
 
 void noteNoRoomForText(const PlotCanvas& canvas, bool textDrawn, std::string& warning) {
     if (canvas.hasFont() && !textDrawn)
@@ -440,9 +429,9 @@ LobePlotResult writeLobePlot(const Kernel& kernel, const LobePlotOptions& option
             result.peakValue.push_back(curves.back().peak);
             result.peakThetaDeg.push_back(thetaAt(curves.back().peakIndex));
         }
-        std::string font = chooseFont(options.fontPath, result.warning);
+        std::string font = chooseFont(options.fontPath);
         PlotCanvas canvas(options.width, options.height, font);
-        noteUnusableFont(canvas, font, result.warning);
+        result.warning = noTextWarning(canvas, font);
         noteNoRoomForText(canvas, drawLobePlot(canvas, curves, options.title), result.warning);
         result.error = canvas.write(path);
     } catch (const std::exception& e) {
@@ -485,9 +474,9 @@ std::string writeNdfPlot(const std::vector<NdfCurve>& curves, const NdfPlotOptio
         YAxis y = chooseYAxis(maxValue, options.logScale);
 
         std::string note;
-        std::string font = chooseFont(options.fontPath, note);
+        std::string font = chooseFont(options.fontPath);
         PlotCanvas canvas(options.width, options.height, font);
-        noteUnusableFont(canvas, font, note);
+        note = noTextWarning(canvas, font);
         noteNoRoomForText(canvas, drawNdfPlot(canvas, curves, values, y, options.title), note);
         if (!note.empty()) {
             if (warning) *warning = note;
