@@ -83,7 +83,7 @@ struct Reference {
     std::vector<char> valid;
 };
 
-Reference computeReference(const CheckedMaterial& m, const Sample& s) {
+Reference computeReference(const CheckedMaterial& m, const LaneBatch& s) {
     Interpreter<double> interp(m);
     Reference ref;
     size_t n = s.size();
@@ -120,7 +120,7 @@ int64_t orderedBits(float f) {
     return i < 0 ? int64_t(INT32_MIN) - i : i;
 }
 
-ErrorStats compare(const CheckedMaterial& m, const Sample& s, const Reference& ref, const Output& out) {
+ErrorStats compare(const CheckedMaterial& m, const LaneBatch& s, const Reference& ref, const Output& out) {
     ErrorStats st;
     size_t n = s.size();
     std::vector<double> rels;
@@ -205,7 +205,7 @@ std::pair<double, double> timeChunks(int warmup, int runs, size_t n, size_t chun
 
 // The scalar entry point of the SPEC, called once per lane as a renderer
 // would call it (inputs gathered per lane from the SoA columns).
-void evalScalarLanes(const Kernel& k, const Sample& s, size_t begin, size_t end, Output& out) {
+void evalScalarLanes(const Kernel& k, const LaneBatch& s, size_t begin, size_t end, Output& out) {
     int slots = k.inputCount();
     float in[64];  // more slots than this take the vector below
     std::vector<float> many(slots > 64 ? slots : 0);
@@ -222,7 +222,7 @@ void evalScalarLanes(const Kernel& k, const Sample& s, size_t begin, size_t end,
 }
 
 // Kernel::evalBatch on lanes [begin, end) of a sample.
-int64_t evalBatchRange(const Kernel& k, const Sample& s, size_t begin, size_t end, Output& out) {
+int64_t evalBatchRange(const Kernel& k, const LaneBatch& s, size_t begin, size_t end, Output& out) {
     const float* wi[3] = {s.wi()[0] + begin, s.wi()[1] + begin, s.wi()[2] + begin};
     const float* wo[3] = {s.wo()[0] + begin, s.wo()[1] + begin, s.wo()[2] + begin};
     std::vector<const float*> in;
@@ -432,7 +432,7 @@ private:
         return true;
     }
 
-    ErrorStats errorOn(const Kernel& kernel, const Sample& s, const Reference& ref) {
+    ErrorStats errorOn(const Kernel& kernel, const LaneBatch& s, const Reference& ref) {
         Output out(s.size());
         out.invalid = kernel.evalBatch(int64_t(s.size()), s.wi(), s.wo(), s.inputs(), out.ptr);
         return compare(m_, s, ref, out);
@@ -466,7 +466,7 @@ private:
     const BenchSettings& settings_;
     Compiler& compiler_;
     std::FILE* progress_;
-    Sample regular_, hard_;
+    LaneBatch regular_, hard_;
     Reference refRegular_, refHard_;
 };
 

@@ -8,23 +8,6 @@
 
 namespace facet::bench {
 
-void Sample::push(const double wi[3], const double wo[3], const std::vector<double>& inputs) {
-    for (int d = 0; d < 3; ++d) {
-        dir[d].push_back(float(wi[d]));
-        dir[3 + d].push_back(float(wo[d]));
-    }
-    for (size_t s = 0; s < slots.size(); ++s) slots[s].push_back(float(inputs[s]));
-}
-
-void Sample::finish() {
-    for (int d = 0; d < 3; ++d) {
-        wiPtr_[d] = dir[d].data();
-        woPtr_[d] = dir[3 + d].data();
-    }
-    inPtr_.clear();
-    for (const auto& column : slots) inPtr_.push_back(column.data());
-}
-
 namespace {
 
 constexpr double kPi = 3.141592653589793238462643383279502884;
@@ -43,10 +26,10 @@ void inputRange(const CheckedInput& in, int channel, double& lo, double& hi) {
 
 }  // namespace
 
-Sample regularSample(const CheckedMaterial& material, size_t n, uint64_t seed) {
+LaneBatch regularSample(const CheckedMaterial& material, size_t n, uint64_t seed) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(0, 1);
-    Sample s;
+    LaneBatch s;
     s.slots.assign(material.slotCount, {});
     for (auto& d : s.dir) d.reserve(n);
     for (auto& c : s.slots) c.reserve(n);
@@ -75,9 +58,9 @@ Sample regularSample(const CheckedMaterial& material, size_t n, uint64_t seed) {
 
 namespace {
 
-// The shared generator of compiler/HardCases.h, as a Sample.
-Sample fromHardCases(const CheckedMaterial& m, const std::vector<HardCase>& cases) {
-    Sample s;
+// The shared generator of compiler/HardCases.h, as a lane batch.
+LaneBatch fromHardCases(const CheckedMaterial& m, const std::vector<HardCase>& cases) {
+    LaneBatch s;
     s.slots.assign(m.slotCount, {});
     for (const HardCase& c : cases) s.push(c.wi.data(), c.wo.data(), c.slots);
     s.finish();
@@ -87,7 +70,7 @@ Sample fromHardCases(const CheckedMaterial& m, const std::vector<HardCase>& case
 }  // namespace
 
 // The one place that chooses the hard-case generator.
-Sample hardCaseSample(const CheckedMaterial& material) { return fromHardCases(material, hardCases(material)); }
+LaneBatch hardCaseSample(const CheckedMaterial& material) { return fromHardCases(material, hardCases(material)); }
 
 std::string hardCaseSampleDescription() {
     return "compiler/HardCases.h hardCases(): SPEC 7 grazing/mirror/retro/opposite/below-horizon directions, "

@@ -60,7 +60,7 @@ const Row kRows[] = {{"simd-exact", "backend=simd;math=exact;cache=off"},
                      {"simd-fast", "backend=simd;math=fast;cache=off"},
                      {"scalar-exact", "backend=scalar;math=exact;cache=off"}};
 
-void dump(const std::string& path, const Kernel& k, const bench::Sample& s) {
+void dump(const std::string& path, const Kernel& k, const LaneBatch& s) {
     std::vector<float> c[3];
     float* out[3];
     for (int i = 0; i < 3; ++i) c[i].assign(s.size(), -1.0f), out[i] = c[i].data();
@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
             return 1;
         }
         for (const CheckedMaterial& m : program.materials) {
-            bench::Sample regular = bench::regularSample(m, evals, 1234);
+            LaneBatch regular = bench::regularSample(m, evals, 1234);
             if (grazing) {
                 for (size_t i = 0; i < regular.size(); ++i) {
                     double x = regular.dir[0][i], y = regular.dir[1][i], r = std::hypot(x, y), z = 1e-7;
@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
                     regular.dir[2][i] = float(z);
                 }
             }
-            bench::Sample hard = bench::hardCaseSample(m);
+            LaneBatch hard = bench::hardCaseSample(m);
             for (const Row& row : kRows) {
                 CompileOptions options;
                 std::string err = CompileOptions::parse(row.options + extra, options);

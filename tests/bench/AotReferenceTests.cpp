@@ -49,7 +49,7 @@ struct Outputs {
 
 // Max relative error of `out` against the interpreter (differences below
 // 1e-30 count as 0, as in `facet bench`), with the worst lane described.
-double maxRelError(const CheckedMaterial& m, const bench::Sample& s, const Outputs& out, std::string& worst) {
+double maxRelError(const CheckedMaterial& m, const LaneBatch& s, const Outputs& out, std::string& worst) {
     Interpreter<double> interp(m);
     double maxRel = 0;
     std::vector<double> slots(std::max(1, m.slotCount));
@@ -109,7 +109,7 @@ TEST_CASE("AOT reference models match the interpreter within 1e-4 relative on ra
         // 6e-8 absolute) is amplified by 1/alpha^2 in D beyond 1e-4 near
         // the peak. `facet bench` reports that error on its own samples.
         for (uint64_t seed : {1u, 2u, 3u}) {
-            bench::Sample s = bench::regularSample(m, 20000, seed);
+            LaneBatch s = bench::regularSample(m, 20000, seed);
             for (auto& column : s.slots)
                 for (float& r : column) r = 0.1f + 0.9f * r;  // [0, 1] -> [0.1, 1]
             Outputs out(s.size());
@@ -128,7 +128,7 @@ TEST_CASE("AOT defaults: a null inputs array or a null slot means the material's
         CAPTURE(name);
         CheckedProgram p = load(modelPath(model));
         const CheckedMaterial& m = p.materials.front();
-        bench::Sample s = bench::regularSample(m, 1000, 7);
+        LaneBatch s = bench::regularSample(m, 1000, 7);
         // Explicit defaults in every slot.
         std::vector<double> defaults = m.defaultSlots();
         for (int k = 0; k < m.slotCount; ++k) std::fill(s.slots[k].begin(), s.slots[k].end(), float(defaults[k]));

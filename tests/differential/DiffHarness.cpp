@@ -17,7 +17,7 @@ std::string readFile(const std::string& path) {
 }
 
 namespace {
-void addSlots(const CheckedMaterial& m, Sample& s, std::mt19937_64& rng, size_t n) {
+void addSlots(const CheckedMaterial& m, LaneBatch& s, std::mt19937_64& rng, size_t n) {
     s.slots.assign(m.slotCount, {});
     std::uniform_real_distribution<double> u(0, 1);
     for (const CheckedInput& in : m.inputs) {
@@ -34,30 +34,31 @@ void addSlots(const CheckedMaterial& m, Sample& s, std::mt19937_64& rng, size_t 
 }
 }  // namespace
 
-Sample randomSample(const CheckedMaterial& m, size_t n, uint64_t seed) {
+LaneBatch randomSample(const CheckedMaterial& m, size_t n, uint64_t seed) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(0, 1);
-    Sample s;
+    LaneBatch s;
     for (size_t i = 0; i < n; ++i) {
-        for (int d = 0; d < 2; ++d) {
+        double w[2][3];
+        for (auto& v : w) {
             double z = u(rng), phi = 2 * M_PI * u(rng);
             if (u(rng) < 0.05) z = -z;  // below the horizon
             double r = std::sqrt(std::max(0.0, 1 - z * z));
-            s.dir[3 * d + 0].push_back(float(r * std::cos(phi)));
-            s.dir[3 * d + 1].push_back(float(r * std::sin(phi)));
-            s.dir[3 * d + 2].push_back(float(z));
+            v[0] = r * std::cos(phi), v[1] = r * std::sin(phi), v[2] = z;
         }
+        s.push(w[0], w[1], {});  // the slots are drawn afterwards
     }
     addSlots(m, s, rng, n);
+    s.finish();
     return s;
 }
 
-Sample hardSample(const CheckedMaterial& m) {
-    Sample s;
+LaneBatch hardSample(const CheckedMaterial& m) {
+    LaneBatch s;
     auto push = [&](double ax, double ay, double az, double bx, double by, double bz) {
         double la = std::sqrt(ax * ax + ay * ay + az * az), lb = std::sqrt(bx * bx + by * by + bz * bz);
-        double v[6] = {ax / la, ay / la, az / la, bx / lb, by / lb, bz / lb};
-        for (int d = 0; d < 6; ++d) s.dir[d].push_back(float(v[d]));
+        double wi[3] = {ax / la, ay / la, az / la}, wo[3] = {bx / lb, by / lb, bz / lb};
+        s.push(wi, wo, {});  // the slots are drawn afterwards
     };
     const double zs[] = {1.0, 0.5, 1e-2, 1e-4, 1e-7};
     for (double zi : zs)
@@ -74,6 +75,7 @@ Sample hardSample(const CheckedMaterial& m) {
     push(0.6, 0, -0.8, 0, 0, 1);                    // wi below the horizon
     std::mt19937_64 rng(7);
     addSlots(m, s, rng, s.size());
+    s.finish();
     return s;
 }
 
@@ -98,7 +100,7 @@ bool DiffStats::ok(std::string& why) const {
     return true;
 }
 
-void compare(const Kernel& kernel, const CheckedMaterial& reference, const Sample& s, DiffStats& stats) {
+void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneBatch& s, DiffStats& stats) {
     size_t n = s.size();
     // Kernel slots are the reference slots minus bound inputs; map by name.
     std::vector<int> kernelSlotOf(reference.slotCount, -1);
@@ -171,7 +173,7 @@ int64_t orderedBits(float f) {
 }
 }  // namespace
 
-void compareUlp(const Kernel& scalar, const Kernel& simd, const Sample& s, DiffStats& stats) {
+void compareUlp(const Kernel& scalar, const Kernel& simd, const LaneBatch& s, DiffStats& stats) {
     size_t n = s.size();
     int slots = simd.inputCount();
     std::vector<const float*> inputs;

@@ -10,6 +10,7 @@
 
 #include "Interpreter.h"
 #include "Kernel.h"
+#include "LaneBatch.h"
 
 #include <random>
 #include <string>
@@ -17,17 +18,11 @@
 
 namespace facet::test {
 
-struct Sample {
-    std::vector<float> dir[6];               // wi_x..wo_z, SoA
-    std::vector<std::vector<float>> slots;   // per slot, SoA
-    size_t size() const { return dir[0].size(); }
-};
-
 // n random pairs: directions uniform over the sphere's upper hemisphere
 // (10% below the horizon), inputs uniform in their ranges (5% outside).
-Sample randomSample(const CheckedMaterial& m, size_t n, uint64_t seed);
+LaneBatch randomSample(const CheckedMaterial& m, size_t n, uint64_t seed);
 // Hand-made hard directions: normal, grazing, mirror, retro, near-opposite.
-Sample hardSample(const CheckedMaterial& m);
+LaneBatch hardSample(const CheckedMaterial& m);
 
 struct DiffStats {
     size_t compared = 0, finiteRef = 0, within1e5 = 0, beyond2e3 = 0, nonFinite = 0, negative = 0,
@@ -40,9 +35,9 @@ struct DiffStats {
 // Evaluates `kernel` on `s` and compares with the reference interpreter of
 // `reference` (the unspecialized material: inputs bound in the kernel
 // options are bound in `boundSlots` for the reference).
-void compare(const Kernel& kernel, const CheckedMaterial& reference, const Sample& s, DiffStats& stats);
+void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneBatch& s, DiffStats& stats);
 // Scalar vs SIMD on the same sample: max ulp distance.
-void compareUlp(const Kernel& scalar, const Kernel& simd, const Sample& s, DiffStats& stats);
+void compareUlp(const Kernel& scalar, const Kernel& simd, const LaneBatch& s, DiffStats& stats);
 
 std::string readFile(const std::string& path);
 

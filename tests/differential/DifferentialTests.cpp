@@ -59,8 +59,8 @@ TEST_CASE("every shipped and corpus material agrees with the interpreter on ever
         if (diags.hasErrors()) continue;  // error cases of the corpus
         for (const CheckedMaterial& m : program.materials) {
             ++materials;
-            Sample random = randomSample(m, 100000, 42 + materials);
-            Sample hard = hardSample(m);
+            LaneBatch random = randomSample(m, 100000, 42 + materials);
+            LaneBatch hard = hardSample(m);
             std::unique_ptr<Kernel> scalar;
             struct Run { Backend backend; int width; };
             for (Run run : {Run{Backend::Scalar, 0}, Run{Backend::Simd, 4}, Run{Backend::Simd, 8}, Run{Backend::Simd, 16}}) {
@@ -113,7 +113,7 @@ TEST_CASE("random materials agree across interpreter, scalar and SIMD") {
         CheckedProgram program = loadProgramText(rm.text, "random.mat", diags);
         REQUIRE_MESSAGE(!diags.hasErrors(), rm.text << diags.str());
         const CheckedMaterial& m = program.materials.front();
-        Sample s = randomSample(m, 1500, 99 + i);
+        LaneBatch s = randomSample(m, 1500, 99 + i);
         DiagnosticEngine kd;
         auto scalar = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Scalar, 0), kd);
         auto simd = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Simd, widths[i % 3]), kd);

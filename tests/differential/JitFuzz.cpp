@@ -48,7 +48,7 @@ using namespace facet::test;
 namespace {
 
 // Replaces about a third of the lanes of `s` by hostile ones.
-void addHostileLanes(Sample& s, std::mt19937_64& rng) {
+void addHostileLanes(LaneBatch& s, std::mt19937_64& rng) {
     std::uniform_int_distribution<int> pick(0, 11);
     const float hostile[] = {NAN, INFINITY, -INFINITY, 1e-40f, -1e-45f, 3e38f, -3e38f, 0.0f, 1e-30f, 2.0f};
     std::uniform_int_distribution<int> value(0, int(std::size(hostile)) - 1);
@@ -110,7 +110,7 @@ void finding(Counters& c, const std::string& what) {
     if (++c.findings <= 50) std::printf("FINDING %s\n", what.c_str());
 }
 
-void checkKernel(const Kernel& k, const std::string& label, const Sample& s, bool exact, Counters& c) {
+void checkKernel(const Kernel& k, const std::string& label, const LaneBatch& s, bool exact, Counters& c) {
     const size_t n = s.size();
     std::vector<std::unique_ptr<GuardedArray<float>>> arrays;  // directions, then slots
     for (const auto& d : s.dir) arrays.push_back(std::make_unique<GuardedArray<float>>(d.data(), n));
@@ -217,7 +217,7 @@ int main(int argc, char** argv) {
         ++c.materials;
         // L-31..L lanes: every remainder modulo 4, 8 and 16 occurs.
         const size_t batch = size_t(lanes - rng() % std::min(lanes, 32ull));
-        Sample s = randomSample(program.materials[0], batch, seed * 1000003 + uint64_t(m));
+        LaneBatch s = randomSample(program.materials[0], batch, seed * 1000003 + uint64_t(m));
         addHostileLanes(s, rng);
         for (const auto& [name, options] : kBackends) {
             CompileOptions o;

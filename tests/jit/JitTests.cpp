@@ -36,29 +36,32 @@ material gold {
 }
 )";
 
-struct Batch {
-    size_t n;
-    std::vector<float> dir[6], rough;
+// Random lanes for a material whose input slot 0 is a roughness (kGold):
+// directions over the upper hemisphere, roughness in [0, 1), drawn in float;
+// plus the kernel's output columns.
+struct Batch : LaneBatch {
     std::vector<float> out[3];
-    explicit Batch(size_t count, uint64_t seed) : n(count) {
+    explicit Batch(size_t count, uint64_t seed) {
         std::mt19937 rng(seed);
         std::uniform_real_distribution<float> u(0, 1);
-        for (size_t i = 0; i < n; ++i) {
+        slots.resize(1);
+        for (size_t i = 0; i < count; ++i) {
             for (int d = 0; d < 2; ++d) {
                 float z = u(rng), phi = 6.2831853f * u(rng), r = std::sqrt(1 - z * z);
                 dir[3 * d].push_back(r * std::cos(phi));
                 dir[3 * d + 1].push_back(r * std::sin(phi));
                 dir[3 * d + 2].push_back(z);
             }
-            rough.push_back(u(rng));
+            slots[0].push_back(u(rng));
         }
-        for (auto& o : out) o.assign(n, 0.0f);
+        for (auto& o : out) o.assign(count, 0.0f);
+        finish();
     }
     int64_t run(const Kernel& k, size_t begin = 0, size_t count = SIZE_MAX) {
-        count = std::min(count, n - begin);
+        count = std::min(count, size() - begin);
         const float* wi[3] = {&dir[0][begin], &dir[1][begin], &dir[2][begin]};
         const float* wo[3] = {&dir[3][begin], &dir[4][begin], &dir[5][begin]};
-        const float* inputs[4] = {&rough[begin], nullptr, nullptr, nullptr};
+        const float* inputs[4] = {&slots[0][begin], nullptr, nullptr, nullptr};
         float* rgb[3] = {&out[0][begin], &out[1][begin], &out[2][begin]};
         return k.evalBatch(int64_t(count), wi, wo, inputs, rgb);
     }
@@ -66,7 +69,7 @@ struct Batch {
     // as run() (the roughness; unused by a material without inputs).
     EvalResult<double> reference(const Interpreter<double>& interp, size_t i) const {
         double wi[3] = {dir[0][i], dir[1][i], dir[2][i]}, wo[3] = {dir[3][i], dir[4][i], dir[5][i]};
-        double in[1] = {rough[i]};
+        double in[1] = {slots[0][i]};
         return interp.eval(wi, wo, in);
     }
 };
@@ -102,8 +105,8 @@ TwoBodyRun runTwoBodies(const Kernel& twoBody, const Kernel& oneBody, const char
     CHECK(a.run(twoBody) == 0);
     CHECK(b.run(oneBody) == 0);
     TwoBodyRun r;
-    r.lanes = a.n;
-    for (size_t i = 0; i < a.n; ++i) {
+    r.lanes = a.size();
+    for (size_t i = 0; i < a.size(); ++i) {
         EvalResult<double> ref = a.reference(interp, i);
         for (int ch = 0; ch < 3; ++ch) {
             r.differing += a.out[ch][i] != b.out[ch][i];
@@ -456,15 +459,15 @@ TEST_CASE("guarded fast SIMD: Schlick's 1 - wo.h from |wi + wo| stays within fas
         Interpreter<double> interp(p.materials[0]);
         auto k = compile(c, text, "backend=simd;width=16;math=fast;cache=off");
         Batch b(4096, 11);
-        for (size_t i = 0; i < b.n; ++i) {
-            double q = 1e-7 * std::pow(4e6, double(i) / double(b.n - 1));
+        for (size_t i = 0; i < b.size(); ++i) {
+            double q = 1e-7 * std::pow(4e6, double(i) / double(b.size() - 1));
             double cosT = 1 - q, sinT = std::sqrt(q * (2 - q));
             b.dir[0][i] = float(sinT), b.dir[1][i] = 0, b.dir[2][i] = float(cosT);
             b.dir[3][i] = float(-sinT), b.dir[4][i] = 0, b.dir[5][i] = float(cosT);
         }
         CHECK(b.run(*k) == 0);
         double worst = 0;
-        for (size_t i = 0; i < b.n; ++i) {
+        for (size_t i = 0; i < b.size(); ++i) {
             EvalResult<double> want = b.reference(interp, i);
             REQUIRE(want.valid);
             double rel = std::abs(b.out[0][i] - want.rgb[0]) / std::max(std::abs(want.rgb[0]), 1e-30);
@@ -495,13 +498,13 @@ TEST_CASE("beckmann with the half angle in float: near-opposite directions below
          {"backend=scalar;cache=off", "backend=simd;width=16;cache=off", "backend=simd;width=8;cache=off"}) {
         auto k = compile(c, text, spec);
         Batch b(16, 5);
-        for (size_t i = 0; i < b.n; ++i) {
+        for (size_t i = 0; i < b.size(); ++i) {
             float z = zs[i % std::size(zs)], phi = 0.4f * float(i);
             b.dir[0][i] = std::cos(phi), b.dir[1][i] = std::sin(phi), b.dir[2][i] = z;
             b.dir[3][i] = -std::cos(phi), b.dir[4][i] = -std::sin(phi), b.dir[5][i] = z;
         }
         CHECK(b.run(*k) == 0);
-        for (size_t i = 0; i < b.n; ++i) {
+        for (size_t i = 0; i < b.size(); ++i) {
             EvalResult<double> want = b.reference(interp, i);
             REQUIRE(want.valid);
             REQUIRE(want.rgb[0] > 0);
@@ -550,10 +553,10 @@ TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the p
     CheckedProgram cancelProgram = loadProgramText(cancel, "t.mat", d);
     Interpreter<double> cancelInterp(cancelProgram.materials[0], nullptr);
     Batch x(4096, 3);
-    for (size_t i = 0; i < x.n; ++i) x.rough[i] = 0.7f + 0.0071f * float(i) / float(x.n);
+    for (size_t i = 0; i < x.size(); ++i) x.slots[0][i] = 0.7f + 0.0071f * float(i) / float(x.size());
     CHECK(x.run(*cancelKernel) == 0);
     double worstCancel = 0;
-    for (size_t i = 0; i < x.n; ++i) {
+    for (size_t i = 0; i < x.size(); ++i) {
         EvalResult<double> ref = x.reference(cancelInterp, i);
         if (ref.valid && ref.rgb[0] > 1e-30) worstCancel = std::max(worstCancel, std::fabs(x.out[0][i] - ref.rgb[0]) / ref.rgb[0]);
     }
@@ -568,7 +571,7 @@ TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the p
     g.dir[0][5] = 1.0f, g.dir[1][5] = 0.0f, g.dir[2][5] = 1e-8f;
     CHECK(g.run(*floatFirst) == 0);
     float graze[3];
-    float wi5[3] = {1.0f, 0.0f, 1e-8f}, wo5[3] = {g.dir[3][5], g.dir[4][5], g.dir[5][5]}, r5[1] = {g.rough[5]};
+    float wi5[3] = {1.0f, 0.0f, 1e-8f}, wo5[3] = {g.dir[3][5], g.dir[4][5], g.dir[5][5]}, r5[1] = {g.slots[0][5]};
     precise->eval(wi5, wo5, r5, graze);
     for (int ch = 0; ch < 3; ++ch) {
         CHECK(g.out[ch][5] == graze[ch]);
@@ -589,7 +592,7 @@ struct SampleOutput {
         return invalid == o.invalid;
     }
 };
-SampleOutput runSample(const Kernel& k, const bench::Sample& s) {
+SampleOutput runSample(const Kernel& k, const LaneBatch& s) {
     SampleOutput r;
     float* out[3];
     for (int c = 0; c < 3; ++c) r.rgb[c].assign(s.size(), -1.0f), out[c] = r.rgb[c].data();
@@ -617,7 +620,7 @@ TEST_CASE("tiered compile: the quick code and the optimized code give the same b
         CheckedProgram program = loadProgramFile(file, d);
         REQUIRE_MESSAGE(!d.hasErrors(), d.str());
         for (const CheckedMaterial& m : program.materials) {
-            bench::Sample regular = bench::regularSample(m, 4096, 77), hard = bench::hardCaseSample(m);
+            LaneBatch regular = bench::regularSample(m, 4096, 77), hard = bench::hardCaseSample(m);
             for (const char* row : {"backend=simd;math=exact", "backend=simd;math=fast", "backend=scalar;math=exact"}) {
                 INFO(m.name << " " << row);
                 auto build = [&](const char* codegen) {
@@ -635,7 +638,7 @@ TEST_CASE("tiered compile: the quick code and the optimized code give the same b
                 CHECK(tiered->codeTier() == "optimized");
                 CHECK(tiered->tierUpError() == "");
                 CHECK(tiered->tierUpMillis() > 0);
-                for (const bench::Sample* s : {&regular, &hard}) {
+                for (const LaneBatch* s : {&regular, &hard}) {
                     SampleOutput want = runSample(*optimized, *s);
                     CHECK(runSample(*quick, *s) == want);
                     CHECK(runSample(*tiered, *s) == want);
