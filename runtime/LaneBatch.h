@@ -54,14 +54,6 @@ struct LaneBatch {
         for (size_t s = 0; s < slots.size(); ++s) slots[s].push_back(float(inputs[s]));
     }
 
-    // Lane i's directions widened to double (what the reference interpreter reads).
-    void directions(size_t i, double wi[3], double wo[3]) const {
-        for (int d = 0; d < 3; ++d) {
-            wi[d] = dir[d][i];
-            wo[d] = dir[3 + d][i];
-        }
-    }
-
     // Pointers in the layout of Kernel::evalBatch: wi[3], wo[3], inputs[slots]
     // (nullptr without slots). Valid until the columns change size.
     const float* const* wi() const { return wiPtr_; }
