@@ -1,5 +1,6 @@
 // BenchFormat: terminal table, Markdown and JSON of a bench report (see BenchFormat.h).
 #include "BenchFormat.h"
+#include "ReferenceComparison.h"
 
 #include <array>
 #include <cmath>
@@ -131,7 +132,7 @@ std::string markdown(const BenchReport& report) {
                       s.compileRuns, s.diskRuns, s.quick ? " **Quick mode**: small batches, few runs." : "");
     md += fmt::format("Error is relative to the double-precision interpreter on the same float inputs "
                       "(differences below {:g} count as 0). Hard-case sample: {}.\n",
-                      ErrorStats::kAbsFloor, report.hardSample);
+                      kAbsoluteErrorFloor, report.hardSample);
     for (const MaterialBench& m : report.materials) {
         md += fmt::format("\n## {}\n\n`{}`, AOT twin: {}", m.material, m.file,
                           m.aotModel.empty() ? (m.aotNote.empty() ? "none" : m.aotNote) : "`" + m.aotModel + "`");
@@ -301,7 +302,7 @@ std::string json(const BenchReport& report) {
     j.field("disk_runs", int64_t(s.diskRuns));
     j.field("quick", s.quick);
     j.field("seed", int64_t(s.seed));
-    j.field("abs_floor", ErrorStats::kAbsFloor);
+    j.field("abs_floor", kAbsoluteErrorFloor);
     j.field("hard_sample", report.hardSample);
     j.close('}');
     j.key("materials");

@@ -2,7 +2,7 @@
 #include "BenchRunner.h"
 
 #include "Checker.h"
-#include "Interpreter.h"
+#include "ReferenceComparison.h"
 #include "Jit.h"
 #include "Kernel.h"
 #include "ReferenceModels.h"
@@ -77,29 +77,6 @@ double median(std::vector<double> v) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// The reference: the double interpreter on the very same float inputs.
-struct Reference {
-    std::vector<double> rgb[3];
-    std::vector<char> valid;
-};
-
-Reference computeReference(const CheckedMaterial& m, const LaneBatch& s) {
-    Interpreter<double> interp(m);
-    Reference ref;
-    size_t n = s.size();
-    for (auto& c : ref.rgb) c.resize(n);
-    ref.valid.resize(n);
-    std::vector<double> slots(std::max(1, m.slotCount));
-    for (size_t i = 0; i < n; ++i) {
-        double a[3] = {s.dir[0][i], s.dir[1][i], s.dir[2][i]}, b[3] = {s.dir[3][i], s.dir[4][i], s.dir[5][i]};
-        for (int k = 0; k < m.slotCount; ++k) slots[k] = s.slots[k][i];
-        EvalResult<double> r = interp.eval(a, b, slots.data());
-        ref.valid[i] = r.valid;
-        for (int c = 0; c < 3; ++c) ref.rgb[c][i] = r.valid ? r.rgb[c] : 0.0;
-    }
-    return ref;
-}
-
 // Output columns of one evaluation.
 struct Output {
     std::vector<float> c[3];
@@ -113,59 +90,30 @@ struct Output {
     }
 };
 
-// Float bits mapped to a monotonic integer line (for ULP distances).
-int64_t orderedBits(float f) {
-    int32_t i;
-    std::memcpy(&i, &f, 4);
-    return i < 0 ? int64_t(INT32_MIN) - i : i;
-}
-
-ErrorStats compare(const CheckedMaterial& m, const LaneBatch& s, const Reference& ref, const Output& out) {
+// The error of one evaluation against the reference (ReferenceComparison.h),
+// with the lane data of the worst value for the report.
+ErrorStats compare(const CheckedMaterial& m, const LaneBatch& s, const ReferenceValues& ref, const Output& out) {
+    const float* const rgb[3] = {out.c[0].data(), out.c[1].data(), out.c[2].data()};
+    ReferenceComparison cmp = compareWithReference(ref, rgb);
     ErrorStats st;
-    size_t n = s.size();
-    std::vector<double> rels;
-    rels.reserve(3 * n);
+    st.values = cmp.values;
+    st.skipped = cmp.skipped;
+    st.nonFinite = cmp.nonFinite;
+    st.negative = cmp.negative;
     st.invalidLanes = out.invalid;
-    for (size_t i = 0; i < n; ++i) {
-        st.referenceInvalid += !ref.valid[i];
-        for (int c = 0; c < 3; ++c) {
-            double got = out.c[c][i], want = ref.rgb[c][i];
-            ++st.values;
-            if (std::fabs(want) > FLT_MAX) {
-                ++st.skipped;
-                continue;
-            }
-            double rel;
-            if (!std::isfinite(got)) {
-                ++st.nonFinite;
-                rel = INFINITY;
-            } else {
-                if (got < 0) ++st.negative;
-                double err = std::fabs(got - want);
-                rel = err <= ErrorStats::kAbsFloor ? 0.0 : err / std::max(std::fabs(want), double(FLT_MIN));
-                double ulp = std::fabs(double(orderedBits(float(got)) - orderedBits(float(want))));
-                st.maxUlp = std::max(st.maxUlp, ulp);
-            }
-            rels.push_back(rel);
-            if (rel > st.maxRel || (!st.worst.present && rel >= st.maxRel)) {
-                st.maxRel = rel;
-                ErrorStats::Worst& w = st.worst;
-                w.present = true;
-                w.lane = i;
-                w.channel = c;
-                for (int d = 0; d < 3; ++d) w.wi[d] = s.dir[d][i], w.wo[d] = s.dir[3 + d][i];
-                w.inputs.clear();
-                for (int k = 0; k < m.slotCount; ++k) w.inputs.push_back({m.slotName(k), s.slots[k][i]});
-                w.got = got, w.want = want, w.rel = rel;
-            }
-        }
-    }
-    if (!rels.empty()) {
-        // p99.9: the smallest value that at least 99.9% of the values do not exceed.
-        size_t rank = size_t(std::ceil(0.999 * double(rels.size())));
-        rank = std::clamp<size_t>(rank, 1, rels.size()) - 1;
-        std::nth_element(rels.begin(), rels.begin() + rank, rels.end());
-        st.p999Rel = rels[rank];
+    st.referenceInvalid = int64_t(std::count(ref.valid.begin(), ref.valid.end(), 0));
+    st.maxRel = cmp.maxRel;
+    st.p999Rel = cmp.quantile(0.999);
+    st.maxUlp = cmp.maxUlp;
+    if (cmp.worst.present) {
+        ErrorStats::Worst& w = st.worst;
+        size_t i = cmp.worst.lane;
+        w.present = true;
+        w.lane = i;
+        w.channel = cmp.worst.channel;
+        for (int d = 0; d < 3; ++d) w.wi[d] = s.dir[d][i], w.wo[d] = s.dir[3 + d][i];
+        for (int k = 0; k < m.slotCount; ++k) w.inputs.push_back({m.slotName(k), s.slots[k][i]});
+        w.got = cmp.worst.got, w.want = cmp.worst.want, w.rel = cmp.worst.rel;
     }
     return st;
 }
@@ -269,8 +217,8 @@ public:
         hard_ = hardCaseSample(m_);
         mb.regularLanes = regular_.size();
         mb.hardLanes = hard_.size();
-        refRegular_ = computeReference(m_, regular_);
-        refHard_ = computeReference(m_, hard_);
+        refRegular_ = evaluateReference(m_, regular_);
+        refHard_ = evaluateReference(m_, hard_);
 
         std::optional<ErrorStats> interpRegular, interpHard;
         for (const char* backend : kBackends)
@@ -432,7 +380,7 @@ private:
         return true;
     }
 
-    ErrorStats errorOn(const Kernel& kernel, const LaneBatch& s, const Reference& ref) {
+    ErrorStats errorOn(const Kernel& kernel, const LaneBatch& s, const ReferenceValues& ref) {
         Output out(s.size());
         out.invalid = kernel.evalBatch(int64_t(s.size()), s.wi(), s.wo(), s.inputs(), out.ptr);
         return compare(m_, s, ref, out);
@@ -467,7 +415,7 @@ private:
     Compiler& compiler_;
     std::FILE* progress_;
     LaneBatch regular_, hard_;
-    Reference refRegular_, refHard_;
+    ReferenceValues refRegular_, refHard_;
 };
 
 std::string readText(const std::string& path) {

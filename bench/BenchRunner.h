@@ -44,12 +44,10 @@ struct BenchSettings {
     static BenchSettings quickSettings();
 };
 
-// Error of one row against the reference on one sample. Relative error is
-// |got - want| / |want| per channel; differences up to kAbsFloor count as 0
-// (values that small are float denormals or below), and a reference of 0
-// with a larger difference divides by FLT_MIN instead (finite, huge).
+// Error of one row against the reference on one sample, by the conventions of
+// ReferenceComparison.h (relative error with an absolute floor of
+// kAbsoluteErrorFloor, FLT_MIN as the smallest divisor).
 struct ErrorStats {
-    static constexpr double kAbsFloor = 1e-30;
     size_t values = 0;      // channel values compared
     size_t skipped = 0;     // reference beyond float range (not representable)
     size_t nonFinite = 0;   // outputs NaN or Inf (SPEC 2 forbids them)

@@ -8,6 +8,7 @@
 #include "Jit.h"
 #include "KullaConty.h"
 #include "Pipeline.h"
+#include "ReferenceComparison.h"
 #include "TableCache.h"
 
 #include <llvm/Config/llvm-config.h>
@@ -158,46 +159,29 @@ double measureKernelError(const Kernel& kernel, const CheckedMaterial& material,
     // tolerance choice is reproducible.
     std::mt19937_64 rng(0x5eed);
     std::uniform_real_distribution<double> u(0, 1);
-    std::vector<float> dir[6];
-    std::vector<std::vector<float>> slots(material.slotCount);
+    LaneBatch batch;
+    batch.slots.resize(size_t(material.slotCount));
+    std::vector<double> laneSlots(size_t(material.slotCount));
     for (size_t i = 0; i < samples; ++i) {
-        for (int d = 0; d < 2; ++d) {
+        double w[2][3];
+        for (auto& d : w) {
             double z = std::sqrt(u(rng)), phi = 2 * M_PI * u(rng), r = std::sqrt(std::max(0.0, 1 - z * z));
-            dir[3 * d].push_back(float(r * std::cos(phi)));
-            dir[3 * d + 1].push_back(float(r * std::sin(phi)));
-            dir[3 * d + 2].push_back(float(z));
+            d[0] = r * std::cos(phi), d[1] = r * std::sin(phi), d[2] = z;
         }
         for (const CheckedInput& in : material.inputs)
             for (int c = 0; c < in.slotCount(); ++c) {
                 double lo = in.hasRange ? in.lo : 0.0, hi = in.hasRange ? in.hi : 2 * in.defaultValue[c];
-                slots[in.firstSlot + c].push_back(float(lo + (hi - lo) * u(rng)));
+                laneSlots[size_t(in.firstSlot + c)] = lo + (hi - lo) * u(rng);
             }
+        batch.push(w[0], w[1], laneSlots);
     }
+    batch.finish();
     std::vector<float> out[3];
     for (auto& o : out) o.assign(samples, 0.0f);
-    const float* wi[3] = {dir[0].data(), dir[1].data(), dir[2].data()};
-    const float* wo[3] = {dir[3].data(), dir[4].data(), dir[5].data()};
-    std::vector<const float*> in;
-    for (auto& sl : slots) in.push_back(sl.data());
     float* rgb[3] = {out[0].data(), out[1].data(), out[2].data()};
-    kernel.evalBatch(int64_t(samples), wi, wo, in.empty() ? nullptr : in.data(), rgb);
-    Interpreter<double> interp(material, kernel.energyTable());
-    double worst = 0;
-    std::vector<double> laneSlots(std::max(1, material.slotCount));
-    for (size_t i = 0; i < samples; ++i) {
-        double a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]};
-        for (int s = 0; s < material.slotCount; ++s) laneSlots[s] = slots[s][i];
-        EvalResult<double> ref = interp.eval(a, b, laneSlots.data());
-        for (int c = 0; c < 3; ++c) {
-            double want = ref.valid ? ref.rgb[c] : 0.0, got = rgb[c][i];
-            if (!std::isfinite(got)) return INFINITY;
-            if (std::fabs(want) > 3.0e38) continue;  // beyond float: reported invalid, as allowed
-            double err = std::fabs(got - want);
-            if (err <= 1e-30) continue;
-            worst = std::max(worst, want != 0 ? err / std::fabs(want) : INFINITY);
-        }
-    }
-    return worst;
+    kernel.evalBatch(int64_t(samples), batch.wi(), batch.wo(), batch.inputs(), rgb);
+    const float* const written[3] = {rgb[0], rgb[1], rgb[2]};
+    return compareWithReference(evaluateReference(material, batch, kernel.energyTable()), written).maxRel;
 }
 
 namespace {

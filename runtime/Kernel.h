@@ -62,7 +62,7 @@ struct CachedKernel {
 
 // Max relative error of `kernel` against the double interpreter of
 // `material` on a fixed sample (cosine-distributed directions, inputs
-// uniform in their ranges); values below 1e-30 compare absolutely.
+// uniform in their ranges), by the conventions of ReferenceComparison.h.
 double measureKernelError(const Kernel& kernel, const CheckedMaterial& material, size_t samples = 4096);
 
 enum class Backend { Interp, Scalar, Simd };

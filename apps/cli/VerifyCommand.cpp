@@ -90,7 +90,7 @@ bool verifyMaterial(const CheckedMaterial& m, const std::string& path, Compiler&
     std::shared_ptr<const EnergyTable> table;
     if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
-    Reference ref = evaluateReference(interp, cases);
+    HardCaseReference ref = evaluateHardCaseReference(interp, cases);
     size_t byInput = 0;
     for (const HardCase& c : cases) byInput += c.invalidInput;
     std::printf("  hard cases: %zu (%zu with a non-finite or non-unit input: must give 0 and be counted)\n",

@@ -30,8 +30,8 @@ void addFailure(SampleStats& s, size_t i, std::string why) {
 
 }  // namespace
 
-Reference evaluateReference(const Interpreter<double>& interp, const std::vector<HardCase>& cases) {
-    Reference ref;
+HardCaseReference evaluateHardCaseReference(const Interpreter<double>& interp, const std::vector<HardCase>& cases) {
+    HardCaseReference ref;
     ref.results.reserve(cases.size());
     ref.floatOverflow.reserve(cases.size());
     for (const HardCase& c : cases) {
@@ -112,7 +112,7 @@ std::string SampleStats::summary() const {
     return s;
 }
 
-SampleStats checkReference(const std::vector<HardCase>& cases, const Reference& ref) {
+SampleStats checkReference(const std::vector<HardCase>& cases, const HardCaseReference& ref) {
     SampleStats s;
     s.backend = "interp";
     s.cases = cases.size();
@@ -139,7 +139,7 @@ SampleStats checkReference(const std::vector<HardCase>& cases, const Reference& 
 }
 
 SampleStats checkKernel(const std::string& backend, const KernelRun& run, const std::vector<HardCase>& cases,
-                        const Reference& ref, double bound, const std::function<double(size_t)>& condition,
+                        const HardCaseReference& ref, double bound, const std::function<double(size_t)>& condition,
                         double roundoff) {
     SampleStats s;
     s.backend = backend;
@@ -192,10 +192,9 @@ SampleStats checkKernel(const std::string& backend, const KernelRun& run, const 
             for (double x : *w) subnormal |= x != 0 && std::fabs(x) < double(FLT_MIN);
         for (int ch = 0; ch < 3; ++ch) {
             double g = got[ch], w = r.rgb[ch];
-            if (!std::isfinite(g) || std::fabs(w) > double(FLT_MAX)) continue;
+            if (!std::isfinite(g) || beyondFloatRange(w)) continue;
             ++s.compared;
-            double err = std::fabs(g - w);
-            double rel = err <= kErrorFloor ? 0.0 : err / std::max(std::fabs(w), kErrorFloor);
+            double rel = relativeError(g, w);
             // Beyond a few roundoffs, ask whether the input explains the error.
             if (rel > 8 * roundoff) {
                 if (kappa < 0 && condition) kappa = condition(i);

@@ -11,7 +11,8 @@
 //     hold the result or a model parameter (the reference's value or a
 //     resolved parameter is beyond FLT_MAX), and then outputs 0;
 //   - on lanes both sides find valid, the error against the double
-//     interpreter is within max(bound |want|, kErrorFloor), or (for errors
+//     interpreter (relativeError of ReferenceComparison.h) is within the
+//     bound, or (for errors
 //     above 8 u) the input is
 //     ill-conditioned: the error is within 16 kappa u, kappa the condition
 //     number of f at that input (QuadReference::condition, estimated in
@@ -23,6 +24,7 @@
 #include "HardCases.h"
 #include "Interpreter.h"
 #include "Kernel.h"
+#include "ReferenceComparison.h"
 
 #include <array>
 #include <cstdint>
@@ -31,10 +33,6 @@
 #include <vector>
 
 namespace facet {
-
-// Reference values below this compare absolutely (float results that small
-// are denormal or flushed; DiffHarness uses the same floor).
-constexpr double kErrorFloor = 1e-30;
 
 // Error bounds of the JIT kernels against the double interpreter on the
 // hard-case sample (valid, finite lanes), per math mode. Measured maxima
@@ -47,13 +45,13 @@ inline double hardCaseRoundoff(MathMode m) { return m == MathMode::Exact ? 0x1p-
 constexpr double kConditionAllowance = 16;  // error within 16 kappa u
 
 // The double interpreter on a sample.
-struct Reference {
+struct HardCaseReference {
     std::vector<EvalResult<double>> results;
     // The result or a resolved model parameter is beyond float range: a
     // float kernel may report the lane invalid.
     std::vector<char> floatOverflow;
 };
-Reference evaluateReference(const Interpreter<double>& interp, const std::vector<HardCase>& cases);
+HardCaseReference evaluateHardCaseReference(const Interpreter<double>& interp, const std::vector<HardCase>& cases);
 
 // A kernel on a sample (its slots must be the material's: compiled without
 // bindings). SIMD kernels run the whole sample in one batch call; scalar
@@ -106,11 +104,11 @@ struct SampleStats {
 };
 
 // The reference itself: finite, >= 0, the SPEC 2 invalid cases counted.
-SampleStats checkReference(const std::vector<HardCase>& cases, const Reference& ref);
+SampleStats checkReference(const std::vector<HardCase>& cases, const HardCaseReference& ref);
 // A kernel run against the reference. `condition(i)` (optional) gives the
 // condition number of case i; `roundoff` is the math mode's unit roundoff.
 SampleStats checkKernel(const std::string& backend, const KernelRun& run, const std::vector<HardCase>& cases,
-                        const Reference& ref, double bound, const std::function<double(size_t)>& condition = {},
+                        const HardCaseReference& ref, double bound, const std::function<double(size_t)>& condition = {},
                         double roundoff = 0x1p-24);
 
 }  // namespace facet

@@ -5,7 +5,7 @@
 #include "BenchRunner.h"
 #include "BenchSamples.h"
 #include "Checker.h"
-#include "Interpreter.h"
+#include "ReferenceComparison.h"
 #include "ReferenceModels.h"
 
 #include <doctest/doctest.h>
@@ -47,31 +47,16 @@ struct Outputs {
     }
 };
 
-// Max relative error of `out` against the interpreter (differences below
-// 1e-30 count as 0, as in `facet bench`), with the worst lane described.
+// Max relative error of `out` against the interpreter (ReferenceComparison.h,
+// as in `facet bench`), with the worst lane described.
 double maxRelError(const CheckedMaterial& m, const LaneBatch& s, const Outputs& out, std::string& worst) {
-    Interpreter<double> interp(m);
-    double maxRel = 0;
-    std::vector<double> slots(std::max(1, m.slotCount));
-    for (size_t i = 0; i < s.size(); ++i) {
-        double a[3] = {s.dir[0][i], s.dir[1][i], s.dir[2][i]}, b[3] = {s.dir[3][i], s.dir[4][i], s.dir[5][i]};
-        for (int k = 0; k < m.slotCount; ++k) slots[k] = s.slots[k][i];
-        EvalResult<double> r = interp.eval(a, b, slots.data());
-        for (int c = 0; c < 3; ++c) {
-            double want = r.valid ? r.rgb[c] : 0.0, got = out.c[c][i];
-            double err = std::fabs(got - want);
-            double rel = err <= 1e-30 ? 0.0 : err / std::max(std::fabs(want), 1e-38);
-            if (!std::isfinite(got)) rel = INFINITY;
-            if (rel > maxRel) {
-                maxRel = rel;
-                std::string in;
-                for (int k = 0; k < m.slotCount; ++k) in += fmt::format(" {}={}", m.slotName(k), slots[k]);
-                worst = fmt::format("lane {} ch {}: wi=({},{},{}) wo=({},{},{}){} got {} want {}", i, c, a[0], a[1],
-                                    a[2], b[0], b[1], b[2], in, got, want);
-            }
-        }
-    }
-    return maxRel;
+    const float* const rgb[3] = {out.c[0].data(), out.c[1].data(), out.c[2].data()};
+    ReferenceComparison cmp = compareWithReference(evaluateReference(m, s), rgb);
+    if (cmp.worst.present)
+        worst = fmt::format("lane {} ch {}: {} got {:.9g} want {:.17g}", cmp.worst.lane, cmp.worst.channel,
+                            describeLane(m, s.wi(), s.wo(), s.inputs(), cmp.worst.lane), cmp.worst.got,
+                            cmp.worst.want);
+    return cmp.maxRel;
 }
 
 }  // namespace

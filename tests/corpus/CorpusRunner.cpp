@@ -32,6 +32,7 @@
 #include "Checker.h"
 #include "Interpreter.h"
 #include "Kernel.h"
+#include "ReferenceComparison.h"
 
 #include <algorithm>
 #include <array>
@@ -77,10 +78,9 @@ double toleranceFloor(const std::string& backend) {
     return 1e-5;
 }
 
-// Float kernels cannot represent values below 1e-30 to relative accuracy
-// (nor above FLT_MAX at all): those compare in absolute terms, and a value
-// beyond float range must come back as an invalid lane.
-constexpr double kFloatAbsoluteFloor = 1e-30;
+// Float kernels cannot represent values below kAbsoluteErrorFloor to relative
+// accuracy (nor above FLT_MAX at all): those compare in absolute terms, and a
+// value beyond float range must come back as an invalid lane.
 constexpr double kFloatMax = 3.4028234663852886e38;
 
 // Compiled kernels, one per (material, backend), built on first use.
@@ -423,7 +423,7 @@ void runValueFile(const CorpusFile& f, const std::string& backend, Tally& tally)
         bool ok = true;
         for (int c = 0; c < 3; ++c)
             ok &= close((*got)[c], e.want[c], tol) ||
-                  (floatBackend && e.want[c] != 0 && std::fabs((*got)[c] - e.want[c]) <= kFloatAbsoluteFloor);
+                  (floatBackend && e.want[c] != 0 && std::fabs((*got)[c] - e.want[c]) <= facet::kAbsoluteErrorFloor);
         if (ok) tally.pass();
         else
             tally.fail("{}:{}: expected {}, got {} (tol {:g}, {})", f.path, e.line, fmtRgb(e.want), fmtRgb(*got), tol,

@@ -1,5 +1,6 @@
 // DiffHarness: sampling and error statistics (see DiffHarness.h).
 #include "DiffHarness.h"
+#include "ReferenceComparison.h"
 
 #include <cmath>
 #include <cstring>
@@ -103,22 +104,19 @@ bool DiffStats::ok(std::string& why) const {
 void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneBatch& s, DiffStats& stats) {
     size_t n = s.size();
     // Kernel slots are the reference slots minus bound inputs; map by name.
-    std::vector<int> kernelSlotOf(reference.slotCount, -1);
+    std::vector<const float*> inputs(kernel.inputCount());
     for (int k = 0; k < kernel.inputCount(); ++k)
         for (int r = 0; r < reference.slotCount; ++r)
-            if (reference.slotName(r) == kernel.inputName(k)) kernelSlotOf[r] = k;
-    std::vector<const float*> inputs(kernel.inputCount());
-    for (int r = 0; r < reference.slotCount; ++r)
-        if (kernelSlotOf[r] >= 0) inputs[kernelSlotOf[r]] = s.slots[r].data();
+            if (reference.slotName(r) == kernel.inputName(k)) inputs[k] = s.slots[r].data();
     std::vector<float> out[3];
     for (auto& o : out) o.assign(n, -1.0f);
     float* rgb[3] = {out[0].data(), out[1].data(), out[2].data()};
-    const float* wi[3] = {s.dir[0].data(), s.dir[1].data(), s.dir[2].data()};
-    const float* wo[3] = {s.dir[3].data(), s.dir[4].data(), s.dir[5].data()};
+    const float* const* wi = s.wi();
+    const float* const* wo = s.wo();
     if (kernel.backend() == Backend::Scalar) {
+        std::vector<float> in(kernel.inputCount());
         for (size_t i = 0; i < n; ++i) {
             float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, o[3];
-            std::vector<float> in(kernel.inputCount());
             for (int k = 0; k < kernel.inputCount(); ++k) in[k] = inputs[k][i];
             kernel.eval(a, b, in.data(), o);
             for (int c = 0; c < 3; ++c) rgb[c][i] = o[c];
@@ -126,52 +124,25 @@ void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneB
     } else {
         kernel.evalBatch(int64_t(n), wi, wo, kernel.inputCount() ? inputs.data() : nullptr, rgb);
     }
-    // Bound inputs: the kernel's material has them folded; the reference gets
-    // the defaults of the specialized material for its remaining slots and the
-    // bound values via the kernel's material (evaluate the specialized one).
-    Interpreter<double> interp(kernel.material(), kernel.energyTable());
-    std::vector<double> slots(std::max(1, kernel.inputCount()));
-    for (size_t i = 0; i < n; ++i) {
-        double a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]};
-        for (int k = 0; k < kernel.inputCount(); ++k) slots[k] = inputs[k][i];
-        EvalResult<double> ref = interp.eval(a, b, slots.data());
-        for (int c = 0; c < 3; ++c) {
-            double got = rgb[c][i], want = ref.valid ? ref.rgb[c] : 0.0;
-            ++stats.compared;
-            if (!std::isfinite(got)) {
-                ++stats.nonFinite;
-                continue;
-            }
-            if (got < 0) ++stats.negative;
-            // A reference beyond float range cannot be represented: the
-            // kernel must report the lane invalid (0), which we accept.
-            if (std::fabs(want) > 3.0e38) continue;
-            ++stats.finiteRef;
-            double err = std::fabs(got - want);
-            double rel = std::fabs(want) > 1e-30 ? err / std::fabs(want) : 0.0;
-            bool okAbs = err <= 1e-30;
-            if (rel <= 1e-5 || okAbs) ++stats.within1e5;
-            if (rel > 2e-3 && !okAbs) ++stats.beyond2e3;
-            if (rel > stats.maxRel && !okAbs) {
-                stats.maxRel = rel;
-                std::string in;
-                for (int k = 0; k < kernel.inputCount(); ++k)
-                    in += fmt::format(" {}={:.9g}", kernel.inputName(k), inputs[k][i]);
-                stats.worst = fmt::format("rel {:.3g} ch {} wi=({:.9g},{:.9g},{:.9g}) wo=({:.9g},{:.9g},{:.9g}){} "
-                                          "got {:.9g} want {:.17g}",
-                                          rel, c, a[0], a[1], a[2], b[0], b[1], b[2], in, got, want);
-            }
-        }
+    // The reference evaluates the kernel's own material, in which bound
+    // inputs are folded, on the kernel's remaining inputs.
+    ReferenceValues ref = evaluateReference(kernel.material(), kernel.energyTable(), n, wi, wo, inputs.data());
+    const float* const written[3] = {rgb[0], rgb[1], rgb[2]};
+    ReferenceComparison cmp = compareWithReference(ref, written);
+    size_t compared = cmp.rel.size() - cmp.nonFinite;
+    stats.compared += cmp.values;
+    stats.nonFinite += cmp.nonFinite;
+    stats.negative += cmp.negative;
+    stats.finiteRef += compared;
+    stats.within1e5 += cmp.countWithin(1e-5);
+    stats.beyond2e3 += compared - (cmp.countWithin(2e-3));
+    if (cmp.worst.present && cmp.maxRel > stats.maxRel) {
+        stats.maxRel = cmp.maxRel;
+        const WorstLane& w = cmp.worst;
+        stats.worst = fmt::format("rel {:.3g} ch {} {} got {:.9g} want {:.17g}", w.rel, w.channel,
+                                  describeLane(kernel.material(), wi, wo, inputs.data(), w.lane), w.got, w.want);
     }
 }
-
-namespace {
-int64_t orderedBits(float f) {
-    int32_t i;
-    std::memcpy(&i, &f, 4);
-    return i < 0 ? int64_t(INT32_MIN) - i : i;
-}
-}  // namespace
 
 void compareUlp(const Kernel& scalar, const Kernel& simd, const LaneBatch& s, DiffStats& stats) {
     size_t n = s.size();
@@ -190,7 +161,7 @@ void compareUlp(const Kernel& scalar, const Kernel& simd, const LaneBatch& s, Di
         for (int k = 0; k < slots; ++k) in[k] = inputs[k][i];
         scalar.eval(a, b, in.data(), o);
         for (int c = 0; c < 3; ++c) {
-            double ulps = std::fabs(double(orderedBits(o[c]) - orderedBits(rgb[c][i])));
+            double ulps = floatUlpDistance(o[c], rgb[c][i]);
             stats.maxUlpScalarSimd = std::max(stats.maxUlpScalarSimd, ulps);
             if (ulps > 4) ++stats.ulpViolations;
         }

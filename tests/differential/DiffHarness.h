@@ -32,9 +32,10 @@ struct DiffStats {
     bool ok(std::string& why) const;
 };
 
-// Evaluates `kernel` on `s` and compares with the reference interpreter of
-// `reference` (the unspecialized material: inputs bound in the kernel
-// options are bound in `boundSlots` for the reference).
+// Evaluates `kernel` on `s` (whose slot columns are those of `reference`, the
+// unspecialized material) and compares with the reference interpreter of the
+// kernel's own material, in which inputs bound by the options are folded
+// (ReferenceComparison.h defines the error).
 void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneBatch& s, DiffStats& stats);
 // Scalar vs SIMD on the same sample: max ulp distance.
 void compareUlp(const Kernel& scalar, const Kernel& simd, const LaneBatch& s, DiffStats& stats);

@@ -164,7 +164,7 @@ MaterialResult runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& c
     std::shared_ptr<const EnergyTable> table;
     if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
-    Reference ref = evaluateReference(interp, cases), refRaw = evaluateReference(interp, raw);
+    HardCaseReference ref = evaluateHardCaseReference(interp, cases), refRaw = evaluateHardCaseReference(interp, raw);
     r.interp = checkReference(cases, ref);
     r.interpRaw = checkReference(raw, refRaw);
     for (const SampleStats* s : {&r.interp, &r.interpRaw})

@@ -8,6 +8,7 @@
 #include "Kernel.h"
 #include "Lowering.h"
 #include "Pipeline.h"
+#include "ReferenceComparison.h"
 #include "Specialize.h"
 
 #include <doctest/doctest.h>
@@ -110,7 +111,7 @@ TwoBodyRun runTwoBodies(const Kernel& twoBody, const Kernel& oneBody, const char
         EvalResult<double> ref = a.reference(interp, i);
         for (int ch = 0; ch < 3; ++ch) {
             r.differing += a.out[ch][i] != b.out[ch][i];
-            if (ref.rgb[ch] > 1e-30) r.worst = std::max(r.worst, std::fabs(a.out[ch][i] - ref.rgb[ch]) / ref.rgb[ch]);
+            r.worst = std::max(r.worst, relativeError(a.out[ch][i], ref.rgb[ch]));
         }
     }
     return r;
@@ -376,7 +377,7 @@ TEST_CASE("exact Fresnel near a critical angle or N = 1 keeps exact-mode accurac
             EvalResult<double> want = interp.eval(wiD, woD, nullptr);
             REQUIRE(want.valid);
             for (int ch = 0; ch < 3; ++ch) {
-                double rel = std::abs(got[ch] - want.rgb[ch]) / std::max(std::abs(want.rgb[ch]), 1e-30);
+                double rel = relativeError(got[ch], want.rgb[ch]);
                 worst = std::max(worst, rel);
                 INFO(text, " cos ", cosT, " ch ", ch, " got ", got[ch], " want ", want.rgb[ch]);
                 CHECK(rel < 2e-6);
@@ -470,7 +471,7 @@ TEST_CASE("guarded fast SIMD: Schlick's 1 - wo.h from |wi + wo| stays within fas
         for (size_t i = 0; i < b.size(); ++i) {
             EvalResult<double> want = b.reference(interp, i);
             REQUIRE(want.valid);
-            double rel = std::abs(b.out[0][i] - want.rgb[0]) / std::max(std::abs(want.rgb[0]), 1e-30);
+            double rel = relativeError(b.out[0][i], want.rgb[0]);
             worst = std::max(worst, rel);
         }
         MESSAGE("schlick f0 = " << std::string(f0) << ": worst relative error near wi = wo " << worst);
@@ -558,7 +559,7 @@ TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the p
     double worstCancel = 0;
     for (size_t i = 0; i < x.size(); ++i) {
         EvalResult<double> ref = x.reference(cancelInterp, i);
-        if (ref.valid && ref.rgb[0] > 1e-30) worstCancel = std::max(worstCancel, std::fabs(x.out[0][i] - ref.rgb[0]) / ref.rgb[0]);
+        if (ref.valid) worstCancel = std::max(worstCancel, relativeError(x.out[0][i], ref.rgb[0]));
     }
     MESSAGE("alpha = 0.5 - x^2 near x = 0.707: worst relative error " << worstCancel);
     CHECK(worstCancel < 2e-6);
