@@ -90,6 +90,11 @@ struct EvalResult {
 };
 
 template <typename Real>
+struct SampleResult;  // Sampling.h
+template <typename Real>
+struct PdfResult;
+
+template <typename Real>
 class Interpreter {
 public:
     // A material with energy = kulla_conty uses `energyTable` (e.g. from a
@@ -111,6 +116,13 @@ public:
     // are not finite or not unit length within 1e-3 give an invalid lane
     // (f = 0); valid directions are renormalized.
     EvalResult<Real> eval(const Real wi[3], const Real wo[3], const Real* slots) const;
+
+    // Importance sampling (SPEC 8, Sampling.h), with eval()'s checks of the
+    // directions; u holds three numbers in [0, 1). An invalid lane
+    // (an invalid direction, input or u, or a non-finite result) has wi =
+    // 0, pdf = 0, weight = 0 and valid = false. Defined in Sampling.cpp.
+    SampleResult<Real> sample(const Real wo[3], const Real u[3], const Real* slots) const;
+    PdfResult<Real> pdf(const Real wi[3], const Real wo[3], const Real* slots) const;
 
     const CheckedMaterial& material() const { return material_; }
 

@@ -20,6 +20,9 @@ int cmdBench(const std::vector<std::string>& args);
 // facet render FILE -o OUT [--plot lobe|ndf] ...  (RenderCommand.cpp, apps/preview/)
 int cmdRender(const std::vector<std::string>& args);
 
+// facet sample FILE --wo X,Y,Z [-n N] [--out OUT.csv] [--seed S]  (SampleCommand.cpp)
+int cmdSample(const std::vector<std::string>& args);
+
 // facet build FILE -o OUT.o [--header OUT.h] [--target T] ...  (BuildCommand.cpp, runtime/Aot.h)
 int cmdBuild(const std::vector<std::string>& args);
 

@@ -4,7 +4,7 @@
 //   facet eval FILE [--material NAME] [--backend interp|scalar|simd] [--math exact|fast]
 //              [--width 4|8|16] [--set NAME=VALUE]... --in IN.csv [--out OUT.csv]
 //   facet ir FILE [--material NAME] [--simd] [--stages | --plan] [--set NAME=VALUE]...
-//   facet lut | bench | verify | render | build ...  (in their own files, Commands.h)
+//   facet lut | bench | verify | render | build | sample ...  (in their own files, Commands.h)
 //
 // Exit codes: 0 ok, 1 a check failed (e.g. invalid rows), 2 usage,
 // 65 a material file error.
@@ -47,6 +47,8 @@ const char* kUsage =
     "       [--math exact|fast|tolerance=X] [--width N] [--set NAME=VALUE]... [--target TRIPLE] [--cpu CPU]\n"
     "       [--features +a,-b] [--prefix SYMBOL] [--emit obj|asm|llvm-ir|bitcode]\n"
     "                                      a self-contained object + C header, for the host or another target\n"
+    "  sample FILE --wo X,Y,Z [-n N] [--out OUT.csv] [--seed S] [--material NAME]\n"
+    "                                      importance-sample wi (reference sampler): wi, pdf, weight per row\n"
     "exit codes: 0 ok, 1 a check failed, 2 usage, 65 a material file error\n";
 
 struct UsageError {
@@ -408,6 +410,7 @@ int main(int argc, char** argv) {
         else if (command == "bench") status = cmdBench(args);
         else if (command == "render") status = cmdRender(args);
         else if (command == "build") status = cmdBuild(args);
+        else if (command == "sample") status = cmdSample(args);
         else throw UsageError{fmt::format("unknown command '{}'", command)};
         // Whatever a command printed must have reached its destination.
         if (status == kExitOk && !finishStandardOutput()) status = kExitCheckFailed;

@@ -6,9 +6,10 @@
 // domains (the clamps every evaluator applies), the ways of writing its
 // arguments, its traits (what the checker, the tables, the physics checks,
 // the previews and the generators need to know about it), and its reference
-// formulas, evaluated by the interpreter in double, long double and
-// __float128. The LLVM lowering writes its own formulas independently (the
-// differential tests compare the two), so nothing here emits IR.
+// formulas (and, for NDFs, samplers), evaluated by the interpreter in
+// double, long double and __float128. The LLVM lowering writes its own
+// formulas independently (the differential tests compare the two), so
+// nothing here emits IR.
 //
 // Every other part of Facet asks the catalog ("is this masking a Smith
 // form?", "which roughness does this NDF's table use?") instead of
@@ -152,6 +153,22 @@ struct NdfFormulas {
     virtual Real wholeLobe(const ModelArgs<Real>& a, const Vec3<Real>& h, Real ci, Real co) const;
     // Fills a.derived from the clamped parameters (valid ones only).
     virtual void derive(ModelArgs<Real>& a) const { (void)a; }
+
+    // Importance sampling (SPEC 8): microfacet normals m (m.z >= 0) from two
+    // uniform numbers u1, u2 in [0, 1).
+    // NDF sampling: m with density normalPdf(a, m) per solid angle of m. The
+    // default inverts the polar CDF of D(m) (n.m) numerically (in
+    // models/NdfSampling.cpp), which is exact only for an isotropic D;
+    // entries with a closed-form inversion or an anisotropic D override it.
+    virtual Vec3<Real> sampleNormal(const ModelArgs<Real>& a, Real u1, Real u2) const;
+    // The density of sampleNormal, D(m) (n.m) unless an entry samples
+    // something else (ward: the Beckmann NDF of its exponent).
+    virtual Real normalPdf(const ModelArgs<Real>& a, const Vec3<Real>& m) const { return D(a, m) * m.z; }
+    // Visible-normal sampling for n.wo > 0, NdfEntry::visibleNormals only:
+    // m with density G1(wo) (wo.m)+ D(m) / (n.wo), G1 = 1 / (1 + Lambda(wo))
+    // from cosLambda, which must be Lambda exactly for this D (or the
+    // density does not integrate to 1).
+    virtual Vec3<Real> sampleVisibleNormal(const ModelArgs<Real>& a, const Vec3<Real>& wo, Real u1, Real u2) const;
 };
 
 // The geometry a masking term sees: the directions, the microfacet normal,
@@ -238,6 +255,9 @@ struct NdfEntry : ModelInfo {
     ModelArgs<double> (*argsAtAlpha)(double alpha, const std::vector<double>& shape) = nullptr;
     // Short text of the resolved parameters, for reports ("alpha=(0.1,0.2)").
     std::string (*describe)(const ModelArgs<double>& a) = nullptr;
+    // Has sampleVisibleNormal: an exact visible-normal sampler and a Lambda
+    // exact for its D, so that the visible-normal density integrates to 1.
+    bool visibleNormals = false;
     FormulaSet<NdfFormulas> formulas;
 };
 
@@ -302,6 +322,13 @@ const ModelInfo& modelNamed(ModelSlot slot, std::string_view name);
 
 // The index of the canonical parameter `name` of `m`, or -1.
 int paramIndex(const ModelInfo& m, std::string_view name);
+
+// The specular lobe of this pair is sampled through visible normals (an
+// NDF with an exact visible-normal sampler under a Smith masking, whose
+// weight F G2 / G1 is then at most F); otherwise through NDF sampling.
+inline bool samplesVisibleNormals(const NdfEntry& ndf, const MaskingEntry& masking) {
+    return ndf.visibleNormals && masking.smith;
+}
 
 const NdfEntry& ndfEntry(const ModelInfo& m);
 const MaskingEntry& maskingEntry(const ModelInfo& m);

@@ -20,33 +20,12 @@ set -u
 
 FACET=${1:?usage: cli_test.sh PATH/TO/facet}
 case "$FACET" in /*) ;; *) FACET="$PWD/$FACET" ;; esac
+source "$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/../cli_expect.sh"
 
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 cd "$tmp" || exit 1
 
-failures=0
-checks=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
-
-# run CMD...: runs it, keeping exit code, stdout and stderr.
-run() {
-    "$@" >stdout.txt 2>stderr.txt
-    rc=$?
-    out=$(cat stdout.txt)
-    err=$(cat stderr.txt)
-}
-expect_rc() {  # CODE WHAT
-    checks=$((checks + 1))
-    [ "$rc" -eq "$1" ] || fail "$2: exit code $rc, expected $1; stderr was: $err"
-}
-expect_eq() {  # ACTUAL EXPECTED WHAT
-    checks=$((checks + 1))
-    [ "$1" == "$2" ] || fail "$3:"$'\n'"--- got:"$'\n'"$1"$'\n'"--- expected:"$'\n'"$2"
-}
 expect_first_line() {  # TEXT EXPECTED-FIRST-LINE WHAT
     expect_eq "$(printf '%s\n' "$1" | head -n 1)" "$2" "$3"
 }

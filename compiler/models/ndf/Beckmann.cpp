@@ -2,6 +2,7 @@
 // isotropic or anisotropic, with its closed-form Smith Lambda.
 #include "QuadMath.h"
 #include "models/ModelMath.h"
+#include "models/NdfSampling.h"
 
 namespace facet::models {
 namespace {
@@ -22,6 +23,31 @@ struct BeckmannFormulas final : NdfFormulas<Real> {
         if (proj == 0) return 0;  // v = n: nothing is masked
         return beckmannCosLambda(proj, v.z);
     }
+    // The standard Beckmann slopes have the radial CDF 1 - exp(-r^2).
+    Vec3<Real> sampleNormal(const ModelArgs<Real>& a, Real u1, Real u2) const override {
+        using std::log1p;
+        return stretchedSlopeNormal(a[kAlphaX], a[kAlphaY], -log1p(-u1), u2);
+    }
+    // Heitz & d'Eon 2014: stretched to alpha = 1 and turned so that wo' =
+    // (sin t, 0, cos t), the visible slopes (x, y) have the density
+    // (1 - x tan t)+ exp(-x^2 - y^2) / pi up to a constant: x from the CDF
+    // C(x) = erfc(-x)/2 + tan t exp(-x^2) / (2 sqrt(pi)) (C(cot t) = 1 + Lambda),
+    // y independently from erfc(-y)/2, both by Newton's method; then turned
+    // back and unstretched.
+    Vec3<Real> sampleVisibleNormal(const ModelArgs<Real>& a, const Vec3<Real>& wo, Real u1, Real u2) const override {
+        using std::erfc; using std::exp; using std::sqrt;
+        Real ax = a[kAlphaX], ay = a[kAlphaY];
+        Real sx = ax * wo.x, sy = ay * wo.y, sxy = sqrt(sx * sx + sy * sy);
+        Real cosPhi = sxy > 0 ? sx / sxy : Real(1), sinPhi = sxy > 0 ? sy / sxy : Real(0);
+        Real tanT = sxy / wo.z;
+        const Real tail = 8, rootPi = sqrt(kPi<Real>);  // C(-8) < 1e-28 C(cot t)
+        auto gauss = [&](Real x) { return exp(-x * x) / rootPi; };
+        auto cdfX = [&](Real x) { return erfc(-x) / 2 + tanT * exp(-x * x) / (2 * rootPi); };
+        Real hi = sxy > 0 && wo.z / sxy < tail ? wo.z / sxy : tail;
+        Real x = invertIncreasing(cdfX, [&](Real t) { return (1 - t * tanT) * gauss(t); }, u1 * cdfX(hi), -tail, hi);
+        Real y = invertIncreasing([&](Real t) { return erfc(-t) / 2; }, gauss, u2, -tail, tail);
+        return normalFromSlopes(ax * (cosPhi * x - sinPhi * y), ay * (sinPhi * x + cosPhi * y));
+    }
 };
 
 }  // namespace
@@ -31,6 +57,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Beckmann() {
         NdfEntry e = alphaXYNdf(1, "beckmann", "Beckmann (Cook & Torrance 1982, Walter et al. 2007)");
         e.smith = true;
         e.shapeInvariant = true;
+        e.visibleNormals = true;
         e.hardCases = {
             {"hcc_beckmann_alpha_min", "ndf = beckmann(1e-4); masking = smith_height_correlated; fresnel = dielectric(1.5);"},
             {"hcc_beckmann_aniso_1e4", "ndf = beckmann(alpha_x = 1, alpha_y = 1e-4); masking = smith_direction_correlated;"},

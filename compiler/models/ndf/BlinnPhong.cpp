@@ -3,6 +3,7 @@
 // (SPEC 3), which is also the roughness its tables and previews use.
 #include "QuadMath.h"
 #include "models/ModelMath.h"
+#include "models/NdfSampling.h"
 
 #include <fmt/format.h>
 
@@ -36,6 +37,13 @@ struct BlinnPhongFormulas final : NdfFormulas<Real> {
         Real proj = smithProjection(alpha, alpha, v);
         if (proj == 0) return 0;  // v = n: nothing is masked
         return beckmannCosLambda(proj, v.z);
+    }
+    // D(m) (n.m) has the polar CDF 1 - mz^(e + 2), so mz^2 = (1 - u)^(2/(e + 2)),
+    // and sin^2 = -expm1(2 log1p(-u) / (e + 2)) keeps narrow lobes accurate.
+    // No visible-normal sampler: the Beckmann Lambda is not exact for this D.
+    Vec3<Real> sampleNormal(const ModelArgs<Real>& a, Real u1, Real u2) const override {
+        using std::expm1; using std::log1p;
+        return normalFromPolar(-expm1(2 * log1p(-u1) / (a[kExponent] + 2)), u2);
     }
 };
 

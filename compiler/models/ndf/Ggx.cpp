@@ -2,6 +2,7 @@
 // 2007, isotropic or anisotropic, with its closed-form Smith Lambda.
 #include "QuadMath.h"
 #include "models/ModelMath.h"
+#include "models/NdfSampling.h"
 
 namespace facet::models {
 namespace {
@@ -22,6 +23,29 @@ struct GgxFormulas final : NdfFormulas<Real> {
         if (proj == 0) return 0;  // v = n: nothing is masked
         return proj / (2 * (v.z + sqrt(sq(v.z) + proj)));
     }
+    // The standard GGX slopes have the radial CDF r^2 / (1 + r^2): r^2 = u / (1 - u).
+    Vec3<Real> sampleNormal(const ModelArgs<Real>& a, Real u1, Real u2) const override {
+        return stretchedSlopeNormal(a[kAlphaX], a[kAlphaY], u1 / (1 - u1), u2);
+    }
+    // Spherical caps (Dupuy & Benyoub 2023): stretched to alpha = 1, the
+    // visible normals are h = c + wo', wo' the stretched view direction and c
+    // uniform on the unit sphere's cap c.z >= -wo'.z; unstretching h gives m.
+    Vec3<Real> sampleVisibleNormal(const ModelArgs<Real>& a, const Vec3<Real>& wo, Real u1, Real u2) const override {
+        using std::cos; using std::sin; using std::sqrt;
+        Real ax = a[kAlphaX], ay = a[kAlphaY];
+        Vec3<Real> s{ax * wo.x, ay * wo.y, wo.z};
+        Real inv = 1 / sqrt(s.x * s.x + s.y * s.y + s.z * s.z);
+        s = {s.x * inv, s.y * inv, s.z * inv};
+        Real phi = 2 * kPi<Real> * u1;
+        Real z = (1 - u2) * (1 + s.z) - s.z;
+        Real r2 = (1 - z) * (1 + z);
+        Real r = sqrt(r2 > 0 ? r2 : Real(0));
+        Vec3<Real> h{r * cos(phi) + s.x, r * sin(phi) + s.y, z + s.z};
+        Vec3<Real> m{ax * h.x, ay * h.y, h.z > 0 ? h.z : Real(0)};
+        Real len = sqrt(m.x * m.x + m.y * m.y + m.z * m.z);
+        if (!(len > 0)) return {0, 0, 1};  // h = 0: only where wo' is the cap's pole, a null set
+        return {m.x / len, m.y / len, m.z / len};
+    }
 };
 
 }  // namespace
@@ -32,6 +56,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Ggx() {
         e.aliases = {"trowbridge_reitz"};
         e.smith = true;
         e.shapeInvariant = true;
+        e.visibleNormals = true;
         e.representative = true;
         e.hardCases = {
             {"hcc_ggx_alpha_min", "ndf = ggx(1e-4); masking = smith_height_correlated;"},

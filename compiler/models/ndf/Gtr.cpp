@@ -3,6 +3,7 @@
 // distribution. No closed-form Smith Lambda for a general gamma.
 #include "QuadMath.h"
 #include "models/ModelMath.h"
+#include "models/NdfSampling.h"
 
 #include <fmt/format.h>
 
@@ -55,6 +56,20 @@ struct GtrFormulas final : NdfFormulas<Real> {
             logD = logExpm1OverX(L) - logExpm1OverX(yy) - gamma * log(t);
         }
         return exp(logD) / kPi<Real>;
+    }
+    // Burley 2012's inversion, in s = sin^2 theta: the density of D(m) (n.m)
+    // in s is proportional to (1 + b s)^(-gamma), b = 1/a^2 - 1, whose CDF
+    // inverts to ln(1 + b s) = -L g, L = ln a^2, k = (gamma - 1) L,
+    // g = log1p(u expm1(k)) / k (g = u at k = 0: gamma = 1 or a = 1), so
+    // s = expm1(-L g) / expm1(-L) (s = u at a = 1).
+    Vec3<Real> sampleNormal(const ModelArgs<Real>& a, Real u1, Real u2) const override {
+        using std::exp; using std::expm1; using std::log; using std::log1p;
+        Real L = 2 * log(a[kAlpha]), k = (a[kGamma] - 1) * L;
+        Real g = u1;
+        if (k > 30) g = (k + log(u1 + (1 - u1) * exp(-k))) / k;  // expm1(k) would overflow for large gamma
+        else if (k != 0) g = log1p(u1 * expm1(k)) / k;
+        Real s = L == 0 ? u1 : expm1(-L * g) / expm1(-L);
+        return normalFromPolar(s, u2);
     }
 };
 

@@ -9,6 +9,7 @@
 // maskings are refused until the tabulated Lambda lands.
 #include "QuadMath.h"
 #include "models/ModelMath.h"
+#include "models/NdfSampling.h"
 
 #include <fmt/format.h>
 
@@ -33,6 +34,14 @@ struct StudentTFormulas final : NdfFormulas<Real> {
         Real x = s / ((g - 1) * (m.z * m.z));
         Real logD = x > 1 ? -g * (log(s / (g - 1)) + log1p(1 / x)) + (g - 2) * logZ2 : -g * log1p(x) - 2 * logZ2;
         return exp(logD) / (kPi<Real> * ax * ay);
+    }
+    // The standard slopes have the radial CDF 1 - (1 + r^2/(gamma - 1))^(1 - gamma):
+    // r^2 = (gamma - 1) expm1(log1p(-u) / (1 - gamma)) (Beckmann's -log1p(-u)
+    // as gamma grows).
+    Vec3<Real> sampleNormal(const ModelArgs<Real>& a, Real u1, Real u2) const override {
+        using std::expm1; using std::log1p;
+        Real g = a[kGamma];
+        return stretchedSlopeNormal(a[kAlphaX], a[kAlphaY], (g - 1) * expm1(log1p(-u1) / (1 - g)), u2);
     }
 };
 

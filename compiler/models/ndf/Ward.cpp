@@ -3,6 +3,7 @@
 // times F. It carries its own normalization, so it takes no masking term.
 #include "QuadMath.h"
 #include "models/ModelMath.h"
+#include "models/NdfSampling.h"
 
 namespace facet::models {
 namespace {
@@ -17,6 +18,19 @@ struct WardFormulas final : NdfFormulas<Real> {
         Real ax = a[kAlphaX], ay = a[kAlphaY];
         Real e = (sq(h.x / ax) + sq(h.y / ay)) / sq(h.z);
         return exp(-e) / (4 * kPi<Real> * ax * ay * sqrt(ci) * sqrt(co));
+    }
+    // Walter 2005: the half vector is drawn from the Beckmann NDF with the
+    // lobe's exponent, exp(-e) / (pi ax ay mz^4) times mz.
+    Vec3<Real> sampleNormal(const ModelArgs<Real>& a, Real u1, Real u2) const override {
+        using std::log1p;
+        return stretchedSlopeNormal(a[kAlphaX], a[kAlphaY], -log1p(-u1), u2);
+    }
+    Real normalPdf(const ModelArgs<Real>& a, const Vec3<Real>& m) const override {
+        using std::exp;
+        if (!(m.z > 0)) return 0;
+        Real num = exp(-(sq(m.x / a[kAlphaX]) + sq(m.y / a[kAlphaY])) / sq(m.z));
+        if (num == 0) return 0;  // the tail underflowed (mz^3 may have too: no 0/0)
+        return num / (kPi<Real> * a[kAlphaX] * a[kAlphaY] * m.z * m.z * m.z);
     }
 };
 

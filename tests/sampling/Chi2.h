@@ -1,0 +1,83 @@
+// Chi2: the goodness-of-fit machinery of the sampling tests.
+//
+// The procedure is the one of pbrt-v4's and Mitsuba 3's chi-square tests of
+// BSDF samplers (written anew here): bin N samples of wi into cells of the
+// sphere, integrate the claimed pdf over each cell by adaptive quadrature
+// (expected count N times the cell's probability), pool the cells whose
+// expected count is small, compute Pearson's statistic and its p-value from
+// the chi-square distribution, and reject at a significance level corrected
+// for the number of tests run (Sidak). The cells also give the pdf's
+// integral over the whole sphere, which must be 1 (the normalization check:
+// a pdf off by a constant factor near 1 shifts every cell by the same small
+// fraction, which Pearson's statistic hardly sees).
+//
+// The cells are rectangles in the polar angle and azimuth about the normal,
+// with edges graded geometrically toward the lobe's peak (so that narrow
+// lobes spread over many cells) and edges on the curves where the pdf
+// jumps: the horizon (the cosine lobe ends there) and n.wi = -n.wo (where
+// the half vector crosses the horizon). Quadrature within a cell then sees
+// a smooth integrand.
+#pragma once
+
+#include "Interpreter.h"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace sampling_test {
+
+using V3 = facet::Vec3<double>;
+
+class SphereGrid {
+public:
+    // Polar edges from 0 to pi; azimuth edges over one turn (any start).
+    SphereGrid(std::vector<double> thetaEdges, std::vector<double> phiEdges);
+    // The grid for a lobe peaked at (theta, phi): edges graded from widths
+    // firstTheta and firstPhi there, at most maxTheta and maxPhi wide
+    // elsewhere, and edges at the horizon and at pi - viewTheta.
+    static SphereGrid forLobe(double viewTheta, double peakTheta, double peakPhi, double firstTheta, double firstPhi,
+                              double maxTheta = 0.13, double maxPhi = 0.2);
+    int rings() const { return int(theta_.size()) - 1; }
+    int sectors() const { return int(phi_.size()) - 1; }
+    int cellCount() const { return rings() * sectors(); }
+    // The cell of a direction (-1 for a non-finite or zero one).
+    int cellOf(const V3& w) const;
+    static V3 direction(double theta, double phi);
+    const std::vector<double>& thetaEdges() const { return theta_; }
+    const std::vector<double>& phiEdges() const { return phi_; }
+
+private:
+    std::vector<double> theta_, phi_;
+};
+
+using PdfFunction = std::function<double(const V3& wi)>;
+
+// The integral of pdf over each cell (solid angle), by 4x4 Gauss-Legendre
+// rules compared against the same rules on the cell's four quarters,
+// subdividing where they differ by more than `tolerance` (split between
+// the quarters) down to `maxDepth` levels.
+std::vector<double> integrateCells(const SphereGrid& grid, const PdfFunction& pdf, double tolerance = 1e-9,
+                                   int maxDepth = 9);
+
+struct Chi2Outcome {
+    double statistic = 0, pValue = 1;
+    int dof = 0;
+    std::string failure;  // "" when the null hypothesis stands
+};
+
+// Pearson's test of observed counts against expected counts (same length;
+// expected sums to N within the pdf's normalization). Cells expected below
+// minExpected are pooled, smallest first, until the pool reaches it. Fails
+// when p < level, or when observed counts fall where nothing is expected.
+Chi2Outcome chi2Test(const std::vector<double>& observed, const std::vector<double>& expected, double level,
+                     double minExpected = 5);
+
+// P(X >= x) for X chi-square distributed with dof degrees of freedom.
+double chi2Survival(double x, int dof);
+
+// The per-test level that keeps the probability of any false rejection
+// among `tests` independent tests at `level`: 1 - (1 - level)^(1/tests).
+double sidakLevel(double level, int tests);
+
+}  // namespace sampling_test
