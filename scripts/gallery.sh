@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The README gallery: one lit sphere per shipped material (256x256, default
 # light and sky, 64 sky samples, SIMD exact kernel), the NDF comparison at
-# matched roughness, and the lobe plots of two materials, all written by
+# matched roughness, the lobe plots of two materials and the sample
+# histograms of two (beside their integrated pdfs), all written by
 # `facet render` into OUTDIR (default docs/gallery, the committed images).
 # Expects a built tree (scripts/build.sh); run from anywhere.
 # usage: scripts/gallery.sh [OUTDIR]
@@ -17,4 +18,6 @@ done
 $facet render --plot ndf --compare ggx,beckmann,blinn_phong --alpha 0.2,0.5 -o "$out/ndf_compare.png"
 $facet render materials/plastic.mat --plot lobe -o "$out/lobe_plastic.png"
 $facet render materials/gold.mat --plot lobe -o "$out/lobe_gold.png"
+$facet render materials/plastic.mat --plot pdf --wo 0.6,0,0.8 -o "$out/pdf_plastic.png"
+$facet render materials/brushed_metal.mat --plot pdf --wo 0.7071068,0,0.7071068 -o "$out/pdf_brushed_metal.png"
 echo "gallery written to $out"

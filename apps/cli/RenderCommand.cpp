@@ -12,6 +12,9 @@
 //       D(theta_m) of the material's NDF at several roughnesses
 //   facet render --plot ndf --compare ggx,beckmann,blinn_phong [--alpha A,...] -o ndf.png
 //       several NDFs at matched roughness (no material file needed)
+//   facet render FILE --plot pdf --wo X,Y,Z -o pdf.png [-n N] [--seed S] [--size W]
+//       the histogram of N importance samples of wi beside the pdf integrated
+//       over the same cells (PdfPlot.h), and their chi-square test
 //
 // Angles are in degrees. Exit codes as everywhere: 0 ok, 1 a check failed
 // (invalid lanes, or the image could not be written), 2 usage, 65 a
@@ -20,8 +23,12 @@
 
 #include "Checker.h"
 #include "CsvTable.h"
+#include "ChiSquare.h"
 #include "Kernel.h"
+#include "PdfPlot.h"
 #include "Plots.h"
+#include "Sampling.h"
+#include "SamplingSetup.h"
 #include "SphereRender.h"
 
 #include <cmath>
@@ -29,6 +36,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <optional>
+#include <random>
 
 namespace facet {
 
@@ -44,6 +52,7 @@ constexpr const char* kRenderUsage =
     "       facet render FILE --plot lobe -o lobe.png [--theta-i A,B,...] [--size WIDTH]\n"
     "       facet render FILE --plot ndf -o ndf.png [--alpha A,B,...] [--size WIDTH]\n"
     "       facet render --plot ndf --compare NDF,NDF,... [--alpha A,...] -o ndf.png\n"
+    "       facet render FILE --plot pdf --wo X,Y,Z -o pdf.png [-n N] [--seed S] [--size WIDTH]\n"
     "angles in degrees: THETA from the view axis +Z, PHI from +X towards +Y (world up)\n";
 
 struct RenderUsageError {
@@ -87,6 +96,9 @@ struct RenderArgs {
     std::string backend = "simd", math = "exact";
     std::vector<double> thetaI, alphas;
     std::optional<int> size;
+    std::string wo;                // --plot pdf: the view direction
+    long samples = 1000000;        // --plot pdf: -n
+    uint64_t seed = 1;             // --plot pdf: --seed
     preview::SphereScene scene;
 };
 
@@ -102,8 +114,8 @@ RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
         else if (a == "--material") r.material = value();
         else if (a == "--plot") {
             r.plot = value();
-            if (r.plot != "lobe" && r.plot != "ndf")
-                throw RenderUsageError{fmt::format("--plot expects lobe or ndf, got '{}'", r.plot)};
+            if (r.plot != "lobe" && r.plot != "ndf" && r.plot != "pdf")
+                throw RenderUsageError{fmt::format("--plot expects lobe, ndf or pdf, got '{}'", r.plot)};
         } else if (a == "--compare") r.compare = value();
         else if (a == "--size") r.size = parseInteger(a, value(), 8, 16384);
         else if (a == "--light") std::tie(r.scene.lightThetaDeg, r.scene.lightPhiDeg) = parseAngles(a, value());
@@ -124,6 +136,9 @@ RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
         else if (a == "--set") r.options += ";set." + value();
         else if (a == "--theta-i") r.thetaI = parseNumberList(a, value());
         else if (a == "--alpha") r.alphas = parseNumberList(a, value());
+        else if (a == "--wo") r.wo = value();
+        else if (a == "-n") r.samples = parseInteger(a, value(), 1, 100000000);
+        else if (a == "--seed") r.seed = uint64_t(parseInteger(a, value(), 0, 2147483647));
         else if (!a.empty() && a[0] == '-') throw RenderUsageError{fmt::format("unknown option '{}'", a)};
         else if (r.file.empty()) r.file = a;
         else throw RenderUsageError{fmt::format("more than one material file ('{}' and '{}')", r.file, a)};
@@ -133,6 +148,10 @@ RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
     if (r.file.empty() && r.compare.empty()) throw RenderUsageError{"no material file given"};
     if (!r.thetaI.empty() && r.plot != "lobe") throw RenderUsageError{"--theta-i goes with --plot lobe"};
     if (!r.alphas.empty() && r.plot != "ndf") throw RenderUsageError{"--alpha goes with --plot ndf"};
+    if (!r.wo.empty() && r.plot != "pdf") throw RenderUsageError{"--wo goes with --plot pdf"};
+    if (r.plot == "pdf" && r.wo.empty()) throw RenderUsageError{"--plot pdf needs --wo X,Y,Z"};
+    if (r.plot == "pdf" && !r.options.empty())
+        throw RenderUsageError{"--set does not apply to --plot pdf (it samples the material at its default inputs)"};
     for (double a : r.alphas)
         if (!(a > 0 && a <= 4)) throw RenderUsageError{fmt::format("--alpha: {} is outside (0, 4]", a)};
     if (r.size) r.scene.size = *r.size;
@@ -190,6 +209,21 @@ int renderSphereCommand(const RenderArgs& r) {
     return kExitOk;
 }
 
+// Loads r.file into `program` and returns its material r.material; null
+// after printing the diagnostics of a material file error. A missing
+// material is a usage error.
+const CheckedMaterial* loadRenderMaterial(const RenderArgs& r, CheckedProgram& program) {
+    DiagnosticEngine diags;
+    program = loadProgramFile(r.file, diags);
+    if (diags.hasErrors()) {
+        std::fputs(diags.str().c_str(), stderr);
+        return nullptr;
+    }
+    const CheckedMaterial* m = program.find(r.material);
+    if (!m) throw RenderUsageError{fmt::format("no material named '{}' in {}", r.material, r.file)};
+    return m;
+}
+
 int lobePlotCommand(const RenderArgs& r) {
     Compiler compiler;
     int exitCode = kExitOk;
@@ -242,14 +276,9 @@ int ndfPlotCommand(const RenderArgs& r) {
         opt.title = alphas.size() == 1 ? fmt::format("D(theta_m) at matched roughness alpha = {:g}", alphas[0])
                                        : std::string("D(theta_m) at matched roughness");
     } else {
-        DiagnosticEngine diags;
-        CheckedProgram program = loadProgramFile(r.file, diags);
-        if (diags.hasErrors()) {
-            std::fputs(diags.str().c_str(), stderr);
-            return kExitMaterialError;
-        }
-        const CheckedMaterial* m = program.find(r.material);
-        if (!m) throw RenderUsageError{fmt::format("no material named '{}' in {}", r.material, r.file)};
+        CheckedProgram program;
+        const CheckedMaterial* m = loadRenderMaterial(r, program);
+        if (!m) return kExitMaterialError;
         const NdfEntry& model = ndfEntry(*m->ndf.model);
         if (model.wholeLobe) {
             std::fprintf(stderr, "%s: error: material '%s': the %s model has no microfacet distribution D to plot\n",
@@ -278,6 +307,70 @@ int ndfPlotCommand(const RenderArgs& r) {
     return kExitOk;
 }
 
+// The equal-area grid of the pdf plot: square-ish cells, 2 columns per row.
+constexpr int kPdfPlotRows = 48, kPdfPlotColumns = 96;
+
+int pdfPlotCommand(const RenderArgs& r) {
+    std::array<double, 3> wo;
+    if (std::string why = parseViewDirection("--wo", r.wo, wo); !why.empty()) throw RenderUsageError{why};
+    CheckedProgram program;
+    const CheckedMaterial* m = loadRenderMaterial(r, program);
+    if (!m) return kExitMaterialError;
+    std::unique_ptr<Interpreter<double>> sampler = referenceSampler(*m);
+
+    SphereGrid grid = SphereGrid::equalArea(kPdfPlotRows, kPdfPlotColumns);
+    preview::SampleHistogram h;
+    h.rows = grid.rings(), h.columns = grid.sectors();
+    h.observed.assign(size_t(grid.cellCount()), 0.0);
+    // The uniform numbers of `facet sample`: a seeded 64-bit Mersenne
+    // Twister, 53 bits each, so a seed draws the same samples everywhere.
+    std::mt19937_64 rng(r.seed);
+    auto uniform = [&] { return double(rng() >> 11) * 0x1p-53; };
+    long invalid = 0, none = 0;
+    for (long i = 0; i < r.samples; ++i) {
+        double u[3] = {uniform(), uniform(), uniform()};
+        SampleResult<double> s = sampler->sample(wo.data(), u, nullptr);
+        invalid += !s.valid;
+        int cell = s.valid && s.pdf > 0 ? grid.cellOf(s.wi) : -1;
+        if (cell < 0) ++none;
+        else h.observed[size_t(cell)] += 1;
+    }
+    if (invalid) {
+        std::fprintf(stderr, "facet: render: %ld of %ld samples are invalid (the material's default inputs are not "
+                     "finite, or a result overflowed)\n", invalid, r.samples);
+        return kExitCheckFailed;
+    }
+    double n = double(r.samples);
+    auto pdf = [&](const Vec3<double>& wi) {
+        double w[3] = {wi.x, wi.y, wi.z};
+        PdfResult<double> p = sampler->pdf(w, wo.data(), nullptr);
+        return p.valid ? p.pdf : 0.0;
+    };
+    // Cell integrals to 1% of a sample: far below the counts' noise.
+    h.expected = integrateCells(grid, pdf, 0.01 / n);
+    double mass = 0;
+    for (double& e : h.expected) mass += e, e *= n;
+    Chi2Outcome chi2 = chi2Test(h.observed, h.expected, 0.01);
+
+    preview::PdfPlotOptions opt;
+    if (r.size) opt.width = *r.size, opt.height = *r.size * 3 / 8;
+    opt.title = fmt::format("{}: importance samples of wi for wo = ({})", m->name, r.wo);
+    std::string verdict = chi2.dof > 0 ? fmt::format("chi-square {:.1f}, {} degrees of freedom, p = {:.3g}",
+                                                     chi2.statistic, chi2.dof, chi2.pValue)
+                                       : chi2.failure;
+    opt.subtitle = fmt::format("{} cells of equal solid angle; pdf integral {:.6f}; {}", grid.cellCount(), mass, verdict);
+    std::string warning;
+    if (std::string err = preview::writePdfPlot(h, opt, r.out, &warning); !err.empty()) {
+        std::fprintf(stderr, "facet: render: %s\n", err.c_str());
+        return kExitCheckFailed;
+    }
+    if (!warning.empty()) std::fprintf(stderr, "facet: render: warning: %s\n", warning.c_str());
+    std::printf("%ld samples (%ld with no direction), %d cells: pdf integral %.6f; %s\n", r.samples, none,
+                grid.cellCount(), mass, chi2.failure.empty() ? verdict.c_str() : chi2.failure.c_str());
+    std::printf("wrote %s\n", r.out.c_str());
+    return kExitOk;
+}
+
 }  // namespace
 
 int cmdRender(const std::vector<std::string>& args) {
@@ -285,6 +378,7 @@ int cmdRender(const std::vector<std::string>& args) {
         RenderArgs r = parseRenderArgs(args);
         if (r.plot == "lobe") return lobePlotCommand(r);
         if (r.plot == "ndf") return ndfPlotCommand(r);
+        if (r.plot == "pdf") return pdfPlotCommand(r);
         return renderSphereCommand(r);
     } catch (const RenderUsageError& e) {
         std::fprintf(stderr, "facet: render: %s\n%s", e.message.c_str(), kRenderUsage);

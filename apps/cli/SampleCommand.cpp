@@ -14,7 +14,7 @@
 #include "Checker.h"
 #include "OutputFile.h"
 #include "Sampling.h"
-#include "TableCache.h"
+#include "SamplingSetup.h"
 
 #include <cmath>
 #include <cstdio>
@@ -34,28 +34,6 @@ constexpr long kMaxSamples = 100000000;
 struct SampleUsageError {
     std::string message;
 };
-
-// "X,Y,Z" as three finite numbers forming a unit vector (within 1e-3, like
-// every direction Facet takes) above the surface.
-std::array<double, 3> parseView(const std::string& text) {
-    std::array<double, 3> w{};
-    const char* p = text.c_str();
-    for (int k = 0; k < 3; ++k) {
-        char* end = nullptr;
-        w[k] = std::strtod(p, &end);
-        if (end == p || !std::isfinite(w[k]) || *end != (k < 2 ? ',' : '\0'))
-            throw SampleUsageError{fmt::format("--wo expects X,Y,Z (three finite numbers), got '{}'", text)};
-        p = end + 1;
-    }
-    double len = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-    if (!(std::abs(len - 1) <= kUnitTolerance))
-        throw SampleUsageError{
-            fmt::format("--wo {} has length {:.6g}; it must be a unit vector (within {:g})", text, len, kUnitTolerance)};
-    if (!(w[2] > 0))
-        throw SampleUsageError{fmt::format(
-            "--wo {} points into the surface (z <= 0); wo points away from it, towards the viewer (n = +z)", text)};
-    return w;
-}
 
 long parseCount(const std::string& text) {
     char* end = nullptr;
@@ -97,7 +75,8 @@ int runSample(const std::vector<std::string>& args) {
     }
     if (file.empty()) throw SampleUsageError{"no material file given"};
     if (wo.empty()) throw SampleUsageError{"--wo X,Y,Z is required"};
-    std::array<double, 3> view = parseView(wo);
+    std::array<double, 3> view;
+    if (std::string why = parseViewDirection("--wo", wo, view); !why.empty()) throw SampleUsageError{why};
 
     DiagnosticEngine diags;
     CheckedProgram program = loadProgramFile(file, diags);
@@ -107,13 +86,7 @@ int runSample(const std::vector<std::string>& args) {
     }
     const CheckedMaterial* m = program.find(material);
     if (!m) throw SampleUsageError{fmt::format("no material named '{}' in {}", material, file)};
-    std::shared_ptr<const EnergyTable> table;
-    if (m->compensatesEnergy()) {
-        TableCache tables;
-        table = tables.getFor(*m);
-        if (!tables.refusal().empty()) std::fprintf(stderr, "facet: warning: %s\n", tables.refusal().c_str());
-    }
-    Interpreter<double> interp(*m, table);
+    std::unique_ptr<Interpreter<double>> interp = referenceSampler(*m);
 
     std::mt19937_64 rng(seed);
     auto uniform = [&] { return double(rng() >> 11) * 0x1p-53; };  // [0, 1), the same on every platform
@@ -122,7 +95,7 @@ int runSample(const std::vector<std::string>& args) {
     long below = 0, invalid = 0;
     for (long i = 0; i < count; ++i) {
         double u[3] = {uniform(), uniform(), uniform()};
-        SampleResult<double> s = interp.sample(view.data(), u, nullptr);
+        SampleResult<double> s = interp->sample(view.data(), u, nullptr);
         invalid += !s.valid;
         below += s.valid && s.pdf > 0 && s.wi.z <= 0;
         for (int ch = 0; ch < 3; ++ch) sum[ch] += s.weight[ch];

@@ -71,6 +71,23 @@ std::string noTextWarning(const PlotCanvas& canvas, const std::string& font) {
     return "cannot draw text with font '" + font + "': the plot is drawn without text";
 }
 
+std::string checkPlotSize(int width, int height) {
+    if (width < kMinPlotSize || height < kMinPlotSize || width > kMaxPlotSize || height > kMaxPlotSize)
+        return "plot size " + std::to_string(width) + " x " + std::to_string(height) + " is outside " +
+               std::to_string(kMinPlotSize) + " .. " + std::to_string(kMaxPlotSize) + " pixels per side";
+    return "";
+}
+
+std::string plotFontOrDefault(const std::string& requested) { return requested.empty() ? findPlotFont() : requested; }
+
+double plotFontSize(int width, int height) { return std::clamp(std::min(width, height * 8 / 5) / 64.0, 7.0, 48.0); }
+
+void noteNoRoomForText(const PlotCanvas& canvas, bool textDrawn, std::string& warning) {
+    if (canvas.hasFont() && !textDrawn)
+        warning = std::to_string(canvas.width()) + " x " + std::to_string(canvas.height()) +
+                  " pixels is too small for legible labels: the plot is drawn without text";
+}
+
 PlotCanvas::PlotCanvas(int width, int height, const std::string& fontPath, Rgb background, int supersample)
     : width_(std::max(width, 1)), height_(std::max(height, 1)), ss_(std::max(supersample, 1)) {
     if (static_cast<long long>(width_) * height_ * ss_ * ss_ > kMaxSupersampledPixels) ss_ = 1;

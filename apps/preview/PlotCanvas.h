@@ -52,6 +52,19 @@ class PlotCanvas;
 // requested file) has no text, or "" when the canvas draws text.
 std::string noTextWarning(const PlotCanvas& canvas, const std::string& font);
 
+// Plot sizes `facet render` draws, output pixels per side.
+constexpr int kMinPlotSize = 64, kMaxPlotSize = 8192;
+// "" or why width x height is outside kMinPlotSize .. kMaxPlotSize.
+std::string checkPlotSize(int width, int height);
+// `requested` if not empty, else findPlotFont().
+std::string plotFontOrDefault(const std::string& requested);
+// Label text size for a plot: ~15 px at 960 x 600, in proportion to the
+// smaller of width and (wide-screen) height.
+double plotFontSize(int width, int height);
+// Sets `warning` when the canvas could draw text but the layout left none
+// (`textDrawn` false): the plot is too small for legible labels.
+void noteNoRoomForText(const PlotCanvas& canvas, bool textDrawn, std::string& warning);
+
 class PlotCanvas {
 public:
     // A width x height (output pixels) canvas filled with `background`.

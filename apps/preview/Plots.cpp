@@ -25,7 +25,6 @@ constexpr double kDeg = kPi / 180;
 // Samples of theta in [-90, 90] degrees: a quarter-degree step, fine enough
 // for the narrow lobes of alpha ~ 0.05 and for locating a peak to 0.25 deg.
 constexpr int kSamples = 721;
-constexpr int kMinSize = 64, kMaxSize = 8192;
 // One lobe per palette colour (more lobes in one polar plot are unreadable
 // anyway); NDF curves beyond the palette repeat it dashed, then dotted.
 constexpr size_t kMaxLobes = 8;
@@ -65,31 +64,12 @@ Stroke curveStroke(size_t i, double fontSize) {
 
 double thetaAt(int k) { return -90.0 + 180.0 * k / (kSamples - 1); }
 
-// Label text size for a canvas: ~15 px at the default 960 x 600, in
-// proportion to the smaller of width and (wide-screen) height.
-double baseFontSize(int width, int height) { return std::clamp(std::min(width, height * 8 / 5) / 64.0, 7.0, 48.0); }
-
 // The next, smaller font size for a layout that did not fit; below ~6
 // pixels text is illegible and the plot is better drawn without.
 void shrinkOrDropText(double& fontSize, bool& text) {
     constexpr double kSmallestLegible = 6;
     if (fontSize * 0.85 >= kSmallestLegible) fontSize *= 0.85;
     else text = false;
-}
-
-std::string checkSize(int width, int height) {
-    if (width < kMinSize || height < kMinSize || width > kMaxSize || height > kMaxSize)
-        return fmt::format("plot size {} x {} is outside {} .. {} pixels per side", width, height, kMinSize, kMaxSize);
-    return "";
-}
-
-// The font for a plot's canvas.
-std::string chooseFont(const std::string& requested) { return requested.empty() ? findPlotFont() : requested; }
-
-void noteNoRoomForText(const PlotCanvas& canvas, bool textDrawn, std::string& warning) {
-    if (canvas.hasFont() && !textDrawn)
-        warning = fmt::format("{} x {} pixels is too small for legible labels: the plot is drawn without text",
-                         canvas.width(), canvas.height());
 }
 
 // "30°" where the font draws the degree sign, else "30 deg" (`number` is
@@ -109,7 +89,7 @@ struct LobeCurve {
 
 std::string checkLobeOptions(const LobePlotOptions& o, const std::string& path) {
     if (path.empty()) return "no output path for the lobe plot";
-    if (std::string e = checkSize(o.width, o.height); !e.empty()) return e;
+    if (std::string e = checkPlotSize(o.width, o.height); !e.empty()) return e;
     if (o.incidentDegrees.empty()) return "the lobe plot needs at least one incident angle";
     if (o.incidentDegrees.size() > kMaxLobes) return fmt::format("the lobe plot draws at most {} incident angles", kMaxLobes);
     for (double t : o.incidentDegrees)
@@ -165,7 +145,7 @@ std::string lobeLegendText(const PlotCanvas& canvas, const LobeCurve& c) {
 // Returns whether the labels fitted (false: drawn without text).
 bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, const std::string& title) {
     const double W = canvas.width(), H = canvas.height();
-    double fs = baseFontSize(canvas.width(), canvas.height());
+    double fs = plotFontSize(canvas.width(), canvas.height());
     bool text = canvas.hasFont();
     // Laid out with the base font size; when the legend is wider than the
     // image or the disk too small, again with smaller text, and below a
@@ -268,7 +248,7 @@ bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, cons
 
 std::string checkNdfInputs(const std::vector<NdfCurve>& curves, const NdfPlotOptions& o, const std::string& path) {
     if (path.empty()) return "no output path for the NDF plot";
-    if (std::string e = checkSize(o.width, o.height); !e.empty()) return e;
+    if (std::string e = checkPlotSize(o.width, o.height); !e.empty()) return e;
     if (curves.empty()) return "the NDF plot needs at least one curve";
     if (curves.size() > kMaxNdfCurves) return fmt::format("the NDF plot draws at most {} curves", kMaxNdfCurves);
     for (const NdfCurve& c : curves) {
@@ -326,7 +306,7 @@ YAxis chooseYAxis(double maxValue, bool log) {
 bool drawNdfPlot(PlotCanvas& canvas, const std::vector<NdfCurve>& curves,
                  const std::vector<std::vector<double>>& values, const YAxis& y, const std::string& title) {
     const double W = canvas.width(), H = canvas.height();
-    double fs = baseFontSize(canvas.width(), canvas.height());
+    double fs = plotFontSize(canvas.width(), canvas.height());
     bool text = canvas.hasFont();
 
     std::vector<std::pair<double, std::string>> yTicks;  // value, label
@@ -429,7 +409,7 @@ LobePlotResult writeLobePlot(const Kernel& kernel, const LobePlotOptions& option
             result.peakValue.push_back(curves.back().peak);
             result.peakThetaDeg.push_back(thetaAt(curves.back().peakIndex));
         }
-        std::string font = chooseFont(options.fontPath);
+        std::string font = plotFontOrDefault(options.fontPath);
         PlotCanvas canvas(options.width, options.height, font);
         result.warning = noTextWarning(canvas, font);
         noteNoRoomForText(canvas, drawLobePlot(canvas, curves, options.title), result.warning);
@@ -474,7 +454,7 @@ std::string writeNdfPlot(const std::vector<NdfCurve>& curves, const NdfPlotOptio
         YAxis y = chooseYAxis(maxValue, options.logScale);
 
         std::string note;
-        std::string font = chooseFont(options.fontPath);
+        std::string font = plotFontOrDefault(options.fontPath);
         PlotCanvas canvas(options.width, options.height, font);
         note = noTextWarning(canvas, font);
         noteNoRoomForText(canvas, drawNdfPlot(canvas, curves, values, y, options.title), note);

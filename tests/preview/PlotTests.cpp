@@ -4,6 +4,7 @@
 // OpenImageIO, and errors that come back as messages.
 #include "Interpreter.h"
 #include "Kernel.h"
+#include "PdfPlot.h"
 #include "PlotCanvas.h"
 #include "Plots.h"
 
@@ -112,6 +113,25 @@ ImageSummary readBack(const std::string& path) {
 }
 
 const NdfEntry& ndf(const char* name) { return ndfEntry(modelNamed(ModelSlot::Ndf, name)); }
+
+// Pixels of the two ends of the pdf plot's colour ramp (zero and full scale).
+struct RampEnds {
+    long zero = 0, full = 0;
+};
+
+RampEnds countRampEnds(const std::string& path) {
+    RampEnds ends;
+    OIIO::ImageBuf img(path);
+    REQUIRE(img.read(0, 0, true, OIIO::TypeDesc::FLOAT));
+    for (int y = 0; y < img.spec().height; ++y)
+        for (int x = 0; x < img.spec().width; ++x) {
+            float p[4] = {};
+            img.getpixel(x, y, p, 4);
+            if (p[0] > 0.2f && p[0] < 0.35f && p[1] < 0.06f && p[2] > 0.27f && p[2] < 0.4f) ++ends.zero;
+            if (p[0] > 0.93f && p[1] > 0.85f && p[2] < 0.25f) ++ends.full;
+        }
+    return ends;
+}
 
 }  // namespace
 
@@ -321,6 +341,52 @@ TEST_CASE("NDF plot errors come back as messages") {
     NdfPlotOptions tiny = options;
     tiny.height = 10;
     CHECK_FALSE(writeNdfPlot(ggx, tiny, dir.file("tiny.png")).empty());
+}
+
+TEST_CASE("pdf plot: both panels on one colour scale") {
+    TempDir dir;
+    SampleHistogram h;
+    h.rows = 8, h.columns = 16;
+    h.expected.assign(128, 10.0);
+    PdfPlotOptions options;
+    options.width = 600, options.height = 225;
+    options.title = "test";
+    // The sampler matches its pdf: both panels at full scale, nothing at zero.
+    h.observed = h.expected;
+    REQUIRE(writePdfPlot(h, options, dir.file("same.png")).empty());
+    RampEnds same = countRampEnds(dir.file("same.png"));
+    CHECK(same.full > 2 * 200 * 90);
+    CHECK(same.zero < 100);  // the colour bar's first steps
+    // No samples at all: the histogram panel turns to the zero colour and
+    // the pdf panel keeps its colour (the scale is shared, not per panel).
+    h.observed.assign(128, 0.0);
+    REQUIRE(writePdfPlot(h, options, dir.file("none.png")).empty());
+    RampEnds none = countRampEnds(dir.file("none.png"));
+    CHECK(none.full == doctest::Approx(same.full / 2.0).epsilon(0.05));
+    CHECK(none.zero == doctest::Approx(same.full / 2.0).epsilon(0.05));
+}
+
+TEST_CASE("pdf plot errors come back as messages") {
+    TempDir dir;
+    SampleHistogram h;
+    h.rows = 4, h.columns = 8;
+    h.observed.assign(32, 1.0), h.expected.assign(32, 1.0);
+    PdfPlotOptions options;
+    CHECK(writePdfPlot(h, options, dir.file("ok.png")).empty());
+    CHECK(writePdfPlot(h, options, "").find("no output path") != std::string::npos);
+    SampleHistogram shortCounts = h;
+    shortCounts.expected.pop_back();
+    CHECK(writePdfPlot(shortCounts, options, dir.file("x.png")).find("31 expected counts") != std::string::npos);
+    SampleHistogram negative = h;
+    negative.observed[3] = -1;
+    CHECK(writePdfPlot(negative, options, dir.file("x.png")).find("negative") != std::string::npos);
+    SampleHistogram empty = h;
+    empty.observed.assign(32, 0.0), empty.expected.assign(32, 0.0);
+    CHECK(writePdfPlot(empty, options, dir.file("x.png")).find("nothing to draw") != std::string::npos);
+    PdfPlotOptions tiny = options;
+    tiny.height = 10;
+    CHECK(writePdfPlot(h, tiny, dir.file("x.png")).find("plot size") != std::string::npos);
+    CHECK_FALSE(writePdfPlot(h, options, dir.file("no/such/dir/x.png")).empty());
 }
 
 TEST_CASE("PlotCanvas strokes: width, dashes, text") {

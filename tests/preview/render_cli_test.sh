@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `facet render` end to end: a sphere PNG and EXR, the lobe and NDF plots,
+# `facet render` end to end: a sphere PNG and EXR, the lobe, NDF and pdf plots,
 # each file read back at its requested size (oiiotool --info), the timing
 # line printed; and the errors: usage mistakes exit 2 with a message naming
 # the option, a material file error exits 65 with file:line:col, an
@@ -43,6 +43,16 @@ check "ndf plot" 0 "$facet" render "$src/materials/aluminium.mat" --plot ndf -o 
 check "ndf compare" 0 "$facet" render --plot ndf --compare ggx,beckmann,blinn_phong --alpha 0.3 -o "$out/cmp.png"
 expect_text "ndf compare" "$out/stdout" "3 curves"
 
+check "pdf plot" 0 "$facet" render "$src/materials/plastic.mat" --plot pdf --wo 0.6,0,0.8 -n 200000 -o "$out/pdf.png" --size 600
+[[ "$(size_of "$out/pdf.png")" == "600 x 225" ]] || { echo "FAIL: pdf.png is $(size_of "$out/pdf.png")"; fail=1; }
+expect_text "pdf plot" "$out/stdout" "200000 samples (0 with no direction), 4608 cells: pdf integral 1.0000"
+expect_text "pdf plot chi-square" "$out/stdout" "degrees of freedom, p = "
+check "pdf plot without wo" 2 "$facet" render "$src/materials/plastic.mat" --plot pdf -o "$out/x.png"
+expect_text "pdf plot without wo" "$out/stderr" "--plot pdf needs --wo X,Y,Z"
+check "pdf plot wo below" 2 "$facet" render "$src/materials/plastic.mat" --plot pdf --wo 0,0,-1 -o "$out/x.png"
+expect_text "pdf plot wo below" "$out/stderr" "points into the surface"
+check "wo with lobe" 2 "$facet" render "$src/materials/plastic.mat" --plot lobe --wo 0,0,1 -o "$out/x.png"
+expect_text "wo with lobe" "$out/stderr" "--wo goes with --plot pdf"
 check "no -o" 2 "$facet" render "$src/materials/gold.mat"
 expect_text "no -o" "$out/stderr" "-o OUT is required"
 check "bad light" 2 "$facet" render "$src/materials/gold.mat" -o "$out/x.png" --light 200,0

@@ -1,9 +1,9 @@
 // SamplingCheck: one goodness-of-fit run of a sampler against a pdf for one
-// view direction (Chi2.h): histogram of the samples, the pdf integrated
+// view direction (ChiSquare.h): histogram of the samples, the pdf integrated
 // over the same cells, the normalization and Pearson's test.
 #pragma once
 
-#include "Chi2.h"
+#include "ChiSquare.h"
 #include "Sampling.h"
 
 #include <array>
@@ -12,6 +12,9 @@
 #include <string>
 
 namespace sampling_test {
+
+using namespace facet;
+using V3 = Vec3<double>;
 
 using Sampler = std::function<facet::SampleResult<double>(const std::array<double, 3>& u)>;
 

@@ -1,4 +1,5 @@
-// Chi2: the goodness-of-fit machinery of the sampling tests.
+// ChiSquare: the goodness-of-fit machinery of the sampling checks (the
+// sampling tests and `facet render --plot pdf`).
 //
 // The procedure is the one of pbrt-v4's and Mitsuba 3's chi-square tests of
 // BSDF samplers (written anew here): bin N samples of wi into cells of the
@@ -25,9 +26,7 @@
 #include <string>
 #include <vector>
 
-namespace sampling_test {
-
-using V3 = facet::Vec3<double>;
+namespace facet {
 
 class SphereGrid {
 public:
@@ -36,14 +35,17 @@ public:
     // The grid for a lobe peaked at (theta, phi): edges graded from widths
     // firstTheta and firstPhi there, at most maxTheta and maxPhi wide
     // elsewhere, and edges at the horizon and at pi - viewTheta.
+    // Equal-area cells: `rows` bands of cos(theta) from 1 to -1 (row 0 at
+    // the normal), `columns` sectors of phi from 0 to 2 pi.
+    static SphereGrid equalArea(int rows, int columns);
     static SphereGrid forLobe(double viewTheta, double peakTheta, double peakPhi, double firstTheta, double firstPhi,
                               double maxTheta = 0.13, double maxPhi = 0.2);
     int rings() const { return int(theta_.size()) - 1; }
     int sectors() const { return int(phi_.size()) - 1; }
     int cellCount() const { return rings() * sectors(); }
     // The cell of a direction (-1 for a non-finite or zero one).
-    int cellOf(const V3& w) const;
-    static V3 direction(double theta, double phi);
+    int cellOf(const Vec3<double>& w) const;
+    static Vec3<double> direction(double theta, double phi);
     const std::vector<double>& thetaEdges() const { return theta_; }
     const std::vector<double>& phiEdges() const { return phi_; }
 
@@ -51,7 +53,7 @@ private:
     std::vector<double> theta_, phi_;
 };
 
-using PdfFunction = std::function<double(const V3& wi)>;
+using PdfFunction = std::function<double(const Vec3<double>& wi)>;
 
 // The integral of pdf over each cell (solid angle), by 4x4 Gauss-Legendre
 // rules compared against the same rules on the cell's four quarters,
@@ -80,4 +82,4 @@ double chi2Survival(double x, int dof);
 // among `tests` independent tests at `level`: 1 - (1 - level)^(1/tests).
 double sidakLevel(double level, int tests);
 
-}  // namespace sampling_test
+}  // namespace facet

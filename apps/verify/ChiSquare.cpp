@@ -1,5 +1,5 @@
-// Chi2: see Chi2.h.
-#include "Chi2.h"
+// ChiSquare: see ChiSquare.h.
+#include "ChiSquare.h"
 
 #include "Quadrature.h"
 
@@ -8,7 +8,7 @@
 #include <fmt/format.h>
 #include <numbers>
 
-namespace sampling_test {
+namespace facet {
 
 namespace {
 
@@ -78,16 +78,23 @@ double gammaQ(double a, double x) {
 SphereGrid::SphereGrid(std::vector<double> thetaEdges, std::vector<double> phiEdges)
     : theta_(std::move(thetaEdges)), phi_(std::move(phiEdges)) {}
 
+SphereGrid SphereGrid::equalArea(int rows, int columns) {
+    std::vector<double> theta, phi;
+    for (int i = 0; i <= rows; ++i) theta.push_back(i == rows ? kPi : std::acos(1 - 2.0 * i / rows));
+    for (int j = 0; j <= columns; ++j) phi.push_back(2 * kPi * j / columns);
+    return SphereGrid(std::move(theta), std::move(phi));
+}
+
 SphereGrid SphereGrid::forLobe(double viewTheta, double peakTheta, double peakPhi, double firstTheta,
                                double firstPhi, double maxTheta, double maxPhi) {
-    using facet::quadrature::gradedBreaks;
+    using quadrature::gradedBreaks;
     std::vector<double> theta =
         gradedBreaks(0, kPi, {{peakTheta, firstTheta}, {kPi / 2, 0}, {kPi - viewTheta, 0}}, maxTheta);
     std::vector<double> phi = gradedBreaks(peakPhi - kPi, peakPhi + kPi, {{peakPhi, firstPhi}}, maxPhi);
     return SphereGrid(std::move(theta), std::move(phi));
 }
 
-int SphereGrid::cellOf(const V3& w) const {
+int SphereGrid::cellOf(const Vec3<double>& w) const {
     if (!std::isfinite(w.x) || !std::isfinite(w.y) || !std::isfinite(w.z)) return -1;
     double r = std::sqrt(w.x * w.x + w.y * w.y);
     if (r == 0 && w.z == 0) return -1;
@@ -102,7 +109,7 @@ int SphereGrid::cellOf(const V3& w) const {
     return index(theta_, t) * sectors() + index(phi_, p);
 }
 
-V3 SphereGrid::direction(double t, double p) {
+Vec3<double> SphereGrid::direction(double t, double p) {
     double st = std::sin(t);
     return {st * std::cos(p), st * std::sin(p), std::cos(t)};
 }
@@ -167,4 +174,4 @@ double chi2Survival(double x, int dof) { return gammaQ(dof / 2.0, x / 2); }
 
 double sidakLevel(double level, int tests) { return -std::expm1(std::log1p(-level) / tests); }
 
-}  // namespace sampling_test
+}  // namespace facet

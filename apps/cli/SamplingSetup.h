@@ -1,0 +1,24 @@
+// SamplingSetup: what `facet sample` and `facet render --plot pdf` share:
+// the --wo view direction and the reference sampler of a material.
+#pragma once
+
+#include "Checker.h"
+#include "Interpreter.h"
+
+#include <array>
+#include <memory>
+#include <string>
+
+namespace facet {
+
+// Parses "X,Y,Z" (three finite numbers forming a unit vector within
+// kUnitTolerance, pointing away from the surface: z > 0) into `view`.
+// Returns "" or the reason, naming the option `option`.
+std::string parseViewDirection(const std::string& option, const std::string& text, std::array<double, 3>& view);
+
+// The double interpreter of `material`, with its Kulla-Conty table from the
+// table cache where the material compensates energy (a cache that cannot be
+// used is reported on stderr and the table built in memory).
+std::unique_ptr<Interpreter<double>> referenceSampler(const CheckedMaterial& material);
+
+}  // namespace facet
