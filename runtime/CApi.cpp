@@ -135,6 +135,53 @@ int64_t facet_eval_batch_status(const facet_kernel* k, int64_t n, const float* c
     return k->kernel->evalBatch(n, wi, wo, inputs, rgb, status);
 }
 
+int facet_sample(const facet_kernel* k, const float wo[3], const float u[3], const float* inputs, float wi_out[3],
+                 float* pdf_out, float weight_out[3]) {
+    float wi[3] = {0, 0, 0}, pdf = 0, weight[3] = {0, 0, 0};
+    bool valid = k && wo && u && k->kernel->sample(wo, u, inputs, wi, &pdf, weight);
+    if (wi_out) wi_out[0] = wi[0], wi_out[1] = wi[1], wi_out[2] = wi[2];
+    if (pdf_out) *pdf_out = pdf;
+    if (weight_out) weight_out[0] = weight[0], weight_out[1] = weight[1], weight_out[2] = weight[2];
+    return valid ? 0 : 1;
+}
+
+float facet_pdf(const facet_kernel* k, const float wi[3], const float wo[3], const float* inputs) {
+    if (!k || !wi || !wo) return 0.0f;
+    return k->kernel->pdf(wi, wo, inputs);
+}
+
+int64_t facet_sample_batch(const facet_kernel* k, int64_t n, const float* const wo[3], const float* const u[3],
+                           const float* const* inputs, float* const wi[3], float* pdf, float* const weight[3]) {
+    const char* fn = "facet_sample_batch";
+    if (!k) return callError(fn, "the kernel is NULL");
+    if (n < 0) return callError(fn, "n is negative (" + std::to_string(n) + ")");
+    if (n == 0) return 0;
+    if (const char* missing = missingArray(wo, "wo")) return callError(fn, missing);
+    if (const char* missing = missingArray(u, "u")) return callError(fn, missing);
+    if (const char* missing = missingArray(wi, "wi")) return callError(fn, missing);
+    if (!pdf) return callError(fn, "pdf is NULL");
+    if (const char* missing = missingArray(weight, "weight")) return callError(fn, missing);
+    return k->kernel->sampleBatch(n, wo, u, inputs, wi, pdf, weight);
+}
+
+int64_t facet_pdf_batch(const facet_kernel* k, int64_t n, const float* const wi[3], const float* const wo[3],
+                        const float* const* inputs, float* pdf) {
+    const char* fn = "facet_pdf_batch";
+    if (!k) return callError(fn, "the kernel is NULL");
+    if (n < 0) return callError(fn, "n is negative (" + std::to_string(n) + ")");
+    if (n == 0) return 0;
+    if (const char* missing = missingArray(wi, "wi")) return callError(fn, missing);
+    if (const char* missing = missingArray(wo, "wo")) return callError(fn, missing);
+    if (!pdf) return callError(fn, "pdf is NULL");
+    return k->kernel->pdfBatch(n, wi, wo, inputs, pdf);
+}
+
+const char* facet_sampler(const facet_kernel* k) {
+    static const char* const names[] = {"jit", "reference"};
+    if (!k) return "";
+    return k->kernel->samplerTier() == "jit" ? names[0] : names[1];
+}
+
 const char* facet_last_error(void) { return lastError().c_str(); }
 
 void facet_release(facet_kernel* k) { delete k; }

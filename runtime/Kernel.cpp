@@ -9,6 +9,7 @@
 #include "KullaConty.h"
 #include "Pipeline.h"
 #include "ReferenceComparison.h"
+#include "Sampling.h"
 #include "TableCache.h"
 
 #include <llvm/Config/llvm-config.h>
@@ -279,6 +280,11 @@ struct KernelCode {
     std::atomic<ScalarKernelFn> scalar{nullptr};
     std::atomic<ScalarStatusFn> scalarStatus{nullptr};
     std::atomic<BatchKernelFn> batch{nullptr};
+    // The sampler's (null where the kernel has none: the reference samples).
+    std::atomic<SampleScalarFn> sampleScalar{nullptr};
+    std::atomic<PdfScalarFn> pdfScalar{nullptr};
+    std::atomic<SampleBatchFn> sampleBatch{nullptr};
+    std::atomic<PdfBatchFn> pdfBatch{nullptr};
 
     mutable std::mutex mutex;  // guards the members below
     mutable std::condition_variable settled;
@@ -435,6 +441,121 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
         for (int c = 0; c < 3; ++c) rgb[c][i] = out[c];
     }
     return invalid;
+}
+
+std::string Kernel::samplerTier() const {
+    bool jit = code_ && (code_->sampleScalar.load(std::memory_order_acquire) ||
+                         code_->sampleBatch.load(std::memory_order_acquire));
+    return jit ? "jit" : "reference";
+}
+
+namespace {
+
+// Calls laneFn(i, slots, floatSlots) for each of n lanes, with the lane's
+// inputs as evalBatch reads them (the caller's value, or the slot's default
+// where inputs or inputs[s] is NULL) in double and in float; returns how
+// many lanes it reported invalid.
+template <typename LaneFn>
+int64_t forEachLane(const CheckedMaterial& material, int64_t n, const float* const* inputs, LaneFn laneFn) {
+    const int slots = material.slotCount;
+    std::vector<double> defaults = material.defaultSlots(), lane(std::max(1, slots));
+    std::vector<float> laneF(std::max(1, slots));
+    int64_t invalid = 0;
+    for (int64_t i = 0; i < n; ++i) {
+        for (int s = 0; s < slots; ++s) {
+            lane[s] = inputs && inputs[s] ? double(inputs[s][i]) : defaults[s];
+            laneF[s] = float(lane[s]);
+        }
+        invalid += laneFn(i, lane.data(), laneF.data()) ? 0 : 1;
+    }
+    return invalid;
+}
+
+}  // namespace
+
+bool Kernel::sample(const float wo[3], const float u[3], const float* inputs, float wi[3], float* pdf,
+                    float weight[3]) const {
+    if (SampleScalarFn fn = code_ ? code_->sampleScalar.load(std::memory_order_acquire) : nullptr)
+        return fn(wo, u, inputs, wi, pdf, weight) == 0;
+    // One lane through the batch entry (or the reference).
+    const float* const woP[3] = {&wo[0], &wo[1], &wo[2]};
+    const float* const uP[3] = {&u[0], &u[1], &u[2]};
+    std::vector<const float*> in;
+    if (inputs)
+        for (int s = 0; s < inputCount(); ++s) in.push_back(&inputs[s]);
+    float* const wiP[3] = {&wi[0], &wi[1], &wi[2]};
+    float* const weightP[3] = {&weight[0], &weight[1], &weight[2]};
+    return sampleBatch(1, woP, uP, inputs ? in.data() : nullptr, wiP, pdf, weightP) == 0;
+}
+
+float Kernel::pdf(const float wi[3], const float wo[3], const float* inputs) const {
+    float out = 0;
+    if (PdfScalarFn fn = code_ ? code_->pdfScalar.load(std::memory_order_acquire) : nullptr) {
+        fn(wi, wo, inputs, &out);
+        return out;
+    }
+    const float* const wiP[3] = {&wi[0], &wi[1], &wi[2]};
+    const float* const woP[3] = {&wo[0], &wo[1], &wo[2]};
+    std::vector<const float*> in;
+    if (inputs)
+        for (int s = 0; s < inputCount(); ++s) in.push_back(&inputs[s]);
+    pdfBatch(1, wiP, woP, inputs ? in.data() : nullptr, &out);
+    return out;
+}
+
+int64_t Kernel::sampleBatch(int64_t n, const float* const wo[3], const float* const u[3], const float* const* inputs,
+                            float* const wi[3], float* pdf, float* const weight[3]) const {
+    if (n <= 0) return n == 0 ? 0 : -1;
+    if (SampleBatchFn fn = code_ ? code_->sampleBatch.load(std::memory_order_acquire) : nullptr)
+        return fn(n, wo, u, inputs, wi, pdf, weight);
+    SampleScalarFn scalar = code_ ? code_->sampleScalar.load(std::memory_order_acquire) : nullptr;
+    std::optional<Interpreter<double>> interp;
+    if (!scalar) interp.emplace(material_, energyTable_);
+    return forEachLane(material_, n, inputs, [&](int64_t i, const double* lane, const float* laneF) {
+        float o[3] = {wo[0][i], wo[1][i], wo[2][i]}, uu[3] = {u[0][i], u[1][i], u[2][i]};
+        float w[3] = {0, 0, 0}, p = 0, wt[3] = {0, 0, 0};
+        bool bad;
+        if (scalar) {
+            bad = scalar(o, uu, laneF, w, &p, wt) != 0;
+        } else {
+            double od[3] = {o[0], o[1], o[2]}, ud[3] = {uu[0], uu[1], uu[2]};
+            SampleResult<double> r = interp->sample(od, ud, lane);
+            w[0] = float(r.wi.x), w[1] = float(r.wi.y), w[2] = float(r.wi.z), p = float(r.pdf);
+            for (int c = 0; c < 3; ++c) wt[c] = float(r.weight[c]);
+            // As the compiled kernels: a result float cannot hold is an invalid lane.
+            bad = !r.valid || !std::isfinite(p) || !std::isfinite(wt[0]) || !std::isfinite(wt[1]) ||
+                  !std::isfinite(wt[2]);
+            if (bad) w[0] = w[1] = w[2] = p = wt[0] = wt[1] = wt[2] = 0.0f;
+        }
+        for (int c = 0; c < 3; ++c) wi[c][i] = w[c], weight[c][i] = wt[c];
+        pdf[i] = p;
+        return !bad;
+    });
+}
+
+int64_t Kernel::pdfBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                         float* pdf) const {
+    if (n <= 0) return n == 0 ? 0 : -1;
+    if (PdfBatchFn fn = code_ ? code_->pdfBatch.load(std::memory_order_acquire) : nullptr)
+        return fn(n, wi, wo, inputs, pdf);
+    PdfScalarFn scalar = code_ ? code_->pdfScalar.load(std::memory_order_acquire) : nullptr;
+    std::optional<Interpreter<double>> interp;
+    if (!scalar) interp.emplace(material_, energyTable_);
+    return forEachLane(material_, n, inputs, [&](int64_t i, const double* lane, const float* laneF) {
+        float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, p = 0;
+        bool bad;
+        if (scalar) {
+            bad = scalar(a, b, laneF, &p) != 0;
+        } else {
+            double ad[3] = {a[0], a[1], a[2]}, bd[3] = {b[0], b[1], b[2]};
+            PdfResult<double> r = interp->pdf(ad, bd, lane);
+            p = float(r.pdf);
+            bad = !r.valid || !std::isfinite(p);
+            if (bad) p = 0;
+        }
+        pdf[i] = p;
+        return !bad;
+    });
 }
 
 Compiler::Compiler()
@@ -651,6 +772,20 @@ void Compiler::link(KernelCode& code, const std::string& object, const std::stri
     if (lowering.emitBatch)
         code.batch.store(reinterpret_cast<BatchKernelFn>(jit_->lookup(dylib, prefix + "_batch")),
                          std::memory_order_release);
+    // The sampler's entry points exist where the plan has a sampler in IR
+    // for the material (LoweringPlan::sampling).
+    if (lowering.emitSampling && lowering.emitScalar) {
+        code.sampleScalar.store(reinterpret_cast<SampleScalarFn>(jit_->lookupIfDefined(dylib, prefix + "_sample_scalar")),
+                                std::memory_order_release);
+        code.pdfScalar.store(reinterpret_cast<PdfScalarFn>(jit_->lookupIfDefined(dylib, prefix + "_pdf_scalar")),
+                             std::memory_order_release);
+    }
+    if (lowering.emitSampling && lowering.emitBatch) {
+        code.sampleBatch.store(reinterpret_cast<SampleBatchFn>(jit_->lookupIfDefined(dylib, prefix + "_sample_batch")),
+                               std::memory_order_release);
+        code.pdfBatch.store(reinterpret_cast<PdfBatchFn>(jit_->lookupIfDefined(dylib, prefix + "_pdf_batch")),
+                            std::memory_order_release);
+    }
 }
 
 CachedKernel Compiler::searchVariants(const CheckedMaterial& material, LoweringOptions lowering, double tolerance,

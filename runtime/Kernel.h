@@ -104,6 +104,13 @@ using ScalarStatusFn = int32_t (*)(const float*, const float*, const float*, flo
 // The batch kernel; the last argument is the optional per-lane status array.
 using BatchKernelFn = int64_t (*)(int64_t, const float* const*, const float* const*, const float* const*,
                                   float* const*, uint8_t*);
+// The sampler's entry points (Lowering.h, LoweredModule): scalar ones
+// return 1 for an invalid lane, batch ones the number of invalid lanes.
+using SampleScalarFn = int32_t (*)(const float*, const float*, const float*, float*, float*, float*);
+using PdfScalarFn = int32_t (*)(const float*, const float*, const float*, float*);
+using SampleBatchFn = int64_t (*)(int64_t, const float* const*, const float* const*, const float* const*,
+                                  float* const*, float*, float* const*);
+using PdfBatchFn = int64_t (*)(int64_t, const float* const*, const float* const*, const float* const*, float*);
 
 class Kernel {
 public:
@@ -143,6 +150,31 @@ public:
     // or a result float cannot hold) -- on every backend alike.
     int64_t evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
                       float* const rgb[3], uint8_t* status = nullptr) const;
+
+    // Importance sampling (SPEC 8; facet.h has the conventions). sample()
+    // draws wi for wo from the uniform numbers u (u[0] picks the lobe, u[1]
+    // and u[2] place the direction) and gives the mixture's pdf at wi and
+    // weight = f (n.wi) / pdf; pdf() is that density for any wi. sample()
+    // returns false and pdf() 0 for an invalid lane: a non-finite or
+    // non-unit direction, u outside [0, 1), a non-finite input, or a result
+    // float cannot hold; its outputs are 0. With n.wo <= 0 there is no
+    // sample (wi = 0, pdf = 0, weight = 0, a valid lane); a sample below
+    // the horizon is valid with weight 0 and its pdf reported.
+    bool sample(const float wo[3], const float u[3], const float* inputs, float wi[3], float* pdf,
+                float weight[3]) const;
+    float pdf(const float wi[3], const float wo[3], const float* inputs) const;
+    // n lanes, SoA, as evalBatch: the number of invalid lanes, 0 for n = 0,
+    // -1 for n < 0.
+    int64_t sampleBatch(int64_t n, const float* const wo[3], const float* const u[3], const float* const* inputs,
+                        float* const wi[3], float* pdf, float* const weight[3]) const;
+    int64_t pdfBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                     float* pdf) const;
+    // Which code samples: "jit" (the kernel's own sample/pdf entry points,
+    // scalar or SIMD as eval), or "reference" (the interpreter's sampler in
+    // double, lane by lane: interp kernels, and materials whose NDF has no
+    // sampler in IR, which `facet ir --plan` shows as sampling:
+    // specular=none).
+    std::string samplerTier() const;
 
 private:
     friend class Compiler;

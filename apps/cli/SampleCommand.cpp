@@ -1,17 +1,23 @@
 // facet sample FILE --wo X,Y,Z [-n N] [--out OUT.csv] [--seed S] [--material NAME]
+//                   [--backend interp|scalar|simd] [--math exact|fast]
 //
-// Draws N samples of wi for the view direction wo with the reference
-// sampler (compiler/Sampling.h, the interpreter in double) at the
-// material's default inputs, and writes one CSV row per sample:
-// wi_x,wi_y,wi_z,pdf,weight_r,weight_g,weight_b (%.17g). The uniform
+// Draws N samples of wi for the view direction wo at the material's default
+// inputs and writes one CSV row per sample:
+// wi_x,wi_y,wi_z,pdf,weight_r,weight_g,weight_b. The backend is eval's:
+// simd (the default) and scalar run the kernel's compiled sampler (float,
+// %.9g; a material whose NDF has no compiled sampler samples through the
+// reference, and a note says so), interp the reference sampler
+// (compiler/Sampling.h, the interpreter in double, %.17g). The uniform
 // numbers come from a 64-bit Mersenne Twister seeded with S (default 1),
-// 53 bits each, so a seed gives the same samples on every platform. With
+// 53 bits each (rounded down to float below 1 for the kernels), so a seed
+// gives the same samples on every platform. With
 // --out, a summary goes to standard output: the mean weight per channel
 // (an estimate of the directional albedo) and how many samples fell below
 // the horizon.
 #include "Commands.h"
 
 #include "Checker.h"
+#include "Kernel.h"
 #include "OutputFile.h"
 #include "Sampling.h"
 #include "SamplingSetup.h"
@@ -28,6 +34,7 @@ namespace {
 
 constexpr const char* kSampleUsage =
     "usage: facet sample FILE --wo X,Y,Z [-n N] [--out OUT.csv] [--seed S] [--material NAME]\n"
+    "                     [--backend interp|scalar|simd] [--math exact|fast]\n"
     "  wo: the unit view direction, pointing away from the surface (n = +z)\n";
 constexpr long kMaxSamples = 100000000;
 
@@ -52,15 +59,18 @@ uint64_t parseSeed(const std::string& text) {
 }
 
 int runSample(const std::vector<std::string>& args) {
-    std::string file, material, out, wo;
+    std::string file, material, out, wo, backend = "simd", math = "exact";
     long count = 1000;
     uint64_t seed = 1;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
-        if (a == "--wo" || a == "-n" || a == "--out" || a == "-o" || a == "--seed" || a == "--material") {
+        if (a == "--wo" || a == "-n" || a == "--out" || a == "-o" || a == "--seed" || a == "--material" ||
+            a == "--backend" || a == "--math") {
             if (i + 1 >= args.size()) throw SampleUsageError{a + " needs a value"};
             const std::string& v = args[++i];
             if (a == "--wo") wo = v;
+            else if (a == "--backend") backend = v;
+            else if (a == "--math") math = v;
             else if (a == "-n") count = parseCount(v);
             else if (a == "--seed") seed = parseSeed(v);
             else if (a == "--material") material = v;
@@ -75,6 +85,9 @@ int runSample(const std::vector<std::string>& args) {
     }
     if (file.empty()) throw SampleUsageError{"no material file given"};
     if (wo.empty()) throw SampleUsageError{"--wo X,Y,Z is required"};
+    if (backend != "interp" && backend != "scalar" && backend != "simd")
+        throw SampleUsageError{fmt::format("--backend '{}' is not interp, scalar or simd", backend)};
+    if (math != "exact" && math != "fast") throw SampleUsageError{fmt::format("--math '{}' is not exact or fast", math)};
     std::array<double, 3> view;
     if (std::string why = parseViewDirection("--wo", wo, view); !why.empty()) throw SampleUsageError{why};
 
@@ -86,21 +99,59 @@ int runSample(const std::vector<std::string>& args) {
     }
     const CheckedMaterial* m = program.find(material);
     if (!m) throw SampleUsageError{fmt::format("no material named '{}' in {}", material, file)};
-    std::unique_ptr<Interpreter<double>> interp = referenceSampler(*m);
-
     std::mt19937_64 rng(seed);
     auto uniform = [&] { return double(rng() >> 11) * 0x1p-53; };  // [0, 1), the same on every platform
     std::string csv = "wi_x,wi_y,wi_z,pdf,weight_r,weight_g,weight_b\n";
     std::array<double, 3> sum{};
     long below = 0, invalid = 0;
-    for (long i = 0; i < count; ++i) {
-        double u[3] = {uniform(), uniform(), uniform()};
-        SampleResult<double> s = interp->sample(view.data(), u, nullptr);
-        invalid += !s.valid;
-        below += s.valid && s.pdf > 0 && s.wi.z <= 0;
-        for (int ch = 0; ch < 3; ++ch) sum[ch] += s.weight[ch];
-        csv += fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}\n", s.wi.x, s.wi.y, s.wi.z, s.pdf,
-                           s.weight[0], s.weight[1], s.weight[2]);
+    if (backend == "interp") {
+        std::unique_ptr<Interpreter<double>> interp = referenceSampler(*m);
+        for (long i = 0; i < count; ++i) {
+            double u[3] = {uniform(), uniform(), uniform()};
+            SampleResult<double> s = interp->sample(view.data(), u, nullptr);
+            invalid += !s.valid;
+            below += s.valid && s.pdf > 0 && s.wi.z <= 0;
+            for (int ch = 0; ch < 3; ++ch) sum[ch] += s.weight[ch];
+            csv += fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}\n", s.wi.x, s.wi.y, s.wi.z,
+                               s.pdf, s.weight[0], s.weight[1], s.weight[2]);
+        }
+    } else {
+        Compiler compiler;
+        CompileOptions options;
+        std::string problem = CompileOptions::parse(fmt::format("backend={};math={}", backend, math), options);
+        internal_assert(problem.empty()) << problem;
+        std::unique_ptr<Kernel> kernel = compiler.compileMaterial(*m, options, diags);
+        if (!kernel) {
+            std::fputs(diags.str().c_str(), stderr);
+            return 65;
+        }
+        if (kernel->samplerTier() != "jit")
+            std::fprintf(stderr, "facet: note: material %s has no compiled sampler (ndf %s); sampling through the "
+                                 "reference\n", m->name.c_str(), m->ndf.model->name);
+        const float wo3[3] = {float(view[0]), float(view[1]), float(view[2])};
+        std::array<std::vector<float>, 3> wos, us, wis, weights;
+        std::vector<float> pdfs(static_cast<size_t>(count));
+        for (int c = 0; c < 3; ++c) {
+            wos[c].assign(size_t(count), wo3[c]);
+            wis[c].resize(size_t(count)), weights[c].resize(size_t(count)), us[c].resize(size_t(count));
+        }
+        // Floats below 1: a double u rounds down, never up to 1.
+        for (long i = 0; i < count; ++i)
+            for (int c = 0; c < 3; ++c) {
+                float f = float(uniform());
+                us[c][size_t(i)] = f < 1 ? f : std::nextafter(1.0f, 0.0f);
+            }
+        const float* woP[3] = {wos[0].data(), wos[1].data(), wos[2].data()};
+        const float* uP[3] = {us[0].data(), us[1].data(), us[2].data()};
+        float* wiP[3] = {wis[0].data(), wis[1].data(), wis[2].data()};
+        float* weightP[3] = {weights[0].data(), weights[1].data(), weights[2].data()};
+        invalid = long(kernel->sampleBatch(count, woP, uP, nullptr, wiP, pdfs.data(), weightP));
+        for (size_t i = 0; i < size_t(count); ++i) {
+            below += pdfs[i] > 0 && wis[2][i] <= 0;
+            for (int ch = 0; ch < 3; ++ch) sum[ch] += weights[ch][i];
+            csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", wis[0][i], wis[1][i], wis[2][i],
+                               pdfs[i], weights[0][i], weights[1][i], weights[2][i]);
+        }
     }
     if (!writeOutput(out, csv)) return 1;
     if (invalid > 0) {

@@ -18,6 +18,7 @@
 #include <llvm/Support/raw_ostream.h>
 
 #include <algorithm>
+#include <functional>
 
 namespace facet {
 namespace {
@@ -168,25 +169,52 @@ LaneEmitter::Result emitLanes(const KernelContext& k, llvm::IRBuilder<>& b, llvm
     return out;
 }
 
-// The scalar kernel: `<name>_status` computes one lane and returns 1 if it
-// was invalid; `<name>` is the SPEC's void entry point, a thin wrapper.
-void emitScalarEntry(const KernelContext& k, llvm::Module& module, const std::string& name) {
+// The lane body of an entry point: the values of its output streams and
+// the invalid mask, from its input streams (float or <W x float> lanes) and
+// the material's slots.
+struct LaneOutputs {
+    std::vector<llvm::Value*> values;
+    llvm::Value* invalid;
+};
+using LaneBody = std::function<LaneOutputs(llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
+                                           const std::vector<llvm::Value*>& slots)>;
+
+// The argument groups of an entry point besides n and inputs: direction-like
+// inputs (three floats per lane, read as three arrays with the padding
+// value of each for masked-off lanes) and outputs (three arrays, or one).
+struct EntryShape {
+    std::vector<std::array<float, 3>> inputs;  // padding of each input group
+    std::vector<int> outputs;                  // 3 or 1 streams per output group
+    int inStreams() const { return 3 * int(inputs.size()); }
+    int outStreams() const {
+        int n = 0;
+        for (int o : outputs) n += o;
+        return n;
+    }
+};
+
+// A scalar entry point: int32 name(const float* in0, ..., const float*
+// inputs, float* out0, ...), returning 1 for an invalid lane. The argument
+// order is the shape's: the input groups, the material's inputs, the
+// output groups.
+llvm::Function* emitScalarFunction(const KernelContext& k, llvm::Module& module, const std::string& name,
+                                   const EntryShape& shape, const BodyPlan& body, const LaneBody& lanes) {
     const CheckedMaterial& mat = k.material;
     llvm::LLVMContext& ctx = module.getContext();
     llvm::IRBuilder<> b(ctx);
     llvm::Type* ptr = b.getPtrTy();
-    auto* statusTy = llvm::FunctionType::get(b.getInt32Ty(), {ptr, ptr, ptr, ptr}, false);
-    auto* fn = llvm::Function::Create(statusTy, llvm::Function::ExternalLinkage, name + "_status", module);
-    addKernelAttributes(fn, 1, k.plan.scalarBody);
+    llvm::Type* f32 = b.getFloatTy();
+    const int groupsIn = int(shape.inputs.size()), groupsOut = int(shape.outputs.size());
+    std::vector<llvm::Type*> argTypes(size_t(groupsIn + 1 + groupsOut), ptr);
+    auto* fn = llvm::Function::Create(llvm::FunctionType::get(b.getInt32Ty(), argTypes, false),
+                                      llvm::Function::ExternalLinkage, name, module);
+    addKernelAttributes(fn, 1, body);
     b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", fn));
     DenormalFlush flush(b, fn, k.plan);
-    llvm::Value *wiP = fn->getArg(0), *woP = fn->getArg(1), *inP = fn->getArg(2), *outP = fn->getArg(3);
-    llvm::Type* f32 = b.getFloatTy();
-    std::array<llvm::Value*, 3> wi, wo;
-    for (int i = 0; i < 3; ++i) {
-        wi[i] = b.CreateLoad(f32, b.CreateConstGEP1_32(f32, wiP, i));
-        wo[i] = b.CreateLoad(f32, b.CreateConstGEP1_32(f32, woP, i));
-    }
+    std::vector<llvm::Value*> in;
+    for (int g = 0; g < groupsIn; ++g)
+        for (int i = 0; i < 3; ++i) in.push_back(b.CreateLoad(f32, b.CreateConstGEP1_32(f32, fn->getArg(unsigned(g)), i)));
+    llvm::Value* inP = fn->getArg(unsigned(groupsIn));
     std::vector<llvm::Value*> slots;
     if (mat.slotCount > 0) {
         // inputs == NULL means all defaults: read from a constant array instead.
@@ -195,16 +223,37 @@ void emitScalarEntry(const KernelContext& k, llvm::Module& module, const std::st
         llvm::Value* base = b.CreateSelect(b.CreateIsNull(inP), defaults, inP);
         for (int s = 0; s < mat.slotCount; ++s) slots.push_back(b.CreateLoad(f32, b.CreateConstGEP1_32(f32, base, s)));
     }
+    LaneOutputs r = lanes(b, f32, in, slots);
+    size_t next = 0;
+    for (int g = 0; g < groupsOut; ++g)
+        for (int i = 0; i < shape.outputs[g]; ++i)
+            b.CreateStore(r.values[next++], b.CreateConstGEP1_32(f32, fn->getArg(unsigned(groupsIn + 1 + g)), i));
+    flush.restore();
+    b.CreateRet(b.CreateZExt(r.invalid, b.getInt32Ty()));
+    return fn;
+}
+
+// The scalar kernel: `<name>_status` computes one lane and returns 1 if it
+// was invalid; `<name>` is the SPEC's void entry point, a thin wrapper.
+void emitScalarEntry(const KernelContext& k, llvm::Module& module, const std::string& name) {
+    const CheckedMaterial& mat = k.material;
     // The scalar kernel computes the precise body directly: per lane, float
     // arithmetic is no faster than double except for division and square
     // root, and the guards would cost more than they save (measured: GGX
     // 47 ns/eval precise, 56 ns float-first).
-    LaneEmitter lanes(mat, k.plan, k.plan.scalarBody, k.options.energyTable, b, f32, module);
-    LaneEmitter::Result r = lanes.emit(wi, wo, slots);
-    for (int i = 0; i < 3; ++i) b.CreateStore(r.rgb[i], b.CreateConstGEP1_32(f32, outP, i));
-    flush.restore();
-    b.CreateRet(b.CreateZExt(r.invalid, b.getInt32Ty()));
+    EntryShape shape{{{0, 0, 1}, {0, 0, 1}}, {3}};
+    llvm::Function* fn = emitScalarFunction(
+        k, module, name + "_status", shape, k.plan.scalarBody,
+        [&](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
+            const std::vector<llvm::Value*>& slots) {
+            LaneEmitter lanes(mat, k.plan, k.plan.scalarBody, k.options.energyTable, b, laneTy, module);
+            LaneEmitter::Result r = lanes.emit({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
+            return LaneOutputs{{r.rgb.begin(), r.rgb.end()}, r.invalid};
+        });
 
+    llvm::LLVMContext& ctx = module.getContext();
+    llvm::IRBuilder<> b(ctx);
+    llvm::Type* ptr = b.getPtrTy();
     auto* voidTy = llvm::FunctionType::get(b.getVoidTy(), {ptr, ptr, ptr, ptr}, false);
     auto* entry = llvm::Function::Create(voidTy, llvm::Function::ExternalLinkage, name, module);
     addKernelAttributes(entry, 1, k.plan.scalarBody);
@@ -213,7 +262,12 @@ void emitScalarEntry(const KernelContext& k, llvm::Module& module, const std::st
     b.CreateRetVoid();
 }
 
-void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::string& name) {
+// A batch entry point: int64 name(int64 n, const float* const in0[3], ...,
+// const float* const* inputs, float* const out0[3] (or float* out0), ...
+// [, uint8_t* status]), returning the number of invalid lanes. It loops over
+// vectors of `width` lanes.
+void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::string& name, const EntryShape& shape,
+                       bool withStatus, const BodyPlan& body, const LaneBody& lanes) {
     const CheckedMaterial& mat = k.material;
     llvm::LLVMContext& ctx = module.getContext();
     llvm::IRBuilder<> b(ctx);
@@ -222,25 +276,31 @@ void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::str
     llvm::Type* i64 = b.getInt64Ty();
     llvm::Type* f32 = b.getFloatTy();
     auto* vecTy = llvm::FixedVectorType::get(f32, W);
-    // The sixth argument is the optional per-lane status array (one byte
-    // per lane, 1 = invalid; null: not wanted).
-    auto* fnTy = llvm::FunctionType::get(i64, {i64, ptr, ptr, ptr, ptr, ptr}, false);
+    const int groupsIn = int(shape.inputs.size()), groupsOut = int(shape.outputs.size());
+    std::vector<llvm::Type*> argTypes(size_t(1 + groupsIn + 1 + groupsOut + (withStatus ? 1 : 0)), ptr);
+    argTypes[0] = i64;
+    auto* fnTy = llvm::FunctionType::get(i64, argTypes, false);
     auto* fn = llvm::Function::Create(fnTy, llvm::Function::ExternalLinkage, name, module);
-    addKernelAttributes(fn, W, k.plan.batchBody);
-    llvm::Value *n = fn->getArg(0), *wiA = fn->getArg(1), *woA = fn->getArg(2), *inA = fn->getArg(3),
-                *outA = fn->getArg(4), *statusA = fn->getArg(5);
+    addKernelAttributes(fn, W, body);
+    llvm::Value *n = fn->getArg(0), *inA = fn->getArg(unsigned(1 + groupsIn));
+    llvm::Value* statusA = withStatus ? fn->getArg(unsigned(2 + groupsIn + groupsOut)) : nullptr;
     auto* entry = llvm::BasicBlock::Create(ctx, "entry", fn);
     auto* header = llvm::BasicBlock::Create(ctx, "loop.header", fn);
-    auto* body = llvm::BasicBlock::Create(ctx, "loop.body", fn);
+    auto* bodyBlock = llvm::BasicBlock::Create(ctx, "loop.body", fn);
     auto* exit = llvm::BasicBlock::Create(ctx, "exit", fn);
 
     b.SetInsertPoint(entry);
     DenormalFlush flush(b, fn, k.plan);
-    std::array<llvm::Value*, 3> wiP, woP, outP;
-    for (int i = 0; i < 3; ++i) {
-        wiP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, wiA, i), "wi.ptr");
-        woP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, woA, i), "wo.ptr");
-        outP[i] = b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, outA, i), "rgb.ptr");
+    std::vector<llvm::Value*> inP, outP;
+    for (int g = 0; g < groupsIn; ++g)
+        for (int i = 0; i < 3; ++i)
+            inP.push_back(b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, fn->getArg(unsigned(1 + g)), i), "in.ptr"));
+    for (int g = 0; g < groupsOut; ++g) {
+        llvm::Value* arg = fn->getArg(unsigned(2 + groupsIn + g));
+        if (shape.outputs[g] == 1) outP.push_back(arg);
+        else
+            for (int i = 0; i < shape.outputs[g]; ++i)
+                outP.push_back(b.CreateLoad(ptr, b.CreateConstGEP1_32(ptr, arg, i), "out.ptr"));
     }
     // Per slot: a base pointer and a stride (1 for a caller array, 0 for the
     // constant array of defaults when inputs or inputs[s] is NULL).
@@ -267,12 +327,13 @@ void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::str
     // The lane body is emitted once (it is most of the module: emitting it a
     // second time for the remainder doubled the compile time). The last,
     // partial chunk is staged through W-lane buffers on the stack: masked
-    // loads fill them (masked-off lanes read the valid direction (0,0,1) and
-    // the slot defaults), the body runs on the buffers, and masked stores
-    // write the valid lanes back.
-    const int streams = 6 + mat.slotCount;  // wi xyz, wo xyz, slots
+    // loads fill them (masked-off lanes read the padding, a valid direction
+    // such as (0,0,1), and the slot defaults), the body runs on the buffers,
+    // and masked stores write the valid lanes back.
+    const int streams = shape.inStreams() + mat.slotCount;
+    const int outStreams = shape.outStreams();
     llvm::Value* stageIn = b.CreateAlloca(vecTy, b.getInt32(streams), "stage.in");
-    llvm::Value* stageOut = b.CreateAlloca(vecTy, b.getInt32(3), "stage.out");
+    llvm::Value* stageOut = b.CreateAlloca(vecTy, b.getInt32(outStreams), "stage.out");
     b.CreateBr(header);
 
     b.SetInsertPoint(header);
@@ -281,9 +342,9 @@ void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::str
     i->addIncoming(llvm::ConstantInt::get(i64, 0), entry);
     count->addIncoming(llvm::ConstantInt::get(i64, 0), entry);
     llvm::Value* remaining = b.CreateSub(n, i);
-    b.CreateCondBr(b.CreateICmpSGT(remaining, llvm::ConstantInt::get(i64, 0)), body, exit);
+    b.CreateCondBr(b.CreateICmpSGT(remaining, llvm::ConstantInt::get(i64, 0)), bodyBlock, exit);
 
-    b.SetInsertPoint(body);
+    b.SetInsertPoint(bodyBlock);
     llvm::Value* partial = b.CreateICmpSLT(remaining, llvm::ConstantInt::get(i64, W));
     std::vector<llvm::Constant*> laneIds;
     for (int l = 0; l < W; ++l) laneIds.push_back(llvm::ConstantInt::get(i64, l));
@@ -293,14 +354,11 @@ void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::str
     // buffers on the partial chunk (filled below).
     std::vector<llvm::Value*> streamPtr;
     std::vector<float> padding;
-    for (int c = 0; c < 3; ++c) {
-        streamPtr.push_back(b.CreateGEP(f32, wiP[c], i));
-        padding.push_back(c == 2 ? 1.0f : 0.0f);
-    }
-    for (int c = 0; c < 3; ++c) {
-        streamPtr.push_back(b.CreateGEP(f32, woP[c], i));
-        padding.push_back(c == 2 ? 1.0f : 0.0f);
-    }
+    for (int g = 0; g < groupsIn; ++g)
+        for (int c = 0; c < 3; ++c) {
+            streamPtr.push_back(b.CreateGEP(f32, inP[size_t(3 * g + c)], i));
+            padding.push_back(shape.inputs[g][c]);
+        }
     for (int s = 0; s < mat.slotCount; ++s) {
         streamPtr.push_back(b.CreateGEP(f32, slotBase[s], b.CreateMul(i, slotStep[s])));
         padding.push_back(float(defaults[s]));
@@ -312,51 +370,51 @@ void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::str
 
     b.SetInsertPoint(stageBlock);
     std::vector<llvm::Value*> stagePtr;
-    for (int k = 0; k < streams; ++k) {
-        llvm::Value* v = b.CreateMaskedLoad(vecTy, streamPtr[k], llvm::Align(4), mask,
-                                            llvm::ConstantFP::get(vecTy, padding[k]));
-        stagePtr.push_back(b.CreateConstGEP1_32(vecTy, stageIn, k));
+    for (int s = 0; s < streams; ++s) {
+        llvm::Value* v = b.CreateMaskedLoad(vecTy, streamPtr[s], llvm::Align(4), mask,
+                                            llvm::ConstantFP::get(vecTy, padding[s]));
+        stagePtr.push_back(b.CreateConstGEP1_32(vecTy, stageIn, s));
         b.CreateAlignedStore(v, stagePtr.back(), llvm::Align(4));
     }
     b.CreateBr(compute);
 
     b.SetInsertPoint(compute);
     std::vector<llvm::PHINode*> src;
-    for (int k = 0; k < streams; ++k) {
+    for (int s = 0; s < streams; ++s) {
         src.push_back(b.CreatePHI(ptr, 2));
-        src.back()->addIncoming(streamPtr[k], bodyEntry);
-        src.back()->addIncoming(stagePtr[k], stageBlock);
+        src.back()->addIncoming(streamPtr[s], bodyEntry);
+        src.back()->addIncoming(stagePtr[s], stageBlock);
     }
-    std::array<llvm::Value*, 3> wi, wo, out;
-    std::vector<llvm::Value*> slots;
-    for (int k = 0; k < streams; ++k) {
-        llvm::Value* v = b.CreateAlignedLoad(vecTy, src[k], llvm::Align(4));
-        if (k < 3) wi[k] = v;
-        else if (k < 6) wo[k - 3] = v;
+    std::vector<llvm::Value*> in, slots, out;
+    for (int s = 0; s < streams; ++s) {
+        llvm::Value* v = b.CreateAlignedLoad(vecTy, src[s], llvm::Align(4));
+        if (s < shape.inStreams()) in.push_back(v);
         else slots.push_back(v);
     }
-    for (int c = 0; c < 3; ++c) out[c] = b.CreateSelect(partial, b.CreateConstGEP1_32(vecTy, stageOut, c),
-                                                        b.CreateGEP(f32, outP[c], i));
-    LaneEmitter::Result r = emitLanes(k, b, vecTy, module, wi, wo, slots);
-    for (int c = 0; c < 3; ++c) b.CreateAlignedStore(r.rgb[c], out[c], llvm::Align(4));
+    for (int c = 0; c < outStreams; ++c)
+        out.push_back(b.CreateSelect(partial, b.CreateConstGEP1_32(vecTy, stageOut, c), b.CreateGEP(f32, outP[c], i)));
+    LaneOutputs r = lanes(b, vecTy, in, slots);
+    for (int c = 0; c < outStreams; ++c) b.CreateAlignedStore(r.values[c], out[c], llvm::Align(4));
     llvm::Value* bodyCount = b.CreateAdd(count, popcount(b.CreateAnd(r.invalid, mask)));
-    auto* statusBlock = llvm::BasicBlock::Create(ctx, "status", fn);
-    auto* statusDone = llvm::BasicBlock::Create(ctx, "status.done", fn);
     auto* unstage = llvm::BasicBlock::Create(ctx, "unstage", fn);
     auto* latch = llvm::BasicBlock::Create(ctx, "latch", fn);
-    b.CreateCondBr(b.CreateIsNull(statusA), statusDone, statusBlock,
-                   llvm::MDBuilder(ctx).createBranchWeights(1, 1));
+    if (withStatus) {
+        auto* statusBlock = llvm::BasicBlock::Create(ctx, "status", fn);
+        auto* statusDone = llvm::BasicBlock::Create(ctx, "status.done", fn);
+        b.CreateCondBr(b.CreateIsNull(statusA), statusDone, statusBlock,
+                       llvm::MDBuilder(ctx).createBranchWeights(1, 1));
 
-    b.SetInsertPoint(statusBlock);
-    b.CreateMaskedStore(b.CreateZExt(r.invalid, llvm::FixedVectorType::get(b.getInt8Ty(), W)),
-                        b.CreateGEP(b.getInt8Ty(), statusA, i), llvm::Align(1), mask);
-    b.CreateBr(statusDone);
+        b.SetInsertPoint(statusBlock);
+        b.CreateMaskedStore(b.CreateZExt(r.invalid, llvm::FixedVectorType::get(b.getInt8Ty(), W)),
+                            b.CreateGEP(b.getInt8Ty(), statusA, i), llvm::Align(1), mask);
+        b.CreateBr(statusDone);
 
-    b.SetInsertPoint(statusDone);
+        b.SetInsertPoint(statusDone);
+    }
     b.CreateCondBr(partial, unstage, latch);
 
     b.SetInsertPoint(unstage);
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < outStreams; ++c) {
         llvm::Value* v = b.CreateAlignedLoad(vecTy, b.CreateConstGEP1_32(vecTy, stageOut, c), llvm::Align(4));
         b.CreateMaskedStore(v, b.CreateGEP(f32, outP[c], i), llvm::Align(4), mask);
     }
@@ -373,6 +431,44 @@ void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::str
     b.CreateRet(result);
 }
 
+// The eval batch entry; the sixth argument is the optional per-lane status
+// array (one byte per lane, 1 = invalid; null: not wanted).
+void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::string& name) {
+    EntryShape shape{{{0, 0, 1}, {0, 0, 1}}, {3}};
+    emitBatchFunction(k, module, name, shape, true, k.plan.batchBody,
+                      [&](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
+                          const std::vector<llvm::Value*>& slots) {
+                          LaneEmitter::Result r =
+                              emitLanes(k, b, laneTy, module, {in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
+                          return LaneOutputs{{r.rgb.begin(), r.rgb.end()}, r.invalid};
+                      });
+}
+
+// The sampler's entry points (SPEC 8), in the plan's sampling body:
+//   sample: (wo[3], u[3], inputs) -> (wi[3], pdf, weight[3])
+//   pdf:    (wi[3], wo[3], inputs) -> (pdf)
+// Masked-off lanes of a partial chunk read wo = (0,0,1) and u = 0.
+const EntryShape kSampleShape{{{0, 0, 1}, {0, 0, 0}}, {3, 1, 3}};
+const EntryShape kPdfShape{{{0, 0, 1}, {0, 0, 1}}, {1}};
+
+LaneBody sampleLanes(const KernelContext& k, llvm::Module& module) {
+    return [&k, &module](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
+                         const std::vector<llvm::Value*>& slots) {
+        LaneEmitter lanes(k.material, k.plan, k.plan.sampling.body, k.options.energyTable, b, laneTy, module);
+        LaneEmitter::SampleResult r = lanes.emitSample({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
+        return LaneOutputs{{r.wi[0], r.wi[1], r.wi[2], r.pdf, r.weight[0], r.weight[1], r.weight[2]}, r.invalid};
+    };
+}
+
+LaneBody pdfLanes(const KernelContext& k, llvm::Module& module) {
+    return [&k, &module](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
+                         const std::vector<llvm::Value*>& slots) {
+        LaneEmitter lanes(k.material, k.plan, k.plan.sampling.body, k.options.energyTable, b, laneTy, module);
+        LaneEmitter::PdfResult r = lanes.emitPdf({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
+        return LaneOutputs{{r.pdf}, r.invalid};
+    };
+}
+
 }  // namespace
 
 LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan& plan, const LoweringOptions& options,
@@ -383,13 +479,30 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
     out.plan = plan;
     const KernelContext k{material, out.plan, options};
     out.module = std::make_unique<llvm::Module>(symbolPrefix, context);
+    const bool sampling = options.emitSampling && plan.sampling.specular != SpecularSampling::None;
     if (options.emitScalar) {
         out.scalarSymbol = symbolPrefix + "_scalar";
         emitScalarEntry(k, *out.module, out.scalarSymbol);
+        if (sampling) {
+            out.sampleScalarSymbol = symbolPrefix + "_sample_scalar";
+            out.pdfScalarSymbol = symbolPrefix + "_pdf_scalar";
+            emitScalarFunction(k, *out.module, out.sampleScalarSymbol, kSampleShape, plan.sampling.body,
+                               sampleLanes(k, *out.module));
+            emitScalarFunction(k, *out.module, out.pdfScalarSymbol, kPdfShape, plan.sampling.body,
+                               pdfLanes(k, *out.module));
+        }
     }
     if (options.emitBatch) {
         out.batchSymbol = symbolPrefix + "_batch";
         emitBatchEntry(k, *out.module, out.batchSymbol);
+        if (sampling) {
+            out.sampleBatchSymbol = symbolPrefix + "_sample_batch";
+            out.pdfBatchSymbol = symbolPrefix + "_pdf_batch";
+            emitBatchFunction(k, *out.module, out.sampleBatchSymbol, kSampleShape, false, plan.sampling.body,
+                              sampleLanes(k, *out.module));
+            emitBatchFunction(k, *out.module, out.pdfBatchSymbol, kPdfShape, false, plan.sampling.body,
+                              pdfLanes(k, *out.module));
+        }
     }
     // Every constant table in the module is part of the cache key: the
     // energy tables through their own key (runtime/Kernel.cpp), the others

@@ -82,6 +82,46 @@ LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value
     return r;
 }
 
+// |w|^2 in emitter `math` (double in both bodies of an exact kernel, so
+// their invalid lanes agree); a non-finite or non-unit w marks the lane
+// invalid. `widened` receives w in math's type. The ordered range test on
+// |w|^2 is also the finiteness test: a NaN component makes |w|^2 NaN and an
+// infinite one makes it +inf, and both fail it.
+Value* LaneEmitter::checkedLength2(MathEmitter& math, const std::array<Value*, 3>& w, std::array<Value*, 3>& widened) {
+    llvm::IRBuilder<>& b = builder;
+    for (int i = 0; i < 3; ++i) widened[i] = math.convert(w[i], math.type());
+    Value* len2 = math.fma(widened[0], widened[0], math.fma(widened[1], widened[1], math.mul(widened[2], widened[2])));
+    Value* unit = b.CreateAnd(math.ge(len2, math.c((1 - kUnitTolerance) * (1 - kUnitTolerance))),
+                              math.le(len2, math.c((1 + kUnitTolerance) * (1 + kUnitTolerance))));
+    markInvalid(b.CreateNot(unit));
+    return len2;
+}
+
+// A valid direction has |w| within 1e-3 of 1, so 1/|w| = (1 + delta)^(-1/2),
+// delta = |w|^2 - 1 in [-2e-3, 2e-3], is a polynomial: the binomial series
+// to delta^6 leaves 0.23 delta^7 < 3e-20, below double rounding; in float
+// (fast mode) the series to delta^2 leaves 0.32 delta^3 < 2.6e-9, below
+// float rounding. No square root or division; lanes outside the range are
+// invalid and their value unused. With a double precise type, `unitF`
+// receives the unit w in float too, as w + w (1/|w| - 1) with one float FMA
+// from the float input and the correction rounded to float: the same 0.5
+// ulp as rounding the double unit w, for one conversion instead of three.
+std::array<Value*, 3> LaneEmitter::unitDirection(const std::array<Value*, 3>& w, std::array<Value*, 3>& unitF) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& pm = preciseMath_;
+    std::array<Value*, 3> out;
+    Value* len2 = checkedLength2(pm, w, out);
+    Value* delta = pm.sub(len2, pm.c(1.0));
+    Value* inv = pm.isDouble() ? pm.poly(delta, {1.0, -1.0 / 2, 3.0 / 8, -5.0 / 16, 35.0 / 128, -63.0 / 256, 231.0 / 1024})
+                               : pm.poly(delta, {1.0, -1.0 / 2, 3.0 / 8});
+    for (Value*& x : out) x = pm.mul(x, inv);
+    if (pm.isDouble()) {
+        Value* corr = fm.convert(pm.sub(inv, pm.c(1.0)), fm.type());
+        for (int i = 0; i < 3; ++i) unitF[i] = fm.fma(w[i], corr, w[i]);
+    }
+    return out;
+}
+
 // SPEC 2: non-finite or non-unit directions are invalid lanes; valid ones
 // are renormalized. Normalization and the half vector are computed in the
 // precise type (double in exact mode): wi + wo cancels when the directions
@@ -92,44 +132,8 @@ LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value
 LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo) {
     MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
-    llvm::IRBuilder<>& b = builder;
     std::array<Value*, 3> wiD, woD;
-    // A valid direction has |w| within 1e-3 of 1, so 1/|w| = (1 +
-    // delta)^(-1/2), delta = |w|^2 - 1 in [-2e-3, 2e-3], is a polynomial:
-    // the binomial series to delta^6 leaves 0.23 delta^7 < 3e-20, below
-    // double rounding; in float (fast mode) the series to delta^2 leaves
-    // 0.32 delta^3 < 2.6e-9, below float rounding. No square root or
-    // division; lanes outside the range are invalid and their value unused.
-    // |w|^2 in emitter `math` (double in both bodies of an exact kernel, so
-    // their invalid lanes agree); a non-finite or non-unit w marks the lane
-    // invalid. `widened` receives w in math's type. The ordered range test
-    // on |w|^2 is also the finiteness test: a NaN component makes |w|^2 NaN
-    // and an infinite one makes it +inf, and both fail it.
-    auto checkedLength2 = [&](MathEmitter& math, const std::array<Value*, 3>& w, std::array<Value*, 3>& widened) {
-        for (int i = 0; i < 3; ++i) widened[i] = math.convert(w[i], math.type());
-        Value* len2 = math.fma(widened[0], widened[0], math.fma(widened[1], widened[1], math.mul(widened[2], widened[2])));
-        Value* unit = b.CreateAnd(math.ge(len2, math.c((1 - kUnitTolerance) * (1 - kUnitTolerance))),
-                                  math.le(len2, math.c((1 + kUnitTolerance) * (1 + kUnitTolerance))));
-        markInvalid(b.CreateNot(unit));
-        return len2;
-    };
-    // With a double precise type, `unitF` receives the unit w in float too,
-    // as w + w (1/|w| - 1) with one float FMA from the float input and the
-    // correction rounded to float: the same 0.5 ulp as rounding the double
-    // unit w, for one conversion instead of three.
-    auto normalize = [&](const std::array<Value*, 3>& w, std::array<Value*, 3>& out, std::array<Value*, 3>& unitF) {
-        Value* len2 = checkedLength2(pm, w, out);
-        Value* delta = pm.sub(len2, pm.c(1.0));
-        Value* inv = pm.isDouble()
-                         ? pm.poly(delta, {1.0, -1.0 / 2, 3.0 / 8, -5.0 / 16, 35.0 / 128, -63.0 / 256, 231.0 / 1024})
-                         : pm.poly(delta, {1.0, -1.0 / 2, 3.0 / 8});
-        for (Value*& x : out) x = pm.mul(x, inv);
-        if (pm.isDouble()) {
-            Value* corr = fm.convert(pm.sub(inv, pm.c(1.0)), fm.type());
-            for (int i = 0; i < 3; ++i) unitF[i] = fm.fma(w[i], corr, w[i]);
-        }
-    };
-    std::array<Value*, 3> wiF{}, woF{};  // unit directions in float, where normalize() made them
+    std::array<Value*, 3> wiF{}, woF{};  // unit directions in float, where unitDirection() made them
     std::array<Value*, 3> hD, diff;
     if (body.role == BodyRole::FloatGuarded) {
         // Float body. Rounding the normalized directions to float and then
@@ -144,7 +148,7 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
             std::array<Value*, 3> widened;
             Value* len2 = checkedLength2(dm, w, widened);
             Value* delta = fm.convert(dm.sub(len2, dm.c(1.0)), fm.type());
-            // (1 + delta)^(-1/2) - 1, the series of normalize() to delta^3:
+            // (1 + delta)^(-1/2) - 1, the series of unitDirection() to delta^3:
             // the rest, 0.28 delta^4 <= 5e-12 for |delta| <= 2e-3, is far
             // below the float rounding of the corrected sums.
             return fm.mul(delta, fm.poly(delta, {-1.0 / 2, 3.0 / 8, -5.0 / 16}));
@@ -157,8 +161,8 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
             diff[i] = fm.add(fm.sub(wi[i], wo[i]), fm.fma(wi[i], ci, fm.neg(fm.mul(wo[i], co))));
         }
     } else {
-        normalize(wi, wiD, wiF);
-        normalize(wo, woD, woF);
+        wiD = unitDirection(wi, wiF);
+        woD = unitDirection(wo, woF);
         hD = {pm.add(wiD[0], woD[0]), pm.add(wiD[1], woD[1]), pm.add(wiD[2], woD[2])};
         diff = {pm.sub(wiD[0], woD[0]), pm.sub(wiD[1], woD[1]), pm.sub(wiD[2], woD[2])};
     }
@@ -241,7 +245,7 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
     return g;
 }
 
-std::array<Value*, 3> LaneEmitter::brdf(const LaneGeometry& geo) {
+std::array<Value*, 3> LaneEmitter::brdfPrecise(const LaneGeometry& geo, Value*& valid) {
     MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
     llvm::IRBuilder<>& b = builder;
@@ -305,7 +309,14 @@ std::array<Value*, 3> LaneEmitter::brdf(const LaneGeometry& geo) {
         for (int ch = 0; ch < 3; ++ch) total.c[ch] = pm.add(total.c[ch], ms[ch]);
     }
     // Below the horizon (or wi + wo = 0): f = 0, a valid lane.
-    Value* valid = b.CreateAnd(above, geo.hNonZero);
+    valid = b.CreateAnd(above, geo.hNonZero);
+    return total.c;
+}
+
+std::array<Value*, 3> LaneEmitter::brdf(const LaneGeometry& geo) {
+    MathEmitter& fm = floatMath_;
+    Value* valid = nullptr;
+    LVal total{brdfPrecise(geo, valid), true};
     return map({total}, true, [&](auto& x) { return fm.select(valid, fm.convert(x[0], fm.type()), fm.c(0.0)); }).c;
 }
 

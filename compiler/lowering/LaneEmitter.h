@@ -73,6 +73,24 @@ public:
     Result emit(std::array<llvm::Value*, 3> wi, std::array<llvm::Value*, 3> wo,
                 const std::vector<llvm::Value*>& slots);
 
+    // ---- importance sampling (LaneSampling.cpp; SPEC 8, the plan's
+    // SamplingPlan): the body of the sample and pdf entry points ----
+    struct SampleResult {
+        std::array<llvm::Value*, 3> wi;      // float; 0 without a sample
+        llvm::Value* pdf;                    // float, the mixture's density at wi
+        std::array<llvm::Value*, 3> weight;  // float, f (n.wi) / pdf; 0 below the horizon
+        llvm::Value* invalid;
+    };
+    // One sample for the direction wo and the uniform numbers u (float lanes).
+    SampleResult emitSample(const std::array<llvm::Value*, 3>& wo, const std::array<llvm::Value*, 3>& u,
+                            const std::vector<llvm::Value*>& slots);
+    struct PdfResult {
+        llvm::Value* pdf;  // float
+        llvm::Value* invalid;
+    };
+    PdfResult emitPdf(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
+                      const std::vector<llvm::Value*>& slots);
+
     // ---- what the term emitters use ----
     const CheckedMaterial& material;
     const LoweringPlan& plan;
@@ -158,6 +176,17 @@ public:
     void setQuarterDFraction(llvm::Value* num, llvm::Value* den) { quarterD_ = {nullptr, num, den}; }
     // cos(theta_d) for the exact Fresnel terms in `math` (>= 1e-18 in float).
     llvm::Value* fresnelCos(MathEmitter& math, const LaneGeometry& geo);
+    // Sampling helpers for the NDF emitters, precise type: the unit normal
+    // with slopes (sx, sy); the one at sin^2(theta) = sin2 (and cos^2(theta)
+    // = cos2 where the caller has it more accurately than 1 - sin2) and
+    // azimuth 2 pi u; the normal of a shape-invariant NDF whose standard (alpha = 1)
+    // slopes have squared radius r2 and azimuth 2 pi u, stretched by the
+    // lane's alphas.
+    std::array<llvm::Value*, 3> normalFromSlopes(llvm::Value* sx, llvm::Value* sy);
+    std::array<llvm::Value*, 3> normalFromPolar(llvm::Value* sin2, llvm::Value* u, llvm::Value* cos2 = nullptr);
+    std::array<llvm::Value*, 3> stretchedSlopeNormal(const NdfParams& n, llvm::Value* r2, llvm::Value* u);
+    // expm1(y), precise type.
+    llvm::Value* expm1(llvm::Value* y);
     // Upper clamp of eta and k for the exact Fresnel terms (float: |N|^4 must stay finite).
     double maxFresnelIndex() const { return body.precise == Precision::Double ? INFINITY : 1e9; }
 
@@ -176,6 +205,22 @@ private:
     llvm::Type* boolType();
     LaneGeometry geometry(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo);
     std::array<llvm::Value*, 3> brdf(const LaneGeometry& geo);
+    // f per channel in the precise type and the lanes where it applies (both
+    // directions above the horizon, wi + wo not 0; elsewhere f = 0).
+    std::array<llvm::Value*, 3> brdfPrecise(const LaneGeometry& geo, llvm::Value*& valid);
+    // The unit direction of w in the precise type (SPEC 2: a non-finite or
+    // non-unit w marks the lane invalid); with a double precise type, the
+    // unit w in float too (unitF; else untouched).
+    llvm::Value* checkedLength2(MathEmitter& math, const std::array<llvm::Value*, 3>& w,
+                                std::array<llvm::Value*, 3>& widened);
+    std::array<llvm::Value*, 3> unitDirection(const std::array<llvm::Value*, 3>& w, std::array<llvm::Value*, 3>& unitF);
+
+    // LaneSampling.cpp
+    struct SamplingTerms;
+    SamplingTerms samplingTerms(const std::array<llvm::Value*, 3>& wo);
+    llvm::Value* specularProbability(SamplingTerms& t);
+    llvm::Value* specularPdf(SamplingTerms& t, const std::array<llvm::Value*, 3>& m, llvm::Value* om);
+    llvm::Value* mixturePdf(SamplingTerms& t, llvm::Value* spec, const std::array<llvm::Value*, 3>& wi);
 
     // ExprLowering.cpp
     void lowerInputsAndLets(const std::vector<llvm::Value*>& slots);

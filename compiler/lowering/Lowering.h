@@ -1,6 +1,7 @@
 // Lowering: a checked (and usually specialized) material to LLVM IR.
 //
-// Emits up to two entry points with a C ABI (SPEC section 4):
+// Emits up to two entry points with a C ABI (SPEC section 4), and next to
+// each the sampler's sample and pdf twins (SPEC section 8, LoweredModule):
 //   void  <prefix>_scalar(const float wi[3], const float wo[3], const float* inputs, float rgb[3])
 //   int64 <prefix>_batch(int64 n, const float* const wi[3], const float* const wo[3],
 //                        const float* const* inputs, float* const rgb[3])
@@ -41,6 +42,9 @@ struct LoweringOptions {
     int width = 16;  // lanes of the batch kernel: 4, 8 or 16
     bool emitScalar = true;
     bool emitBatch = true;
+    // The sampler's entry points next to eval's (where the plan has a JIT
+    // sampler for the material: LoweringPlan::sampling).
+    bool emitSampling = true;
     // Whether the target is x86, whose MXCSR fast kernels set to flush
     // subnormals (LoweringPlan::flushDenormals). The host's by default; an
     // ahead-of-time build for another target sets its own.
@@ -55,6 +59,16 @@ struct LoweredModule {
     std::unique_ptr<llvm::Module> module;
     LoweringPlan plan;  // the decisions the module was lowered with
     std::string scalarSymbol, batchSymbol;  // empty when not emitted
+    // The sampler's (empty when not emitted):
+    //   int32 <prefix>_sample_scalar(const float wo[3], const float u[3], const float* inputs,
+    //                                float wi[3], float* pdf, float weight[3])   (1: invalid lane)
+    //   int32 <prefix>_pdf_scalar(const float wi[3], const float wo[3], const float* inputs, float* pdf)
+    //   int64 <prefix>_sample_batch(int64 n, const float* const wo[3], const float* const u[3],
+    //                               const float* const* inputs, float* const wi[3], float* pdf,
+    //                               float* const weight[3])   (the number of invalid lanes)
+    //   int64 <prefix>_pdf_batch(int64 n, const float* const wi[3], const float* const wo[3],
+    //                            const float* const* inputs, float* pdf)
+    std::string sampleScalarSymbol, pdfScalarSymbol, sampleBatchSymbol, pdfBatchSymbol;
 };
 
 // `material` must be checked (and is usually specialized); `plan` is

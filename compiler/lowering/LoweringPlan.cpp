@@ -61,6 +61,15 @@ const char* lambdaFormName(LambdaForm l) {
     return "?";
 }
 
+const char* specularSamplingName(SpecularSampling s) {
+    switch (s) {
+        case SpecularSampling::None: return "none";
+        case SpecularSampling::NdfNormals: return "ndf-normals";
+        case SpecularSampling::VisibleNormals: return "visible-normals";
+    }
+    return "?";
+}
+
 std::optional<long> smallIntegerConstant(const Expr& e) {
     if (e.kind != ExprKind::Number) return std::nullopt;
     double v = static_cast<const NumberExpr&>(e).value;
@@ -240,6 +249,17 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
         plan.batchBodies = BatchBodies::Plain;
         plan.batchBody = plan.scalarBody;
     }
+
+    // Sampling: the technique is the catalog's (visible normals only where
+    // the entry has an exact sampler and the masking is a Smith form); the
+    // NDF's emitter says whether it has that sampler in IR.
+    const NdfEntry& ndfEntry = facet::ndfEntry(*material.ndf.model);
+    const bool visible = samplesVisibleNormals(ndfEntry, maskingEntry(*material.masking.model));
+    if (visible ? em.ndf.traits.samplesVisibleNormals : em.ndf.traits.samplesNormals)
+        plan.sampling.specular = visible ? SpecularSampling::VisibleNormals : SpecularSampling::NdfNormals;
+    plan.sampling.cosineLobe = em.diffuse.present() || material.compensatesEnergy();
+    plan.sampling.compensationAlbedo = material.compensatesEnergy();
+    plan.sampling.body = plan.scalarBody;
     return plan;
 }
 
@@ -275,6 +295,10 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
        << " at-most-one=" << yesNo(plan.fresnel.atMostOne) << " can-vanish=" << yesNo(plan.fresnel.canVanish) << "\n";
     os << "energy-compensation: " << yesNo(plan.compensatesEnergy) << "\n";
     os << "flush-denormals: " << yesNo(plan.flushDenormals) << "\n";
+    os << "sampling: specular=" << specularSamplingName(plan.sampling.specular)
+       << " cosine-lobe=" << yesNo(plan.sampling.cosineLobe)
+       << " compensation-albedo=" << yesNo(plan.sampling.compensationAlbedo) << "\n";
+    if (plan.sampling.specular != SpecularSampling::None) printBody(os, "sampling-body", plan.sampling.body);
     return os.str();
 }
 

@@ -116,6 +116,28 @@ struct FresnelPlan {
     bool canVanish = true;           // F can be 0 (every term but none)
 };
 
+// How the sample and pdf entry points draw and weigh directions (SPEC 8):
+// the specular lobe through visible normals or NDF sampling (the catalog's
+// samplesVisibleNormals), a cosine lobe where the material has a diffuse
+// base or energy compensation, and the lobe probability's albedo estimate.
+enum class SpecularSampling {
+    None,           // the NDF has no JIT sampler: no sample/pdf entry points
+    NdfNormals,     // m with density normalPdf(m), the NDF entry's own
+    VisibleNormals, // m with density G1(wo) (wo.m)+ D(m) / (n.wo)
+};
+const char* specularSamplingName(SpecularSampling s);
+
+struct SamplingPlan {
+    SpecularSampling specular = SpecularSampling::None;
+    bool cosineLobe = false;          // diffuse base or Kulla-Conty compensation
+    bool compensationAlbedo = false;  // the lobe probability reads the Kulla-Conty table
+    // The body the sampler lanes compute in, scalar and SIMD alike: the
+    // plain body (no guarded float-first or fast body: the sampler's
+    // directions and pdf are not guarded, and one body keeps the scalar and
+    // SIMD samplers identical).
+    BodyPlan body;
+};
+
 struct LoweringPlan {
     MathVariant variant;
     BatchBodies batchBodies = BatchBodies::Plain;
@@ -127,6 +149,7 @@ struct LoweringPlan {
     FresnelPlan fresnel;
     bool compensatesEnergy = false;
     bool flushDenormals = false;  // fast kernels on x86: MXCSR FTZ/DAZ for the call
+    SamplingPlan sampling;
 };
 
 // `material` checked (and usually specialized). `x86Target`: the kernel's

@@ -86,6 +86,21 @@ llvm::Value* NdfEmitter::energyAlpha(LaneEmitter& lane, const NdfParams& n) cons
     return n.isotropic ? n.axD : pm.sqrt(pm.mul(n.axD, n.ayD));
 }
 
+std::array<llvm::Value*, 3> NdfEmitter::sampleNormal(LaneEmitter&, const NdfParams&, llvm::Value*, llvm::Value*) const {
+    internal_error << "NDF sampling of an NDF without a sampler in IR (NdfLoweringTraits::samplesNormals)";
+}
+
+llvm::Value* NdfEmitter::normalPdf(LaneEmitter& lane, const NdfParams& n, const LaneGeometry& atM) const {
+    MathEmitter& pm = lane.preciseMath();
+    return pm.mul(D(lane, n, atM), atM.hD[2]);
+}
+
+std::array<llvm::Value*, 3> NdfEmitter::sampleVisibleNormal(LaneEmitter&, const NdfParams&,
+                                                            const std::array<llvm::Value*, 3>&, llvm::Value*,
+                                                            llvm::Value*) const {
+    internal_error << "visible-normal sampling of an NDF without it in IR (NdfLoweringTraits::samplesVisibleNormals)";
+}
+
 FresnelAverageArgs FresnelEmitter::averageArgs(LaneEmitter&) const { return {}; }
 
 LVal DiffuseEmitter::diffuse(LaneEmitter&) const { internal_error << "diffuse term of `none`"; }
@@ -93,6 +108,11 @@ LVal DiffuseEmitter::diffuse(LaneEmitter&) const { internal_error << "diffuse te
 std::array<llvm::Value*, 3> EnergyEmitter::compensation(LaneEmitter&, const NdfEmitter&, const NdfParams&,
                                                         const FresnelEmitter&, llvm::Value*, llvm::Value*) const {
     internal_error << "energy compensation of an entry that does not compensate";
+}
+
+CompensationAlbedo EnergyEmitter::samplingAlbedo(LaneEmitter&, const NdfEmitter&, const NdfParams&,
+                                                 const FresnelEmitter&, llvm::Value*) const {
+    internal_error << "compensation albedo of an entry that does not compensate";
 }
 
 }  // namespace facet

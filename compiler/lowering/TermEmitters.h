@@ -57,6 +57,11 @@ struct NdfLoweringTraits {
     bool beckmannProfileLambda = false;
     // Always isotropic (one alpha parameter).
     bool isotropicOnly = false;
+    // Has the samplers in IR (sampleNormal / sampleVisibleNormal); the plan
+    // picks which one the catalog asks for, and emits no sampler when the
+    // emitter lacks it.
+    bool samplesNormals = false;
+    bool samplesVisibleNormals = false;
 };
 
 class NdfEmitter {
@@ -81,6 +86,22 @@ public:
     // The roughness the Kulla-Conty table is looked up with, precise type
     // (default: alpha, or sqrt(ax ay) for an anisotropic lobe).
     virtual llvm::Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const;
+
+    // ---- importance sampling (SPEC 8), written independently of the
+    // catalog entry's reference samplers; u1, u2 in [0, 1), everything in
+    // the precise type ----
+    // NDF sampling (traits.samplesNormals): a unit microfacet normal m with
+    // m.z >= 0 and density normalPdf per solid angle of m.
+    virtual std::array<llvm::Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, llvm::Value* u1,
+                                                     llvm::Value* u2) const;
+    // The density of sampleNormal at the unit normal `atM.h` (m.z > 0; a
+    // geometry whose h, hD and slopeH are m): D(m) (n.m) by default.
+    virtual llvm::Value* normalPdf(LaneEmitter& lane, const NdfParams& n, const LaneGeometry& atM) const;
+    // Visible-normal sampling (traits.samplesVisibleNormals) for the unit
+    // wo, n.wo > 0: m with density G1(wo) (wo.m)+ D(m) / (n.wo).
+    virtual std::array<llvm::Value*, 3> sampleVisibleNormal(LaneEmitter& lane, const NdfParams& n,
+                                                            const std::array<llvm::Value*, 3>& wo, llvm::Value* u1,
+                                                            llvm::Value* u2) const;
 };
 
 struct MaskingLoweringTraits {
@@ -141,6 +162,13 @@ public:
     virtual LVal diffuse(LaneEmitter& lane) const;
 };
 
+// What the sampler's lobe probability needs from an energy compensation at
+// n.wo: 1 - E(n.wo) and the compensation lobe's albedo (channel mean).
+struct CompensationAlbedo {
+    llvm::Value* oneMinusE = nullptr;
+    llvm::Value* albedo = nullptr;
+};
+
 class EnergyEmitter {
 public:
     virtual ~EnergyEmitter() = default;
@@ -148,6 +176,10 @@ public:
     virtual std::array<llvm::Value*, 3> compensation(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
                                                      const FresnelEmitter& fresnel, llvm::Value* ci,
                                                      llvm::Value* co) const;
+    // The same entry's albedos at n.wo = co for the lobe probability,
+    // precise type (only for an entry that compensates).
+    virtual CompensationAlbedo samplingAlbedo(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
+                                              const FresnelEmitter& fresnel, llvm::Value* co) const;
 };
 
 // One emitter of a registry file: the catalog entry's name and its emitter.

@@ -248,4 +248,30 @@ Value* MathEmitter::atan2(Value* y, Value* x) {
     return select(lt(x, c(0.0)), sub(c(M_PI), r), r);
 }
 
+std::pair<Value*, Value*> MathEmitter::sinCosTurns(Value* t) {
+    // t = k/4 + f with k = rint(4 t) and |f| <= 1/8: t - k/4 is exact (k/4
+    // has fewer significant bits than t), and r = 2 pi f is in [-pi/4, pi/4].
+    Value* k = rint(mul(t, c(4.0)));
+    Value* r = mul(fma(k, c(-0.25), t), c(2 * M_PI));
+    Value* z = mul(r, r);
+    Value *s, *co;
+    if (isDouble_ && !fast_) {
+        s = fma(mul(r, z), poly(z, {-1 / 6.0, 1 / 120.0, -1 / 5040.0, 1 / 362880.0, -1 / 39916800.0,
+                                    1 / 6227020800.0, -1 / 1307674368000.0}), r);
+        co = poly(z, {1.0, -1 / 2.0, 1 / 24.0, -1 / 720.0, 1 / 40320.0, -1 / 3628800.0, 1 / 479001600.0,
+                      -1 / 87178291200.0, 1 / 20922789888000.0});
+    } else {
+        s = fma(mul(r, z), poly(z, {-1 / 6.0, 1 / 120.0, -1 / 5040.0, 1 / 362880.0}), r);
+        co = poly(z, {1.0, -1 / 2.0, 1 / 24.0, -1 / 720.0, 1 / 40320.0, -1 / 3628800.0});
+    }
+    // The quadrant q = k mod 4 turns (cos, sin) by q quarter turns.
+    Value* q = b.CreateAnd(b.CreateFPToSI(k, intType_), ci(3));
+    Value* odd = b.CreateICmpEQ(b.CreateAnd(q, ci(1)), ci(1));
+    Value* sinNeg = b.CreateICmpNE(b.CreateAnd(q, ci(2)), ci(0));                  // q = 2, 3
+    Value* cosNeg = b.CreateICmpNE(b.CreateAnd(b.CreateAdd(q, ci(1)), ci(2)), ci(0));  // q = 1, 2
+    Value* sinV = select(odd, co, s);
+    Value* cosV = select(odd, s, co);
+    return {select(sinNeg, neg(sinV), sinV), select(cosNeg, neg(cosV), cosV)};
+}
+
 }  // namespace facet

@@ -169,6 +169,41 @@ int main(void) {
     EXPECT(strstr(err, "backend 'gpu'") != NULL, "err: %s", err);
     EXPECT(facet_compile_text(kMaterial, "t", "nope", NULL, err, 8) == NULL && strlen(err) == 7, "truncated err");
 
+    /* Sampling: the same u through the SIMD, scalar and interpreter kernels;
+       the pdf of the sample; invalid lanes (u = 1, a non-unit wo) counted
+       and zeroed; NULL arrays rejected. */
+    {
+        const float wo[3] = {0.6f, 0.0f, 0.8f}, u[3] = {0.25f, 0.5f, 0.75f};
+        float wi[3][3], pdf[3], weight[3][3];
+        facet_kernel* kernels[3] = {simd, scalar, interp};
+        for (int b = 0; b < 3; ++b)
+            EXPECT(facet_sample(kernels[b], wo, u, NULL, wi[b], &pdf[b], weight[b]) == 0, "sample %d invalid", b);
+        for (int b = 1; b < 3; ++b) {
+            EXPECT(fabsf(wi[b][2] - wi[0][2]) < 1e-5f, "wi.z %d: %g vs %g", b, wi[b][2], wi[0][2]);
+            EXPECT(fabsf(pdf[b] - pdf[0]) <= 1e-5f * pdf[0], "pdf %d: %g vs %g", b, pdf[b], pdf[0]);
+            EXPECT(fabsf(weight[b][0] - weight[0][0]) <= 1e-5f * weight[0][0] + 1e-7f, "weight %d", b);
+        }
+        EXPECT(pdf[0] > 0 && weight[0][0] > 0, "sample: pdf %g weight %g", pdf[0], weight[0][0]);
+        float back = facet_pdf(simd, wi[0], wo, NULL);
+        EXPECT(fabsf(back - pdf[0]) <= 1e-5f * pdf[0], "facet_pdf %g vs sampled %g", back, pdf[0]);
+
+        float woX[3] = {0.6f, 0.6f, 0.5f}, woY[3] = {0, 0, 0}, woZ[3] = {0.8f, 0.8f, 0.5f};
+        float u0[3] = {0.25f, 1.0f, 0.25f}, u1[3] = {0.5f, 0.5f, 0.5f}, u2[3] = {0.75f, 0.75f, 0.75f};
+        float wiX[3], wiY[3], wiZ[3], p[3], wr[3], wg[3], wb[3];
+        const float* woA[3] = {woX, woY, woZ};
+        const float* uA[3] = {u0, u1, u2};
+        float* wiA[3] = {wiX, wiY, wiZ};
+        float* wA[3] = {wr, wg, wb};
+        EXPECT(facet_sample_batch(simd, 3, woA, uA, NULL, wiA, p, wA) == 2, "two invalid lanes");
+        EXPECT(p[0] == pdf[0] && p[1] == 0 && p[2] == 0 && wiZ[1] == 0 && wr[2] == 0, "invalid lanes zeroed");
+        EXPECT(facet_sample_batch(simd, 3, woA, NULL, NULL, wiA, p, wA) == -1, "NULL u accepted");
+        EXPECT(strcmp(facet_last_error(), "facet_sample_batch: error: u is NULL") == 0, "message: %s",
+               facet_last_error());
+        /* wi of the invalid lanes is 0, not unit: both lanes are invalid for pdf. */
+        EXPECT(facet_pdf_batch(simd, 3, (const float* const*)wiA, woA, NULL, p) == 2, "pdf batch: two invalid lanes");
+        EXPECT(fabsf(p[0] - pdf[0]) <= 1e-5f * pdf[0] && p[1] == 0 && p[2] == 0, "pdf batch values");
+    }
+
     facet_release(simd);
     facet_release(scalar);
     facet_release(interp);

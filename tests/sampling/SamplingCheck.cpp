@@ -43,15 +43,19 @@ CheckOutcome checkSampler(const Sampler& sampler, const PdfFunction& pdf, const 
     return out;
 }
 
-CheckOutcome checkMaterial(const facet::ResolvedMaterial<double>& r, const V3& wo, const CheckSettings& s,
-                           const PdfFunction& pdf) {
+SphereGrid lobeGrid(const facet::ResolvedMaterial<double>& r, const V3& wo) {
     auto [ax, ay] = r.ndf->equivalentAlphas(r.ndfArgs);
     double first = std::min({ax, ay, 1.0}) / 2;
     double theta = std::atan2(std::sqrt(wo.x * wo.x + wo.y * wo.y), wo.z), phi = std::atan2(-wo.y, -wo.x);
     // Out of the plane of incidence, a tilt d of m turns wi by 2 (wo.m) d:
     // the lobe is 2 alpha cos(theta_o) wide there, alpha cot(theta_o) in azimuth.
     double firstPhi = std::min(0.2, first * std::max(wo.z, 1e-7) / std::max(std::sin(theta), 1e-7));
-    SphereGrid grid = SphereGrid::forLobe(theta, theta, phi, first, firstPhi);
+    return SphereGrid::forLobe(theta, theta, phi, first, firstPhi);
+}
+
+CheckOutcome checkMaterial(const facet::ResolvedMaterial<double>& r, const V3& wo, const CheckSettings& s,
+                           const PdfFunction& pdf) {
+    SphereGrid grid = lobeGrid(r, wo);
     return checkSampler([&](const std::array<double, 3>& u) { return facet::sampleBrdf(r, wo, u); },
                         pdf ? pdf : PdfFunction([&](const V3& wi) { return facet::brdfPdf(r, wi, wo); }), grid, s);
 }

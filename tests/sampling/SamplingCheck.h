@@ -40,6 +40,10 @@ CheckOutcome checkSampler(const Sampler& sampler, const PdfFunction& pdf, const 
 // The same for a resolved material and a view direction: sampleBrdf
 // against brdfPdf (or `pdf` when given), on a grid graded toward the mirror
 // direction of wo from half the lobe's smallest roughness.
+// The grid of checkMaterial: graded toward the mirror direction of wo from
+// half the lobe's smallest roughness.
+SphereGrid lobeGrid(const facet::ResolvedMaterial<double>& r, const V3& wo);
+
 CheckOutcome checkMaterial(const facet::ResolvedMaterial<double>& r, const V3& wo, const CheckSettings& settings,
                            const PdfFunction& pdf = nullptr);
 

@@ -46,7 +46,10 @@ constexpr int kAlphaX = 0, kAlphaY = 1;
 
 class BeckmannEmitter final : public BeckmannProfileEmitter {
 public:
-    BeckmannEmitter() { traits.dFromUnnormalizedHalf = true; }
+    BeckmannEmitter() {
+        traits.dFromUnnormalizedHalf = true;
+        traits.samplesNormals = true;
+    }
 
     NdfParams params(LaneEmitter& lane) const override {
         return lane.roundedAlphaParams(lane.material.ndf, kAlphaX, kAlphaY);
@@ -76,6 +79,12 @@ public:
         }
         // exp underflowed: 0, not 0/0 when mz^4 underflows too.
         return pm.select(pm.gt(e, pm.c(lane.expTailLimit())), pm.c(0.0), D);
+    }
+
+    // The standard slope radius has the CDF 1 - exp(-r^2).
+    std::array<Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, Value* u1, Value* u2) const override {
+        MathEmitter& pm = lane.preciseMath();
+        return lane.stretchedSlopeNormal(n, pm.neg(pm.log1p(pm.neg(u1))), u2);
     }
 };
 

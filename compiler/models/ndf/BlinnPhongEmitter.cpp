@@ -19,6 +19,8 @@ Value* equivalentAlpha(LaneEmitter& lane, const NdfParams& n) {
 
 class BlinnPhongEmitter final : public BeckmannProfileEmitter {
 public:
+    BlinnPhongEmitter() { traits.samplesNormals = true; }
+
     NdfParams params(LaneEmitter& lane) const override {
         NdfParams n;
         n.own[kOwnExponent] = lane.scalarParam(lane.material.ndf, kExponent, false);
@@ -49,6 +51,15 @@ public:
     }
 
     Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const override { return equivalentAlpha(lane, n); }
+
+    // D(m) (n.m) has the polar CDF 1 - mz^(e + 2): sin^2 theta = 1 - (1 -
+    // u)^(2 / (e + 2)), through expm1 and log1p so that narrow lobes (e up
+    // to 2e8) keep their small angles.
+    std::array<Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, Value* u1, Value* u2) const override {
+        MathEmitter& pm = lane.preciseMath();
+        Value* y = pm.div(pm.mul(pm.c(2.0), pm.log1p(pm.neg(u1))), pm.add(n.own[kOwnExponent], pm.c(2.0)));
+        return lane.normalFromPolar(pm.neg(lane.expm1(y)), u2);
+    }
 };
 
 }  // namespace

@@ -17,6 +17,8 @@ public:
         traits.floatFirstBody = true;
         traits.guardedFastBody = true;
         traits.smithRootSums = true;
+        traits.samplesNormals = true;
+        traits.samplesVisibleNormals = true;
     }
 
     NdfParams params(LaneEmitter& lane) const override {
@@ -92,6 +94,39 @@ public:
     Value* smithRoot(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
         MathEmitter& fm = lane.floatMath();
         return fm.sqrt(fm.fma(v[2], v[2], lane.smithProjection(*this, n, v)));
+    }
+
+    // The standard slope radius has the CDF r^2 / (1 + r^2).
+    std::array<Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, Value* u1, Value* u2) const override {
+        MathEmitter& pm = lane.preciseMath();
+        return lane.stretchedSlopeNormal(n, pm.div(u1, pm.sub(pm.c(1.0), u1)), u2);
+    }
+
+    // In the space stretched to alpha = 1 the visible normals of the view
+    // direction v are v + c for c uniform on the part of the unit sphere
+    // with c.z >= -v.z (Dupuy & Benyoub 2023): c.z uniform in [-v.z, 1], its
+    // azimuth 2 pi u1. Unstretching v + c gives m.
+    std::array<Value*, 3> sampleVisibleNormal(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& wo,
+                                              Value* u1, Value* u2) const override {
+        MathEmitter& pm = lane.preciseMath();
+        Value *vx = pm.mul(n.axD, wo[0]), *vy = pm.mul(n.ayD, wo[1]);
+        Value* inv = pm.div(pm.c(1.0), pm.sqrt(pm.fma(vx, vx, pm.fma(vy, vy, pm.mul(wo[2], wo[2])))));
+        vx = pm.mul(vx, inv), vy = pm.mul(vy, inv);
+        Value* vz = pm.mul(wo[2], inv);
+        Value* z = pm.fma(pm.sub(pm.c(1.0), u2), pm.add(pm.c(1.0), vz), pm.neg(vz));
+        Value* r = pm.sqrt(pm.maxnum(pm.mul(pm.sub(pm.c(1.0), z), pm.add(pm.c(1.0), z)), pm.c(0.0)));
+        auto [sinPhi, cosPhi] = pm.sinCosTurns(u1);
+        Value* hx = pm.fma(r, cosPhi, vx);
+        Value* hy = pm.fma(r, sinPhi, vy);
+        Value* hz = pm.maxnum(pm.add(z, vz), pm.c(0.0));
+        Value* mx = pm.mul(n.axD, hx);
+        Value* my = pm.mul(n.ayD, hy);
+        Value* len2 = pm.fma(mx, mx, pm.fma(my, my, pm.mul(hz, hz)));
+        // v + c = 0 only where c is the cap's pole -v, a null set: n there.
+        Value* ok = pm.gt(len2, pm.c(0.0));
+        Value* mInv = pm.div(pm.c(1.0), pm.sqrt(len2));
+        return {pm.select(ok, pm.mul(mx, mInv), pm.c(0.0)), pm.select(ok, pm.mul(my, mInv), pm.c(0.0)),
+                pm.select(ok, pm.mul(hz, mInv), pm.c(1.0))};
     }
 };
 

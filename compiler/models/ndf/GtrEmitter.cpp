@@ -12,7 +12,10 @@ constexpr int kOwnGamma = 0;  // NdfParams::own: the clamped gamma, precise type
 
 class GtrEmitter final : public NdfEmitter {
 public:
-    GtrEmitter() { traits.isotropicOnly = true; }
+    GtrEmitter() {
+        traits.isotropicOnly = true;
+        traits.samplesNormals = true;
+    }
 
     NdfParams params(LaneEmitter& lane) const override {
         return lane.roundedAlphaParams(lane.material.ndf, kAlpha, kAlpha, {kGamma});  // own[kOwnGamma]
@@ -40,6 +43,40 @@ public:
         Value* small = pm.sub(pm.sub(logPhiL, pm.log(lane.expm1OverX(pm.minnum(y, pm.c(1.0))))), pm.mul(G, pm.log(t)));
         Value* logD = pm.select(pm.gt(y, pm.c(1.0)), big, small);
         return pm.mul(pm.exp(logD), pm.c(1.0 / kPi));
+    }
+
+    // In s = sin^2 theta, D(m) (n.m) is proportional to (1 + b s)^-gamma with
+    // b = 1/a^2 - 1. Its CDF inverts to s = expm1(-L g) / expm1(-L), L = ln
+    // a^2, where g = log1p(u expm1(k)) / k, k = (gamma - 1) L (g = u at k =
+    // 0, s = u at L = 0). For u > 1/2 (and k > -30, where expm1(-k) stays
+    // finite) the same is g = 1 + log1p(v expm1(-k)) / k with v = 1 - u
+    // exact, which keeps 1 - g, and so cos^2 theta = 1 - s = e^(-L g)
+    // expm1(-L (1 - g)) / expm1(-L), accurate toward the horizon, where s
+    // rounds to 1 in float; it also serves k > 30, where expm1(k) could
+    // overflow.
+    std::array<Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, Value* u1, Value* u2) const override {
+        MathEmitter& pm = lane.preciseMath();
+        Value* L = pm.mul(pm.c(2.0), pm.log(n.axD));
+        Value* k = pm.mul(pm.sub(n.own[kOwnGamma], pm.c(1.0)), L);
+        Value* kZero = pm.eq(k, pm.c(0.0));
+        Value* kSafe = pm.select(kZero, pm.c(1.0), k);
+        Value* v = pm.sub(pm.c(1.0), u1);
+        Value* upper = lane.builder.CreateAnd(pm.gt(u1, pm.c(0.5)), pm.gt(k, pm.c(-30.0)));
+        upper = lane.builder.CreateOr(upper, pm.gt(k, pm.c(30.0)));
+        Value* gLower = pm.div(pm.log1p(pm.mul(u1, lane.expm1(pm.minnum(kSafe, pm.c(30.0))))), kSafe);
+        Value* oneMinusGUpper =
+            pm.div(pm.neg(pm.log1p(pm.mul(v, lane.expm1(pm.neg(pm.maxnum(kSafe, pm.c(-30.0))))))), kSafe);
+        Value* g = pm.select(upper, pm.sub(pm.c(1.0), oneMinusGUpper), gLower);
+        Value* oneMinusG = pm.select(upper, oneMinusGUpper, pm.sub(pm.c(1.0), gLower));
+        g = pm.select(kZero, u1, g);
+        oneMinusG = pm.select(kZero, v, oneMinusG);
+        Value* LZero = pm.eq(L, pm.c(0.0));
+        Value* LSafe = pm.select(LZero, pm.c(1.0), L);
+        Value* den = lane.expm1(pm.neg(LSafe));
+        Value* s = pm.select(LZero, u1, pm.div(lane.expm1(pm.neg(pm.mul(LSafe, g))), den));
+        Value* c2 = pm.div(pm.mul(pm.exp(pm.neg(pm.mul(LSafe, g))), lane.expm1(pm.neg(pm.mul(LSafe, oneMinusG)))), den);
+        c2 = pm.select(LZero, v, c2);
+        return lane.normalFromPolar(s, u2, c2);
     }
 };
 

@@ -15,7 +15,10 @@ constexpr int kOwnGamma = 0;  // NdfParams::own: the clamped gamma, precise type
 
 class StudentTEmitter final : public NdfEmitter {
 public:
-    StudentTEmitter() { traits.dFromUnnormalizedHalf = true; }
+    StudentTEmitter() {
+        traits.dFromUnnormalizedHalf = true;
+        traits.samplesNormals = true;
+    }
 
     NdfParams params(LaneEmitter& lane) const override {
         return lane.roundedAlphaParams(lane.material.ndf, kAlphaX, kAlphaY, {kGamma});  // own[kOwnGamma]
@@ -48,6 +51,15 @@ public:
         Value* logNorm = n.isotropic ? pm.mul(pm.log(n.axD), pm.c(2.0)) : pm.add(pm.log(n.axD), pm.log(n.ayD));
         logNorm = pm.add(logNorm, pm.c(std::log(kPi)));
         return pm.exp(pm.sub(logD, logNorm));
+    }
+
+    // The standard slope radius has the CDF 1 - (1 + r^2 / (gamma - 1))^(1 -
+    // gamma): r^2 = (gamma - 1) expm1(log1p(-u) / (1 - gamma)).
+    std::array<Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, Value* u1, Value* u2) const override {
+        MathEmitter& pm = lane.preciseMath();
+        Value* gm1 = pm.sub(n.own[kOwnGamma], pm.c(1.0));
+        Value* r2 = pm.mul(gm1, lane.expm1(pm.div(pm.log1p(pm.neg(u1)), pm.neg(gm1))));
+        return lane.stretchedSlopeNormal(n, r2, u2);
     }
 };
 

@@ -62,6 +62,42 @@ int64_t facet_eval_batch(const facet_kernel* k, int64_t n, const float* const wi
 int64_t facet_eval_batch_status(const facet_kernel* k, int64_t n, const float* const wi[3],
                                 const float* const wo[3], const float* const* inputs, float* const rgb[3],
                                 uint8_t* status);
+/* Importance sampling (one sample of a one-sample mixture of the specular
+   lobe and, where the material has a diffuse base or energy compensation, a
+   cosine lobe). Conventions as eval: n = +z, wo and wi point away from the
+   surface, inputs as facet_eval / facet_eval_batch.
+   u holds three uniform numbers in [0, 1): u[0] picks the lobe, u[1] and
+   u[2] place the direction. Outputs: wi (unit), pdf = the whole mixture's
+   density of wi per solid angle (what multiple importance sampling needs),
+   weight = f(wi, wo) (n.wi) / pdf per channel.
+   - n.wo <= 0: no sample (wi = 0, pdf = 0, weight = 0), a valid lane.
+   - a sample below the horizon (n.wi <= 0) is valid: weight 0, its pdf
+     reported (the density over the whole sphere integrates to 1).
+   - invalid lanes (a non-finite or non-unit wo, u outside [0, 1) or NaN, a
+     non-finite input, a result float cannot hold): wi = 0, pdf = 0,
+     weight = 0, counted in the return value.
+   facet_sample returns 1 for an invalid lane, else 0 (NULL k, wo or u count
+   as invalid; NULL outputs are not written). */
+int facet_sample(const facet_kernel* k, const float wo[3], const float u[3], const float* inputs, float wi_out[3],
+                 float* pdf_out, float weight_out[3]);
+/* The density facet_sample draws wi with, for any unit wi and wo; 0 for an
+   invalid lane (or a NULL k, wi or wo). */
+float facet_pdf(const facet_kernel* k, const float wi[3], const float wo[3], const float* inputs);
+/* SoA: wo[0..2], u[0..2], wi[0..2], weight[0..2] each point to n floats, pdf
+   to n floats; inputs as facet_eval_batch. Returns the number of invalid
+   lanes, or -1 (facet_last_error() says why) for a NULL kernel, n < 0, or a
+   NULL wo, u, wi, pdf or weight (or a NULL entry of one); n = 0 returns 0. */
+int64_t facet_sample_batch(const facet_kernel* k, int64_t n, const float* const wo[3], const float* const u[3],
+                           const float* const* inputs, float* const wi[3], float* pdf, float* const weight[3]);
+/* pdf[i] = facet_pdf of lane i; the return value as facet_sample_batch. */
+int64_t facet_pdf_batch(const facet_kernel* k, int64_t n, const float* const wi[3], const float* const wo[3],
+                        const float* const* inputs, float* pdf);
+/* Which code samples: "jit" (the kernel's own compiled sampler, scalar or
+   SIMD as its eval), or "reference" (the interpreter's sampler in double,
+   one lane at a time: backend=interp, and the materials whose NDF has no
+   compiled sampler, e.g. gaussian); "" for a NULL kernel. */
+const char* facet_sampler(const facet_kernel* k);
+
 /* The message of the last batch call that returned -1 in this thread
    ("facet_eval_batch: error: wi[2] is NULL"); "" before any. Valid until
    the next failing call in this thread. */

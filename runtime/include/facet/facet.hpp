@@ -4,6 +4,7 @@
 //   facet::api::Kernel k = facet::api::Kernel::compileFile("gold.mat", "math=fast");
 //   k.eval(wi, wo, nullptr, rgb);
 //   int64_t invalid = k.evalBatch(n, wi3, wo3, nullptr, rgb3);
+//   facet::api::Sample s = k.sample(wo, u, nullptr);   // s.wi, s.pdf, s.weight
 //
 // Link with libfacet (find_package(Facet): Facet::facet). Kernels are
 // immutable and may be evaluated from many threads at once; a Kernel owns
@@ -25,6 +26,16 @@ namespace facet::api {
 class Error : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;
+};
+
+// One importance sample (facet_sample): wi, the mixture's pdf at wi, and
+// weight = f (n.wi) / pdf; all 0 when `valid` is false (an invalid lane),
+// and also for a valid lane without a sample (n.wo <= 0).
+struct Sample {
+    float wi[3] = {0, 0, 0};
+    float pdf = 0;
+    float weight[3] = {0, 0, 0};
+    bool valid = false;
 };
 
 class Kernel {
@@ -69,6 +80,34 @@ public:
         if (invalid < 0) throw Error(facet_last_error());
         return invalid;
     }
+
+    // Importance sampling, with the conventions of facet_sample (facet.h):
+    // u holds three uniform numbers in [0, 1).
+    Sample sample(const float wo[3], const float u[3], const float* inputs) const {
+        Sample s;
+        s.valid = facet_sample(k_.get(), wo, u, inputs, s.wi, &s.pdf, s.weight) == 0;
+        return s;
+    }
+    // The density sample() draws wi with; 0 for an invalid lane.
+    float pdf(const float wi[3], const float wo[3], const float* inputs) const {
+        return facet_pdf(k_.get(), wi, wo, inputs);
+    }
+    // n lanes in SoA (facet_sample_batch, facet_pdf_batch); return the number
+    // of invalid lanes.
+    int64_t sampleBatch(int64_t n, const float* const wo[3], const float* const u[3], const float* const* inputs,
+                        float* const wi[3], float* pdf, float* const weight[3]) const {
+        int64_t invalid = facet_sample_batch(k_.get(), n, wo, u, inputs, wi, pdf, weight);
+        if (invalid < 0) throw Error(facet_last_error());
+        return invalid;
+    }
+    int64_t pdfBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                     float* pdf) const {
+        int64_t invalid = facet_pdf_batch(k_.get(), n, wi, wo, inputs, pdf);
+        if (invalid < 0) throw Error(facet_last_error());
+        return invalid;
+    }
+    // "jit" or "reference" (facet_sampler).
+    std::string sampler() const { return facet_sampler(k_.get()); }
 
     facet_kernel* get() const { return k_.get(); }  // for the C API
 

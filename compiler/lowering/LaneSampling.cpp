@@ -1,0 +1,286 @@
+// LaneSampling: the lane bodies of the sample and pdf entry points (SPEC 8,
+// the plan's SamplingPlan): the lobe probability from each lobe's albedo
+// estimate, the cosine lobe, the specular lobe's density through the drawn
+// normal or the half vector, the one-sample mixture's pdf, and the weight
+// f (n.wi) / pdf with f from eval's own assembly. The NDF-specific samplers
+// are the NDF emitters' hooks (TermEmitters.h). Written independently of
+// the reference sampler (compiler/Sampling.cpp), against which the tests
+// compare it.
+#include "LaneEmitter.h"
+
+namespace facet {
+
+using llvm::Value;
+using Vec = std::array<Value*, 3>;
+
+namespace {
+
+// The smallest probability either lobe gets when both are present: a poor
+// albedo estimate (F = 0 at n.wo but not at other angles) must not starve
+// a lobe whose f is not zero.
+constexpr double kMinLobeProbability = 0.05;
+
+Value* dot(MathEmitter& m, const Vec& a, const Vec& b) {
+    return m.fma(a[0], b[0], m.fma(a[1], b[1], m.mul(a[2], b[2])));
+}
+
+Vec selectVec(MathEmitter& m, Value* cond, const Vec& a, const Vec& b) {
+    return {m.select(cond, a[0], b[0]), m.select(cond, a[1], b[1]), m.select(cond, a[2], b[2])};
+}
+
+Vec constantVec(MathEmitter& m, double x, double y, double z) { return {m.c(x), m.c(y), m.c(z)}; }
+
+Value* channelMean(MathEmitter& m, const LVal& v) {
+    if (v.gray()) return v.c[0];
+    return m.mul(m.add(m.add(v.c[0], v.c[1]), v.c[2]), m.c(1.0 / 3.0));
+}
+
+}  // namespace
+
+// What the sample and pdf bodies share for one lane.
+struct LaneEmitter::SamplingTerms {
+    NdfParams n;
+    Vec wo;                     // unit, n.wo > 0 (other lanes read (0, 0, 1)), precise type
+    Value* p = nullptr;         // the specular lobe's probability
+    Value* smithDen = nullptr;  // visible normals: 4 ((n.wo) + (n.wo) Lambda(wo)), precise type
+    Value* above = nullptr;     // n.wo > 0 (else no sample and pdf 0)
+};
+
+// The NDF's parameters, the lobe probability and the Smith term of the
+// lane's wo (unit, precise type), after lowerInputsAndLets.
+LaneEmitter::SamplingTerms LaneEmitter::samplingTerms(const Vec& wo) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& pm = preciseMath_;
+    SamplingTerms t;
+    t.n = emitters_.ndf.params(*this);
+    // With n.wo <= 0 the BRDF is 0 for every wi: no sample (a valid lane).
+    // Those lanes compute with wo = n, so that nothing below is NaN there.
+    t.above = pm.gt(wo[2], pm.c(0.0));
+    t.wo = selectVec(pm, t.above, wo, constantVec(pm, 0, 0, 1));
+    if (plan.sampling.specular == SpecularSampling::VisibleNormals) {
+        Vec woLane;
+        for (int i = 0; i < 3; ++i) woLane[i] = fm.convert(t.wo[i], fm.type());
+        Value* cl = pm.convert(emitters_.ndf.cosLambda(*this, t.n, woLane), pm.type());
+        t.smithDen = pm.mul(pm.c(4.0), pm.add(t.wo[2], cl));
+    }
+    t.p = specularProbability(t);
+    return t;
+}
+
+Vec LaneEmitter::normalFromSlopes(Value* sx, Value* sy) {
+    MathEmitter& pm = preciseMath_;
+    Value* inv = pm.div(pm.c(1.0), pm.sqrt(pm.fma(sx, sx, pm.fma(sy, sy, pm.c(1.0)))));
+    return {pm.neg(pm.mul(sx, inv)), pm.neg(pm.mul(sy, inv)), inv};
+}
+
+Vec LaneEmitter::normalFromPolar(Value* sin2, Value* u, Value* cos2) {
+    MathEmitter& pm = preciseMath_;
+    Value* s2 = pm.minnum(pm.maxnum(sin2, pm.c(0.0)), pm.c(1.0));
+    Value* s = pm.sqrt(s2);
+    Value* c = pm.sqrt(cos2 ? pm.minnum(pm.maxnum(cos2, pm.c(0.0)), pm.c(1.0)) : pm.sub(pm.c(1.0), s2));
+    auto [sinPhi, cosPhi] = pm.sinCosTurns(u);
+    return {pm.mul(s, cosPhi), pm.mul(s, sinPhi), c};
+}
+
+Vec LaneEmitter::stretchedSlopeNormal(const NdfParams& n, Value* r2, Value* u) {
+    MathEmitter& pm = preciseMath_;
+    Value* r = pm.sqrt(r2);
+    auto [sinPhi, cosPhi] = pm.sinCosTurns(u);
+    return normalFromSlopes(pm.mul(n.axD, pm.mul(r, cosPhi)), pm.mul(n.ayD, pm.mul(r, sinPhi)));
+}
+
+Value* LaneEmitter::expm1(Value* y) { return preciseMath_.mul(y, expm1OverX(y)); }
+
+// p = A_spec / (A_spec + A_other), clamped to [0.05, 0.95], with the
+// albedo estimates at n.wo (channel means): A_spec = F(n.wo) E(n.wo) (E =
+// 1 without a Kulla-Conty table), A_other = the Lambert albedo plus the
+// compensation lobe's. 1 without a cosine lobe.
+Value* LaneEmitter::specularProbability(SamplingTerms& t) {
+    MathEmitter& pm = preciseMath_;
+    if (!plan.sampling.cosineLobe) return pm.c(1.0);
+    Value* c = pm.minnum(t.wo[2], pm.c(1.0));
+    Value* q = pm.sub(pm.c(1.0), c);
+    // F as a facet seen at wo's angle: the Fresnel emitters read the cosine,
+    // 1 - cosine and sin^2 of a geometry.
+    LaneGeometry atWo{};
+    atWo.cosD = c;
+    atWo.oneMinusCosD = q;
+    atWo.sin2D = pm.mul(q, pm.add(pm.c(1.0), c));
+    Value* albedo = channelMean(pm, emitters_.fresnel.F(*this, atWo));
+    Value* other = pm.c(0.0);
+    if (plan.sampling.compensationAlbedo) {
+        CompensationAlbedo ca = emitters_.energy.samplingAlbedo(*this, emitters_.ndf, t.n, emitters_.fresnel, c);
+        albedo = pm.mul(albedo, pm.sub(pm.c(1.0), ca.oneMinusE));
+        other = ca.albedo;
+    }
+    if (emitters_.diffuse.present())
+        other = pm.fma(channelMean(pm, emitters_.diffuse.diffuse(*this)), pm.c(kPi), other);
+    Value* total = pm.add(albedo, other);
+    Value* ok = builder.CreateAnd(pm.gt(total, pm.c(0.0)), pm.isFinite(total));
+    Value* p = pm.select(ok, pm.div(albedo, total), pm.c(0.5));
+    return pm.minnum(pm.maxnum(p, pm.c(kMinLobeProbability)), pm.c(1 - kMinLobeProbability));
+}
+
+// The specular lobe's density of wi = 2 (wo.m) m - wo, for the unit normal
+// m with om = wo.m: pdf_m(m) / (4 |wo.m|), the Jacobian of the reflection.
+// With visible normals pdf_m = G1(wo) (wo.m)+ D(m) / (n.wo), so the density
+// is D(m) / (4 ((n.wo) + (n.wo) Lambda(wo))) where wo.m > 0.
+Value* LaneEmitter::specularPdf(SamplingTerms& t, const Vec& m, Value* om) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& pm = preciseMath_;
+    const NdfEmitter& ndf = emitters_.ndf;
+    LaneGeometry atM{};
+    for (int i = 0; i < 3; ++i) atM.h[i] = fm.convert(m[i], fm.type());
+    atM.hD = m;
+    atM.slopeH = m;  // unit: slopeHLen2 stays null
+    Value* up = pm.gt(m[2], pm.c(0.0));
+    if (plan.sampling.specular == SpecularSampling::VisibleNormals) {
+        Value* ok = builder.CreateAnd(up, pm.gt(om, pm.c(0.0)));
+        return pm.select(ok, pm.div(ndf.D(*this, t.n, atM), t.smithDen), pm.c(0.0));
+    }
+    Value* ok = builder.CreateAnd(up, builder.CreateNot(pm.eq(om, pm.c(0.0))));
+    Value* pdf = pm.div(ndf.normalPdf(*this, t.n, atM), pm.mul(pm.c(4.0), pm.abs(om)));
+    return pm.select(ok, pdf, pm.c(0.0));
+}
+
+// p pdf_spec + (1 - p) (n.wi)+ / pi, or pdf_spec without a cosine lobe.
+Value* LaneEmitter::mixturePdf(SamplingTerms& t, Value* spec, const Vec& wi) {
+    MathEmitter& pm = preciseMath_;
+    if (!plan.sampling.cosineLobe) return spec;
+    Value* cosine = pm.select(pm.gt(wi[2], pm.c(0.0)), pm.mul(wi[2], pm.c(1.0 / kPi)), pm.c(0.0));
+    return pm.fma(t.p, spec, pm.mul(pm.sub(pm.c(1.0), t.p), cosine));
+}
+
+namespace {
+
+// The unit half vector of wi and wo turned to the upper hemisphere, its
+// wo.m, and whether it exists (wi + wo not 0).
+struct HalfNormal {
+    Vec m;
+    Value *om, *exists;
+};
+
+HalfNormal halfNormal(MathEmitter& pm, const Vec& wi, const Vec& wo) {
+    Vec s = {pm.add(wi[0], wo[0]), pm.add(wi[1], wo[1]), pm.add(wi[2], wo[2])};
+    Value* len2 = dot(pm, s, s);
+    // The sampler's normals have m.z > 0: m = -h where h points down.
+    Value* inv = pm.div(pm.c(1.0), pm.sqrt(len2));
+    inv = pm.select(pm.lt(s[2], pm.c(0.0)), pm.neg(inv), inv);
+    Vec m = {pm.mul(s[0], inv), pm.mul(s[1], inv), pm.mul(s[2], inv)};
+    return {m, dot(pm, wo, m), pm.gt(len2, pm.c(0.0))};
+}
+
+}  // namespace
+
+LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u, const std::vector<Value*>& slots) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& pm = preciseMath_;
+    llvm::IRBuilder<>& b = builder;
+    const SamplingPlan& sp = plan.sampling;
+    internal_assert(sp.specular != SpecularSampling::None) << "a sampler without a specular technique";
+    Vec woF{};
+    Vec wo = unitDirection(woIn, woF);
+    for (Value* x : u) markInvalid(b.CreateNot(b.CreateAnd(fm.ge(x, fm.c(0.0)), fm.lt(x, fm.c(1.0)))));
+    lowerInputsAndLets(slots);
+
+    SamplingTerms t = samplingTerms(wo);
+    const bool visible = sp.specular == SpecularSampling::VisibleNormals;
+    Value* u0 = pm.convert(u[0], pm.type());
+    Value* u1 = pm.convert(u[1], pm.type());
+    Value* u2 = pm.convert(u[2], pm.type());
+
+    // The specular lobe: wi is the reflection of wo about the drawn m.
+    Vec m = visible ? emitters_.ndf.sampleVisibleNormal(*this, t.n, t.wo, u1, u2)
+                    : emitters_.ndf.sampleNormal(*this, t.n, u1, u2);
+    Value* om = dot(pm, t.wo, m);
+    Value* twoOm = pm.add(om, om);
+    Vec sum = {pm.mul(twoOm, m[0]), pm.mul(twoOm, m[1]), pm.mul(twoOm, m[2])};  // wi + wo
+    Vec wi = {pm.sub(sum[0], t.wo[0]), pm.sub(sum[1], t.wo[1]), pm.sub(sum[2], t.wo[2])};
+    Value* specular = nullptr;
+    Vec mPdf = m;
+    Value *omPdf = om, *pdfExists = pm.c(1.0);
+    if (sp.cosineLobe) {
+        // The cosine lobe: sqrt(u1) in the unit disk at azimuth 2 pi u2,
+        // lifted to the hemisphere. Its specular density is through the
+        // half vector.
+        specular = pm.lt(u0, t.p);
+        Value* r = pm.sqrt(u1);
+        auto [sinPhi, cosPhi] = pm.sinCosTurns(u2);
+        Vec wiCos = {pm.mul(r, cosPhi), pm.mul(r, sinPhi), pm.sqrt(pm.sub(pm.c(1.0), u1))};
+        HalfNormal h = halfNormal(pm, wiCos, t.wo);
+        wi = selectVec(pm, specular, wi, wiCos);
+        mPdf = selectVec(pm, specular, m, h.m);
+        omPdf = pm.select(specular, om, h.om);
+        pdfExists = pm.select(b.CreateOr(specular, h.exists), pm.c(1.0), pm.c(0.0));
+    }
+    Value* spec = pm.mul(specularPdf(t, mPdf, omPdf), pdfExists);
+    Value* pdf = mixturePdf(t, spec, wi);
+
+    // f at the sample from eval's assembly. For a specular sample the half
+    // vector is the drawn normal (and wi + wo its multiple), not the sum of
+    // the rounded directions: near wi = -wo that sum would turn h away from
+    // m, and D(h) would no longer cancel the density's D(m).
+    Vec wiLane;
+    for (int i = 0; i < 3; ++i) wiLane[i] = fm.convert(wi[i], fm.type());
+    Vec wiEval = selectVec(fm, t.above, wiLane, constantVec(fm, 0, 0, 1));
+    LaneGeometry geo = geometry(wiEval, woIn);
+    Value* fromDrawn = sp.cosineLobe ? specular : llvm::Constant::getAllOnesValue(boolType());
+    if (geo.hD[0])  // null where the plan keeps the half angle in float (no consumer of the unit h)
+        for (int i = 0; i < 3; ++i) {
+            geo.hD[i] = pm.select(fromDrawn, m[i], geo.hD[i]);
+            geo.h[i] = fm.select(fromDrawn, fm.convert(m[i], fm.type()), geo.h[i]);
+        }
+    if (geo.slopeHLen2) {
+        // wi + wo up to scale: the drawn normal's multiple.
+        for (int i = 0; i < 3; ++i) geo.slopeH[i] = pm.select(fromDrawn, sum[i], geo.slopeH[i]);
+        geo.slopeHLen2 = pm.select(fromDrawn, dot(pm, sum, sum), geo.slopeHLen2);
+    } else {
+        for (int i = 0; i < 3; ++i) geo.slopeH[i] = pm.select(fromDrawn, m[i], geo.slopeH[i]);
+    }
+    Value* fValid = nullptr;
+    Vec f = brdfPrecise(geo, fValid);
+
+    SampleResult r;
+    Value* weighted = b.CreateAnd(fValid, pm.gt(pdf, pm.c(0.0)));
+    Value* cosOverPdf = pm.div(wi[2], pdf);
+    for (int ch = 0; ch < 3; ++ch) {
+        Value* w = pm.select(weighted, pm.mul(f[ch], cosOverPdf), pm.c(0.0));
+        r.weight[ch] = fm.convert(w, fm.type());
+    }
+    r.pdf = fm.convert(pdf, fm.type());
+    r.wi = wiLane;
+    // As in eval: a result float cannot hold is an invalid lane.
+    markInvalid(fm.isNanInfOrNegative(r.pdf));
+    for (Value* w : r.weight) markInvalid(fm.isNanInfOrNegative(w));
+    for (Value* x : r.wi) markInvalid(b.CreateNot(fm.isFinite(x)));
+    Value* zero = b.CreateOr(invalid_, b.CreateNot(t.above));
+    for (Value*& x : r.wi) x = fm.select(zero, fm.c(0.0), x);
+    r.pdf = fm.select(zero, fm.c(0.0), r.pdf);
+    for (Value*& x : r.weight) x = fm.select(zero, fm.c(0.0), x);
+    r.invalid = invalid_;
+    return r;
+}
+
+LaneEmitter::PdfResult LaneEmitter::emitPdf(const Vec& wiIn, const Vec& woIn, const std::vector<Value*>& slots) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& pm = preciseMath_;
+    internal_assert(plan.sampling.specular != SpecularSampling::None) << "a pdf without a specular technique";
+    Vec wiF{}, woF{};
+    Vec wi = unitDirection(wiIn, wiF);
+    Vec wo = unitDirection(woIn, woF);
+    lowerInputsAndLets(slots);
+
+    SamplingTerms t = samplingTerms(wo);
+    HalfNormal h = halfNormal(pm, wi, t.wo);
+    Value* spec = pm.select(h.exists, specularPdf(t, h.m, h.om), pm.c(0.0));
+    Value* pdf = pm.select(t.above, mixturePdf(t, spec, wi), pm.c(0.0));
+
+    PdfResult r;
+    r.pdf = fm.convert(pdf, fm.type());
+    markInvalid(fm.isNanInfOrNegative(r.pdf));
+    r.pdf = fm.select(invalid_, fm.c(0.0), r.pdf);
+    r.invalid = invalid_;
+    return r;
+}
+
+}  // namespace facet

@@ -1,0 +1,421 @@
+// The JIT samplers (SPEC 8) against the reference sampler and against
+// themselves: the same u gives the same wi, pdf and weight as the
+// interpreter (scalar and SIMD, exact and fast); the sampled pdf is the
+// kernel's pdf(wi, wo) and the weight its f cos / pdf; chi-square of the
+// JIT samples against the reference pdf on a subset of the catalog's
+// combinations; bounded visible-normal weights and no NaN/Inf/negative
+// result on the hard-case sample; invalid lanes through Kernel and the C
+// API.
+#include "SamplingCases.h"
+#include "SamplingCheck.h"
+
+#include "HardCases.h"
+#include "Kernel.h"
+#include "facet/facet.h"
+
+#include <doctest/doctest.h>
+#include <fmt/format.h>
+
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <random>
+
+namespace {
+
+using namespace sampling_test;
+using facet::SampleResult;
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kViewDegrees[4] = {0, 45, 80, 89.9};
+constexpr double kRoughness[4] = {0.01, 0.1, 0.5, 1};
+
+V3 viewAt(double degrees, double azimuth = 0.3) {
+    double t = degrees * kPi / 180;
+    return {std::sin(t) * std::cos(azimuth), std::sin(t) * std::sin(azimuth), std::cos(t)};
+}
+
+// A float direction as the kernels read it: in double, renormalized.
+V3 unit(const float w[3]) {
+    double len = std::sqrt(double(w[0]) * w[0] + double(w[1]) * w[1] + double(w[2]) * w[2]);
+    return {w[0] / len, w[1] / len, w[2] / len};
+}
+
+double relDiff(double a, double b) {
+    double scale = std::max(std::abs(a), std::abs(b));
+    return scale == 0 ? 0 : std::abs(a - b) / scale;
+}
+
+facet::Compiler& compiler() {
+    static facet::Compiler c;
+    return c;
+}
+
+// The kernel of `text` with `options` (memory cache only: the suite's
+// kernels are compiled once per run).
+std::unique_ptr<facet::Kernel> compile(const std::string& text, const std::string& options) {
+    facet::CompileOptions o;
+    REQUIRE(facet::CompileOptions::parse(options + ";cache=memory;codegen=quick", o) == "");
+    facet::DiagnosticEngine diags;
+    auto k = compiler().compileText(text, "jit-sampling.mat", "", o, diags);
+    INFO(text, "\n", diags.str());
+    REQUIRE(k);
+    return k;
+}
+
+// n lanes of one wo with u from `rng` (plus u at 0 and 1 - 2^-24 in the
+// first lanes), in SoA.
+struct Lanes {
+    std::array<std::vector<float>, 3> wo, u, wi, weight;
+    std::vector<float> pdf;
+    explicit Lanes(const V3& view, int n, std::mt19937_64& rng) {
+        std::uniform_real_distribution<float> uniform(0, 1);
+        const float edge[2] = {0, 1 - 0x1p-24f};
+        for (int i = 0; i < n; ++i) {
+            float w[3] = {float(view.x), float(view.y), float(view.z)};
+            for (int c = 0; c < 3; ++c) {
+                wo[c].push_back(w[c]);
+                float x = i < 8 ? edge[(i >> c) & 1] : uniform(rng);
+                u[c].push_back(x < 1 ? x : edge[1]);
+                wi[c].push_back(-1), weight[c].push_back(-1);
+            }
+            pdf.push_back(-1);
+        }
+    }
+    int64_t size() const { return int64_t(pdf.size()); }
+    int64_t sample(const facet::Kernel& k) {
+        const float* woP[3] = {wo[0].data(), wo[1].data(), wo[2].data()};
+        const float* uP[3] = {u[0].data(), u[1].data(), u[2].data()};
+        float* wiP[3] = {wi[0].data(), wi[1].data(), wi[2].data()};
+        float* weightP[3] = {weight[0].data(), weight[1].data(), weight[2].data()};
+        return k.sampleBatch(size(), woP, uP, nullptr, wiP, pdf.data(), weightP);
+    }
+};
+
+// The first material of each combination with a JIT sampler, at the
+// roughness its index picks (every combination covers one of the four; the
+// combinations of one NDF cover them all between them).
+struct JitCase {
+    const Combo* combo;
+    double alpha;
+    std::unique_ptr<TestMaterial> material;
+};
+
+std::vector<JitCase> jitCases() {
+    std::vector<JitCase> out;
+    int index = 0;
+    for (const Combo& c : combos()) {
+        double alpha = kRoughness[index++ % 4];
+        auto m = makeMaterial(c, alpha);
+        REQUIRE(m);
+        out.push_back({&c, alpha, std::move(m)});
+    }
+    return out;
+}
+
+}  // namespace
+
+// Exact kernels, scalar and SIMD, against the reference on the same u:
+// wi within 1e-5 (absolute), pdf and weight within 1e-5 (relative) where
+// the lobe choice agrees; the choice may differ only where u0 is within
+// float rounding of the lobe probability. Fast kernels: the same within
+// the fast math's error (2e-3).
+TEST_CASE("jit sampling: the same u gives the reference's wi, pdf and weight") {
+    std::mt19937_64 rng(11);
+    int compared = 0, choiceDiffers = 0, referenceSamplers = 0;
+    std::map<std::string, double> worst;
+    for (JitCase& jc : jitCases()) {
+        const std::string& text = jc.material->text;
+        const facet::ResolvedMaterial<double>& r = jc.material->resolved;
+        for (const char* options : {"backend=scalar;math=exact", "backend=simd;math=exact",
+                                    "backend=simd;math=fast", "backend=scalar;math=fast"}) {
+            auto k = compile(text, options);
+            if (k->samplerTier() != "jit") {
+                ++referenceSamplers;
+                continue;
+            }
+            const bool exact = std::string(options).find("exact") != std::string::npos;
+            const double tol = exact ? 1e-5 : 2e-3;
+            for (double theta : kViewDegrees) {
+                V3 view = viewAt(theta);
+                Lanes lanes(view, 64, rng);
+                REQUIRE(lanes.sample(*k) == 0);
+                float woF[3] = {lanes.wo[0][0], lanes.wo[1][0], lanes.wo[2][0]};
+                V3 wo = unit(woF);
+                double p = facet::specularProbability(r, wo);
+                for (int64_t i = 0; i < lanes.size(); ++i) {
+                    std::array<double, 3> u = {lanes.u[0][i], lanes.u[1][i], lanes.u[2][i]};
+                    SampleResult<double> ref = facet::sampleBrdf(r, wo, u);
+                    INFO(jc.combo->name(), " alpha ", jc.alpha, " ", std::string(options), " theta_o ", theta, " u ", u[0], " ",
+                         u[1], " ", u[2]);
+                    if (p < 1 && std::abs(u[0] - p) <= 1e-6) {
+                        ++choiceDiffers;  // at most: the choice may go either way here
+                        continue;
+                    }
+                    double wiErr = std::max({std::abs(lanes.wi[0][i] - ref.wi.x), std::abs(lanes.wi[1][i] - ref.wi.y),
+                                             std::abs(lanes.wi[2][i] - ref.wi.z)});
+                    double pdfErr = relDiff(lanes.pdf[i], ref.pdf);
+                    double weightErr = 0;
+                    for (int c = 0; c < 3; ++c)
+                        weightErr = std::max(weightErr, std::abs(lanes.weight[c][i] - ref.weight[c]) /
+                                                            std::max({std::abs(ref.weight[c]), 1e-6}));
+                    CHECK(wiErr <= (exact ? 1e-5 : tol));
+                    CHECK(pdfErr <= tol);
+                    CHECK(weightErr <= tol);
+                    double& w = worst[options];
+                    w = std::max({w, wiErr, pdfErr, weightErr});
+                    ++compared;
+                }
+            }
+        }
+    }
+    CHECK(compared > 0);
+    CHECK(choiceDiffers <= compared / 1000 + 4);
+    for (auto& [options, w] : worst) MESSAGE(fmt::format("{}: worst difference {:.3g}", options, w));
+    MESSAGE(fmt::format("{} samples compared, {} within rounding of the lobe probability, {} kernels sample through "
+                        "the reference",
+                        compared, choiceDiffers, referenceSamplers));
+}
+
+// Per kernel: pdf(wi, wo) is the pdf the sample returned, the weight is
+// eval(wi, wo) (n.wi) / pdf, and scalar and SIMD samples agree. The sampled
+// pdf is the density at the drawn normal (as the reference's), pdf() the
+// density at the half vector of the returned float wi: where rounding wi to
+// float moves that half vector measurably (grazing wo, narrow lobes, where
+// |wi + wo| is small) the two differ by as much as the reference's own pdf
+// does between the two, which the bound adds.
+TEST_CASE("jit sampling: pdf and weight agree with the kernel's pdf and eval; scalar agrees with SIMD") {
+    std::mt19937_64 rng(12);
+    double worstPdf = 0, worstWeight = 0, worstScalar = 0;
+    int checked = 0;
+    for (JitCase& jc : jitCases()) {
+        const facet::ResolvedMaterial<double>& r = jc.material->resolved;
+        for (std::string math : {"exact", "fast"}) {
+            auto simd = compile(jc.material->text, std::string("backend=simd;math=") + math);
+            if (simd->samplerTier() != "jit") continue;
+            auto scalar = compile(jc.material->text, std::string("backend=scalar;math=") + math);
+            for (double theta : kViewDegrees) {
+                // Fast kernels form the half vector in float: at 89.9 degrees
+                // its rounding moves narrow lobes by percents (as in fast eval).
+                if (math == "fast" && theta > 89) continue;
+                Lanes lanes(viewAt(theta), 40, rng), scalarLanes = lanes;
+                REQUIRE(lanes.sample(*simd) == 0);
+                REQUIRE(scalarLanes.sample(*scalar) == 0);
+                for (int64_t i = 0; i < lanes.size(); ++i) {
+                    INFO(jc.combo->name(), " alpha ", jc.alpha, " math ", math, " theta ", theta, " lane ", i);
+                    float wi[3] = {lanes.wi[0][i], lanes.wi[1][i], lanes.wi[2][i]};
+                    float wo[3] = {lanes.wo[0][i], lanes.wo[1][i], lanes.wo[2][i]};
+                    V3 wod = unit(wo);
+                    SampleResult<double> ref = facet::sampleBrdf(r, wod, {lanes.u[0][i], lanes.u[1][i], lanes.u[2][i]});
+                    double refAtWi = facet::brdfPdf(r, unit(wi), wod);
+                    double rounding = relDiff(refAtWi, ref.pdf);
+                    const double tol = math == "exact" ? 1e-5 : 2e-3;
+                    const double bound = 2 * tol + 2 * rounding;
+                    float pdf = simd->pdf(wi, wo, nullptr);
+                    // Fast kernels form the half vector in float: only where
+                    // wi + wo does not cancel.
+                    V3 sum{wod.x + unit(wi).x, wod.y + unit(wi).y, wod.z + unit(wi).z};
+                    if (math == "fast" && sum.x * sum.x + sum.y * sum.y + sum.z * sum.z < 0.01) continue;
+                    // Each side against the reference: pdf() at this wi, the sampled pdf at the drawn normal.
+                    CHECK(relDiff(pdf, refAtWi) <= tol);
+                    CHECK(relDiff(lanes.pdf[i], ref.pdf) <= tol);
+                    worstPdf = std::max(worstPdf, relDiff(pdf, lanes.pdf[i]) - 2 * rounding);
+                    CHECK(relDiff(pdf, lanes.pdf[i]) <= bound);
+                    float f[3];
+                    simd->eval(wi, wo, nullptr, f);
+                    for (int c = 0; c < 3; ++c) {
+                        double expected = wi[2] > 0 && lanes.pdf[i] > 0 ? double(f[c]) * wi[2] / lanes.pdf[i] : 0.0;
+                        double err = std::abs(lanes.weight[c][i] - expected) / std::max(std::abs(expected), 1e-6);
+                        worstWeight = std::max(worstWeight, err - 2 * rounding);
+                        CHECK(err <= bound);
+                    }
+                    double s = std::max({double(std::abs(lanes.wi[0][i] - scalarLanes.wi[0][i])),
+                                         double(std::abs(lanes.wi[2][i] - scalarLanes.wi[2][i])),
+                                         relDiff(lanes.pdf[i], scalarLanes.pdf[i]),
+                                         relDiff(lanes.weight[0][i], scalarLanes.weight[0][i])});
+                    worstScalar = std::max(worstScalar, s);
+                    CHECK(s <= 1e-6);
+                    ++checked;
+                }
+            }
+        }
+    }
+    CHECK(checked > 0);
+    MESSAGE(fmt::format("{} samples: worst pdf(wi) against the sampled pdf {:.3g}, weight against eval {:.3g} "
+                        "(beyond the rounding of wi), scalar against SIMD {:.3g}",
+                        checked, worstPdf, worstWeight, worstScalar));
+}
+
+// Chi-square goodness of fit of the SIMD exact sampler's samples against
+// the reference pdf, on every fifth combination with a JIT sampler at one
+// (roughness, view) pair each (the reference sampler's own test covers the
+// whole grid); and the test of the test: the same samples against the pdf
+// scaled by 1.01 fail the normalization check.
+TEST_CASE("jit sampling: chi-square of the JIT samples against the reference pdf") {
+    std::vector<JitCase> cases = jitCases();
+    std::vector<std::pair<JitCase*, std::unique_ptr<facet::Kernel>>> runs;
+    for (size_t i = 0; i < cases.size(); i += 5) {
+        auto k = compile(cases[i].material->text, "backend=simd;math=exact");
+        if (k->samplerTier() == "jit") runs.push_back({&cases[i], std::move(k)});
+    }
+    REQUIRE(runs.size() >= 8);
+    const double level = sidakLevel(0.01, int(runs.size()) + 1);
+    int index = 0;
+    for (auto& [jc, kernel] : runs) {
+        double theta = kViewDegrees[index % 4];
+        V3 view = viewAt(theta);
+        float wo[3] = {float(view.x), float(view.y), float(view.z)};
+        V3 wod = unit(wo);
+        const facet::Kernel& k = *kernel;
+        Sampler sampler = [&](const std::array<double, 3>& u) {
+            float uf[3] = {float(u[0]), float(u[1]), float(u[2])};
+            for (float& x : uf) x = x < 1 ? x : 1 - 0x1p-24f;
+            float wi[3], pdf, weight[3];
+            SampleResult<double> s;
+            s.valid = k.sample(wo, uf, nullptr, wi, &pdf, weight);
+            s.wi = {wi[0], wi[1], wi[2]};
+            s.pdf = pdf;
+            return s;
+        };
+        const facet::ResolvedMaterial<double>& r = jc->material->resolved;
+        PdfFunction pdf = [&](const V3& wi) { return facet::brdfPdf(r, wi, wod); };
+        CheckSettings s;
+        s.samples = 100000;
+        s.level = level;
+        s.seed = 500 + uint64_t(index);
+        CheckOutcome out = checkSampler(sampler, pdf, lobeGrid(r, wod), s);
+        INFO(jc->combo->name(), " alpha ", jc->alpha, " theta ", theta, "\n", out.describe());
+        CHECK(out.chi2.failure == "");
+        CHECK(std::abs(out.integral - 1) <= 1e-4);
+        if (index == 0) {
+            PdfFunction scaled = [&](const V3& wi) { return 1.01 * facet::brdfPdf(r, wi, wod); };
+            CheckOutcome wrong = checkSampler(sampler, scaled, lobeGrid(r, wod), s);
+            CHECK(std::abs(wrong.integral - 1) > 1e-4);
+        }
+        ++index;
+    }
+    MESSAGE(fmt::format("{} chi-square runs of the JIT sampler, per-test level {:.3g}", runs.size(), level));
+}
+
+// A single Smith lobe with visible-normal sampling and F <= 1 has weight F
+// G2 / G1(wo) <= 1; and nothing is NaN, Inf or negative. Over the hard-case
+// directions and inputs (roughness 1e-5 .. huge, anisotropy 1e4, grazing
+// wo), with u at 0, 1/2 and 1 - 2^-24, exact and fast SIMD kernels.
+TEST_CASE("jit sampling: bounded visible-normal weights and finite results on the hard cases") {
+    const float uEdge[3] = {0, 0.5f, 1 - 0x1p-24f};
+    int checked = 0, kernels = 0, onlyJitInvalid = 0;
+    double worst = 0;
+    for (const char* ndf : {"ggx", "beckmann"})
+        for (const char* masking : {"smith_height_correlated", "smith_separable"})
+            for (std::string math : {"exact", "fast"}) {
+                std::string text = fmt::format(
+                    "material t {{ input alpha_x = 0.3; input alpha_y = 0.3; ndf = {}(alpha_x = alpha_x, alpha_y = "
+                    "alpha_y); masking = {}; fresnel = schlick(0.9); }}",
+                    ndf, masking);
+                auto k = compile(text, std::string("backend=simd;math=") + math);
+                if (k->samplerTier() != "jit") continue;
+                ++kernels;
+                facet::Interpreter<double> interp(k->material(), k->energyTable());
+                facet::HardCaseOptions options;
+                for (const facet::HardCase& hc : facet::hardCases(k->material(), options)) {
+                    float wo[3] = {float(hc.wo[0]), float(hc.wo[1]), float(hc.wo[2])};
+                    std::vector<float> in(hc.slots.begin(), hc.slots.end());
+                    for (float u1 : uEdge)
+                        for (float u2 : uEdge) {
+                            float u[3] = {0.5f, u1, u2}, wi[3], pdf, weight[3];
+                            bool valid = k->sample(wo, u, in.data(), wi, &pdf, weight);
+                            INFO(text, " ", math, " ", facet::describeCase(k->material(), hc), " u ", u1, " ", u2);
+                            // Invalid where the reference's lane is (wi plays no part);
+                            // also, rarely, where the reference is valid: alphas
+                            // beyond float range (1e20 against 0.3 at wo = n).
+                            double ud[3] = {u[0], u[1], u[2]};
+                            bool refValid = interp.sample(hc.wo.data(), ud, hc.slots.data()).valid;
+                            if (!refValid) CHECK(!valid);
+                            onlyJitInvalid += refValid && !valid;
+                            CHECK(std::isfinite(pdf));
+                            CHECK(pdf >= 0);
+                            for (float w : weight) {
+                                CHECK(std::isfinite(w));
+                                CHECK(w >= 0);
+                                CHECK(w <= 1 + 1e-5);
+                                worst = std::max(worst, double(w));
+                            }
+                            ++checked;
+                        }
+                }
+            }
+    CHECK(kernels >= 4);
+    CHECK(onlyJitInvalid <= checked / 200);
+    MESSAGE(fmt::format("{} samples of {} kernels: largest weight {:.9g}; {} lanes invalid in the kernel only",
+                        checked, kernels, worst, onlyJitInvalid));
+}
+
+// Invalid lanes through the C API: non-unit, NaN or infinite wo, u outside
+// [0, 1) (1, -0.25, NaN); each is counted and gives wi = pdf = weight = 0,
+// while n.wo <= 0 is a valid lane without a sample; the batch calls reject
+// NULL arrays with -1.
+TEST_CASE("jit sampling: invalid lanes and the C API") {
+    const char* text =
+        "material t { input roughness = 0.3; ndf = ggx(roughness); masking = smith_height_correlated; fresnel = "
+        "schlick(0.04); diffuse = lambert(0.5); }";
+    for (const char* options : {"backend=simd", "backend=scalar", "backend=interp"}) {
+        char err[256];
+        facet_kernel* k = facet_compile_text(text, "t.mat", nullptr, options, err, sizeof err);
+        INFO(options, " ", err);
+        REQUIRE(k);
+        const float nan = std::nanf(""), inf = INFINITY;
+        // lanes: valid, no sample (wo below), non-unit wo, NaN wo, Inf wo, u0 = 1, u1 = -0.25, u2 = NaN
+        std::vector<std::array<float, 3>> wos = {{0.6f, 0, 0.8f}, {0, 0.6f, -0.8f}, {0.5f, 0, 0.5f}, {nan, 0, 1},
+                                                 {inf, 0, 1},     {0, 0, 1},        {0, 0, 1},       {0, 0, 1}};
+        std::vector<std::array<float, 3>> us = {{0.3f, 0.4f, 0.5f}, {0.3f, 0.4f, 0.5f}, {0.3f, 0.4f, 0.5f},
+                                                {0.3f, 0.4f, 0.5f}, {0.3f, 0.4f, 0.5f}, {1, 0.4f, 0.5f},
+                                                {0.3f, -0.25f, 0.5f}, {0.3f, 0.4f, nan}};
+        const int n = int(wos.size());
+        std::array<std::vector<float>, 3> wo, u, wi, weight;
+        std::vector<float> pdf(n, -1), pdf2(n, -1);
+        for (int c = 0; c < 3; ++c) {
+            for (int i = 0; i < n; ++i) wo[c].push_back(wos[i][c]), u[c].push_back(us[i][c]);
+            wi[c].assign(n, -1), weight[c].assign(n, -1);
+        }
+        const float* woP[3] = {wo[0].data(), wo[1].data(), wo[2].data()};
+        const float* uP[3] = {u[0].data(), u[1].data(), u[2].data()};
+        float* wiP[3] = {wi[0].data(), wi[1].data(), wi[2].data()};
+        float* weightP[3] = {weight[0].data(), weight[1].data(), weight[2].data()};
+        CHECK(facet_sample_batch(k, n, woP, uP, nullptr, wiP, pdf.data(), weightP) == 6);
+        CHECK(pdf[0] > 0);
+        CHECK(std::abs(wi[0][0] * wi[0][0] + wi[1][0] * wi[1][0] + wi[2][0] * wi[2][0] - 1) < 1e-5);
+        for (int i = 1; i < n; ++i) {
+            INFO("lane ", i);
+            CHECK(pdf[i] == 0);
+            for (int c = 0; c < 3; ++c) {
+                CHECK(wi[c][i] == 0);
+                CHECK(weight[c][i] == 0);
+            }
+        }
+        // The scalar twins agree with the batch.
+        for (int i = 0; i < n; ++i) {
+            float w[3], p, wt[3];
+            CHECK(facet_sample(k, wos[i].data(), us[i].data(), nullptr, w, &p, wt) == (i >= 2 ? 1 : 0));
+            CHECK(p == pdf[i]);
+            CHECK(w[2] == wi[2][i]);
+        }
+        // pdf: wi = the valid lane's sample; the invalid wo lanes count.
+        const float* wiC[3] = {wi[0].data(), wi[1].data(), wi[2].data()};
+        std::array<std::vector<float>, 3> sampled;
+        for (int c = 0; c < 3; ++c) sampled[c].assign(n, wi[c][0]);
+        const float* sampledP[3] = {sampled[0].data(), sampled[1].data(), sampled[2].data()};
+        CHECK(facet_pdf_batch(k, n, sampledP, woP, nullptr, pdf2.data()) == 3);
+        CHECK(relDiff(pdf2[0], pdf[0]) <= 1e-5);
+        CHECK(pdf2[1] == 0);  // wo below the horizon: no density
+        float wi0[3] = {wi[0][0], wi[1][0], wi[2][0]};
+        CHECK(relDiff(facet_pdf(k, wi0, wos[0].data(), nullptr), pdf[0]) <= 1e-5);
+        // NULL arrays and n < 0.
+        CHECK(facet_sample_batch(k, n, nullptr, uP, nullptr, wiP, pdf.data(), weightP) == -1);
+        CHECK(std::string(facet_last_error()) == "facet_sample_batch: error: wo is NULL");
+        CHECK(facet_sample_batch(k, n, woP, uP, nullptr, wiP, nullptr, weightP) == -1);
+        CHECK(facet_pdf_batch(k, -1, wiC, woP, nullptr, pdf.data()) == -1);
+        CHECK(facet_pdf_batch(k, 0, nullptr, nullptr, nullptr, nullptr) == 0);
+        CHECK(std::string(facet_sampler(k)) == (std::string(options) == "backend=interp" ? "reference" : "jit"));
+        facet_release(k);
+    }
+}
