@@ -192,10 +192,12 @@ int renderSphereCommand(const RenderArgs& r) {
                 backendName(kernel->backend()), kernel->variant().c_str(), r.math.c_str(), kernel->width(),
                 kernel->compileMillis(), kernel->origin().c_str());
     int skySamples = r.scene.sky == preview::SkyModel::None ? 0 : r.scene.skySamples;
-    std::printf("rendered %dx%d: %lld pixels x %d evaluations (1 light + %d sky samples) = %.2fM evaluations in "
-                "%.3f s on %d threads (%.1fM evaluations/s; %.3f s of thread time in the kernel)\n",
-                r.scene.size, r.scene.size, (long long)s.pixels, 1 + skySamples, skySamples, s.evaluations / 1e6, s.seconds,
-                s.threads, s.evaluations / 1e6 / std::max(s.seconds, 1e-9), s.kernelSeconds);
+    double lanes = double(s.evaluations + s.samples);
+    std::printf("rendered %dx%d: %lld pixels x (1 light evaluation + %d sky samples from the kernel's sampler) = "
+                "%.2fM kernel lanes in %.3f s on %d threads (%.1fM lanes/s; %.3f s of thread time in the kernel, "
+                "sampler %s)\n",
+                r.scene.size, r.scene.size, (long long)s.pixels, skySamples, lanes / 1e6, s.seconds, s.threads,
+                lanes / 1e6 / std::max(s.seconds, 1e-9), s.kernelSeconds, kernel->samplerTier().c_str());
     if (std::string err = preview::writeSphereImage(image, r.scene, r.out); !err.empty()) {
         std::fprintf(stderr, "facet: render: %s\n", err.c_str());
         return kExitCheckFailed;
@@ -203,7 +205,8 @@ int renderSphereCommand(const RenderArgs& r) {
     std::printf("wrote %s\n", r.out.c_str());
     if (s.invalidLanes) {
         std::fprintf(stderr, "facet: render: %lld of %lld kernel lanes were invalid (shaded black): the material's "
-                     "parameters are not finite at these inputs\n", (long long)s.invalidLanes, (long long)s.evaluations);
+                     "parameters are not finite at these inputs\n", (long long)s.invalidLanes,
+                     (long long)(s.evaluations + s.samples));
         return kExitCheckFailed;
     }
     return kExitOk;

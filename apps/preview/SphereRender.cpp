@@ -1,15 +1,13 @@
 // SphereRender: shading a sphere with a compiled kernel (see SphereRender.h).
 //
-// The work is organized for the batched kernel: each image row becomes one
-// batch of lanes (every covered pixel contributes 1 light lane + N sky
-// lanes, with the estimator's weight kept beside each lane), the kernel
-// evaluates the whole row at once, and the weighted values are summed back
-// into the pixels. Rows are handed out to the threads one at a time.
+// The work is organized for the batched kernel: each image row becomes two
+// batches of lanes (every covered pixel contributes 1 light lane, evaluated,
+// and N sky lanes, drawn by the kernel's importance sampler), the kernel
+// runs the whole row at once, and the weighted values are summed back into
+// the pixels. Rows are handed out to the threads one at a time.
 #include "SphereRender.h"
 
 #include "ImageFiles.h"
-
-#include "Interpreter.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
@@ -90,21 +88,6 @@ std::array<float, 3> skyRadiance(const SphereScene& scene, Vec d) {
     return {0, 0, 0};
 }
 
-// The GGX roughness the sky samples follow: the material's own at its
-// default inputs where its NDF has one (Blinn-Phong through the matched
-// exponent), clamped to [1e-3, 1]. Any choice keeps the estimate unbiased.
-std::array<double, 2> samplingRoughness(const Kernel& kernel) {
-    Interpreter<double> interp(kernel.material(), kernel.energyTable());
-    ResolvedMaterial<double> r = interp.resolve(nullptr);
-    double ax = 1, ay = 1;
-    if (r.valid) {
-        std::array<double, 2> alphas = r.ndf->equivalentAlphas(r.ndfArgs);
-        ax = alphas[0], ay = alphas[1];
-    }
-    auto clampAlpha = [](double a) { return std::isfinite(a) ? std::clamp(a, 1e-3, 1.0) : 1.0; };
-    return {clampAlpha(ax), clampAlpha(ay)};
-}
-
 double radicalInverse2(uint32_t i) {
     i = (i << 16) | (i >> 16);
     i = ((i & 0x00ff00ffu) << 8) | ((i & 0xff00ff00u) >> 8);
@@ -114,6 +97,12 @@ double radicalInverse2(uint32_t i) {
     return i * 0x1p-32;
 }
 
+double radicalInverse3(uint32_t i) {
+    double inverse = 0, scale = 1.0 / 3;
+    for (; i; i /= 3, scale /= 3) inverse += double(i % 3) * scale;
+    return inverse;
+}
+
 uint64_t splitMix64(uint64_t x) {
     x += 0x9e3779b97f4a7c15ull;
     x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
@@ -121,63 +110,79 @@ uint64_t splitMix64(uint64_t x) {
     return x ^ (x >> 31);
 }
 
-// A 2D Hammersley point set, stored as u and the unit vector of angle 2 pi v
-// so that rotating it per pixel costs a complex multiplication.
-struct PointSet {
-    std::vector<double> u, cosV, sinV;
-    explicit PointSet(int n) {
+// The uniform numbers of a pixel's sky samples: one 3D point set (u0 picks
+// the lobe, u1 and u2 place the direction: Hammersley in (u1, u2), the base-3
+// radical inverse in u0) shifted per pixel modulo 1 (Cranley-Patterson), so
+// that neighbouring pixels do not repeat one pattern.
+struct SkyPointSet {
+    std::vector<double> u[3];
+    explicit SkyPointSet(int n) {
         for (int i = 0; i < n; ++i) {
-            u.push_back((i + 0.5) / n);
-            double v = 2 * kPi * radicalInverse2(uint32_t(i));
-            cosV.push_back(std::cos(v));
-            sinV.push_back(std::sin(v));
+            u[0].push_back(radicalInverse3(uint32_t(i)));
+            u[1].push_back((i + 0.5) / n);
+            u[2].push_back(radicalInverse2(uint32_t(i)));
         }
     }
-    int size() const { return int(u.size()); }
-    // Point i rotated by (du, angle with cos/sin cr, sr), mapped to the
-    // cosine-weighted hemisphere.
-    Vec cosineDirection(int i, double du, double cr, double sr) const {
-        double uu = u[i] + du;
-        uu -= std::floor(uu);
-        double r = std::sqrt(uu);
-        double c = cosV[i] * cr - sinV[i] * sr, s = sinV[i] * cr + cosV[i] * sr;
-        return {r * c, r * s, std::sqrt(std::max(0.0, 1 - uu))};
+    int size() const { return int(u[0].size()); }
+    // Coordinate d of point i shifted by `shift`, as a float below 1 (the
+    // sampler's domain is [0, 1)).
+    float shifted(int d, int i, double shift) const {
+        double v = u[d][size_t(i)] + shift;
+        float f = float(v - std::floor(v));
+        return f < 1.0f ? f : std::nextafter(1.0f, 0.0f);
     }
 };
 
-// The lanes of one image row and what is needed to sum them back. The lane
-// arrays are sized once for a full row and filled by index.
+// A shading point's local frame: tangent, bitangent, normal in world space.
+struct Frame {
+    Vec t, b, n;
+    Vec toLocal(Vec d) const { return {dot(d, t), dot(d, b), dot(d, n)}; }
+    Vec toWorld(Vec d) const { return d.x * t + d.y * b + d.z * n; }
+};
+
+// The lanes of one image row and what is needed to sum them back, in two
+// parts: one light lane per covered pixel, evaluated by the kernel, and N
+// sky lanes per covered pixel, drawn by the kernel's importance sampler
+// (weight = f cos / pdf). The arrays are sized once for a full row.
 struct RowBatch {
-    std::vector<float> wi[3], wo[3], rgb[3], weight[3];
-    size_t count = 0;
+    std::vector<float> wi[3], wo[3], rgb[3], lightWeight;              // light lanes
+    std::vector<float> skyWo[3], skyU[3], skyWi[3], skyPdf, skyWeight[3];  // sky lanes
+    size_t count = 0, skyCount = 0;
     std::vector<int> pixelX;      // covered pixels of the row
     std::vector<float> coverage;  // their coverage
-    explicit RowBatch(size_t maxLanes) {
-        for (int c = 0; c < 3; ++c)
-            wi[c].resize(maxLanes), wo[c].resize(maxLanes), rgb[c].resize(maxLanes), weight[c].resize(maxLanes);
+    std::vector<Frame> frames;    // their local frames
+    RowBatch(size_t pixels, size_t skyPerPixel) {
+        for (int c = 0; c < 3; ++c) {
+            wi[c].resize(pixels), wo[c].resize(pixels), rgb[c].resize(pixels);
+            for (auto* v : {&skyWo[c], &skyU[c], &skyWi[c], &skyWeight[c]}) v->resize(pixels * skyPerPixel);
+        }
+        lightWeight.resize(pixels);
+        skyPdf.resize(pixels * skyPerPixel);
     }
     void clear() {
-        count = 0;
-        pixelX.clear(), coverage.clear();
+        count = skyCount = 0;
+        pixelX.clear(), coverage.clear(), frames.clear();
     }
-    void push(Vec in, Vec out, std::array<float, 3> w) {
+    void pushLight(Vec in, Vec out, float weight) {
         wi[0][count] = float(in.x), wi[1][count] = float(in.y), wi[2][count] = float(in.z);
         wo[0][count] = float(out.x), wo[1][count] = float(out.y), wo[2][count] = float(out.z);
-        for (int c = 0; c < 3; ++c) weight[c][count] = w[c];
+        lightWeight[count] = weight;
         ++count;
     }
-    size_t lanes() const { return count; }
+    void pushSky(Vec out, const float u[3]) {
+        skyWo[0][skyCount] = float(out.x), skyWo[1][skyCount] = float(out.y), skyWo[2][skyCount] = float(out.z);
+        for (int d = 0; d < 3; ++d) skyU[d][skyCount] = u[d];
+        ++skyCount;
+    }
 };
 
 class SphereShader {
 public:
-    SphereShader(const Kernel& kernel, const SphereScene& scene)
+    SphereShader(const SphereScene& scene)
         : scene_(scene), camera_(scene), light_(sphericalDirection(scene.lightThetaDeg, scene.lightPhiDeg)),
-          alpha_(samplingRoughness(kernel)),
-          cosineSamples_(scene.sky == SkyModel::None ? 0 : (scene.skySamples + 1) / 2),
-          ggxSamples_(scene.sky == SkyModel::None ? 0 : scene.skySamples / 2) {}
+          skySamples_(scene.sky == SkyModel::None ? 0 : scene.skySamples) {}
 
-    int lanesPerPixel() const { return 1 + cosineSamples_.size() + ggxSamples_.size(); }
+    int skySamplesPerPixel() const { return skySamples_.size(); }
 
     // Fills `batch` with the lanes of the covered pixels of row y.
     void buildRow(int y, RowBatch& batch) const {
@@ -196,19 +201,23 @@ public:
         }
     }
 
-    // Sums the weighted kernel values of the row into the image.
+    // Sums the light lane (kernel value times irradiance cos) and the mean of
+    // the sky lanes (sampler weight times the sky's radiance) into the image.
     void accumulateRow(int y, const RowBatch& batch, SphereImage& image) const {
-        size_t lane = 0;
-        int per = lanesPerPixel();
+        int per = skySamples_.size();
         for (size_t p = 0; p < batch.pixelX.size(); ++p) {
             int x = batch.pixelX[p];
-            for (int c = 0; c < 3; ++c) {
-                double sum = 0;
-                for (int j = 0; j < per; ++j) sum += double(batch.rgb[c][lane + j]) * batch.weight[c][lane + j];
-                image.at(x, y, c) = float(sum);
+            double sum[3];
+            for (int c = 0; c < 3; ++c) sum[c] = double(batch.rgb[c][p]) * batch.lightWeight[p];
+            double sky[3] = {0, 0, 0};
+            for (size_t j = p * per; j < (p + 1) * per; ++j) {
+                if (!(batch.skyPdf[j] > 0)) continue;  // no direction (the lane's weight is 0)
+                Vec wi{batch.skyWi[0][j], batch.skyWi[1][j], batch.skyWi[2][j]};
+                std::array<float, 3> L = skyRadiance(scene_, batch.frames[p].toWorld(wi));
+                for (int c = 0; c < 3; ++c) sky[c] += double(batch.skyWeight[c][j]) * L[c];
             }
+            for (int c = 0; c < 3; ++c) image.at(x, y, c) = float(sum[c] + (per ? sky[c] / per : 0.0));
             image.coverage[size_t(y) * scene_.size + x] = batch.coverage[p];
-            lane += per;
         }
     }
 
@@ -218,65 +227,28 @@ private:
         // anisotropy direction); at the poles any perpendicular will do.
         Vec t = cross(kWorldUp, n);
         t = dot(t, t) < 1e-12 ? normalize(cross(Vec{1, 0, 0}, n)) : normalize(t);
-        Vec b = cross(n, t);
-        auto toLocal = [&](Vec d) { return Vec{dot(d, t), dot(d, b), dot(d, n)}; };
-        auto toWorld = [&](Vec d) { return d.x * t + d.y * b + d.z * n; };
-        Vec wo = toLocal(camera_.view);
-
-        Vec wl = toLocal(light_);
-        float lightWeight = float(scene_.lightIrradiance * std::max(0.0, wl.z));
-        batch.push(wl, wo, {lightWeight, lightWeight, lightWeight});
-        if (cosineSamples_.size() == 0) return;
-
+        Frame frame{t, cross(n, t), n};
+        batch.frames.push_back(frame);
+        Vec wo = frame.toLocal(camera_.view);
+        Vec wl = frame.toLocal(light_);
+        batch.pushLight(wl, wo, float(scene_.lightIrradiance * std::max(0.0, wl.z)));
         uint64_t h = splitMix64(pixelIndex);
-        double du = double(h >> 11) * 0x1p-53;
-        double angle = 2 * kPi * double(splitMix64(h) >> 11) * 0x1p-53;
-        double cr = std::cos(angle), sr = std::sin(angle);
-        double ax = alpha_[0], ay = alpha_[1];
-        double mCos = cosineSamples_.size(), mGgx = ggxSamples_.size();
-        // Multi-sample balance heuristic: every sample, whichever strategy
-        // drew it, is weighted by L cos / (sum_k M_k p_k), with
-        //   p_cos = cos / pi,  p_ggx = D(h) (n.h) / (4 wo.h),  h = s / |s|, s = wi + wo.
-        // p_ggx is formed from s without normalizing it: with
-        // e = s.x^2/ax^2 + s.y^2/ay^2 + s.z^2,  D(h) (n.h) = s.z |s|^4 / (pi ax ay e^2 |s|)
-        // and wo.h = wo.s / |s|, so p_ggx = s.z (s.s)^2 / (4 pi ax ay e^2 wo.s).
-        // (This loop is most of the renderer's own time: one division per sample.)
-        double invAx2 = 1 / (ax * ax), invAy2 = 1 / (ay * ay), ggxScale = mGgx / (4 * kPi * ax * ay);
-        auto pushSky = [&](Vec in) {
-            std::array<float, 3> w{0, 0, 0};
-            if (in.z > 0) {
-                double densityTimesPi = mCos * in.z;  // (sum_k M_k p_k) * pi
-                Vec sum = in + wo;
-                double os = dot(wo, sum);
-                if (mGgx > 0 && os > 0) {
-                    double ss = dot(sum, sum);
-                    double e = sum.x * sum.x * invAx2 + sum.y * sum.y * invAy2 + sum.z * sum.z;
-                    densityTimesPi += kPi * ggxScale * sum.z * ss * ss / (e * e * os);
-                }
-                double scale = kPi * in.z / densityTimesPi;
-                std::array<float, 3> L = skyRadiance(scene_, toWorld(in));
-                for (int c = 0; c < 3; ++c) w[c] = float(L[c] * scale);
-            } else {
-                in = Vec{0, 0, 1};  // below the horizon: contributes nothing
-            }
-            batch.push(in, wo, w);
-        };
-        for (int i = 0; i < cosineSamples_.size(); ++i) pushSky(cosineSamples_.cosineDirection(i, du, cr, sr));
-        for (int i = 0; i < ggxSamples_.size(); ++i) {
-            // Stretching a cosine-distributed direction by (ax, ay) gives
-            // microfacet normals distributed as D_ggx(h) cos(theta_h).
-            Vec c = ggxSamples_.cosineDirection(i, du, cr, sr);
-            Vec hv = normalize(Vec{ax * c.x, ay * c.y, c.z});
-            double oh = dot(wo, hv);
-            pushSky(oh > 0 ? 2 * oh * hv - wo : Vec{0, 0, -1});
+        double shift[3];
+        for (double& d : shift) {
+            d = double(h >> 11) * 0x1p-53;
+            h = splitMix64(h);
+        }
+        for (int i = 0; i < skySamples_.size(); ++i) {
+            float u[3] = {skySamples_.shifted(0, i, shift[0]), skySamples_.shifted(1, i, shift[1]),
+                          skySamples_.shifted(2, i, shift[2])};
+            batch.pushSky(wo, u);
         }
     }
 
     const SphereScene& scene_;
     Camera camera_;
     Vec light_;
-    std::array<double, 2> alpha_;
-    PointSet cosineSamples_, ggxSamples_;
+    SkyPointSet skySamples_;
 };
 
 double srgbEncode(double x) {
@@ -310,26 +282,32 @@ SphereImage renderSphere(const Kernel& kernel, const SphereScene& scene) {
     image.size = scene.size;
     image.radiance.assign(size_t(scene.size) * scene.size * 3, 0.0f);
     image.coverage.assign(size_t(scene.size) * scene.size, 0.0f);
-    SphereShader shader(kernel, scene);
+    SphereShader shader(scene);
 
     int threads = scene.threads ? scene.threads : int(std::max(1u, std::thread::hardware_concurrency()));
     threads = std::min(threads, scene.size);
     std::atomic<int> nextRow{0};
-    std::atomic<int64_t> invalid{0}, evaluations{0}, pixels{0}, kernelNanos{0};
+    std::atomic<int64_t> invalid{0}, evaluations{0}, samples{0}, pixels{0}, kernelNanos{0};
     auto worker = [&] {
-        RowBatch batch(size_t(scene.size) * shader.lanesPerPixel());
+        RowBatch batch(size_t(scene.size), size_t(shader.skySamplesPerPixel()));
         for (int y; (y = nextRow.fetch_add(1)) < scene.size;) {
             shader.buildRow(y, batch);
-            size_t n = batch.lanes();
+            size_t n = batch.count, m = batch.skyCount;
             if (n == 0) continue;
             const float* wi[3] = {batch.wi[0].data(), batch.wi[1].data(), batch.wi[2].data()};
             const float* wo[3] = {batch.wo[0].data(), batch.wo[1].data(), batch.wo[2].data()};
             float* rgb[3] = {batch.rgb[0].data(), batch.rgb[1].data(), batch.rgb[2].data()};
+            const float* skyWo[3] = {batch.skyWo[0].data(), batch.skyWo[1].data(), batch.skyWo[2].data()};
+            const float* skyU[3] = {batch.skyU[0].data(), batch.skyU[1].data(), batch.skyU[2].data()};
+            float* skyWi[3] = {batch.skyWi[0].data(), batch.skyWi[1].data(), batch.skyWi[2].data()};
+            float* skyWeight[3] = {batch.skyWeight[0].data(), batch.skyWeight[1].data(), batch.skyWeight[2].data()};
             auto kernelStart = std::chrono::steady_clock::now();
             invalid += kernel.evalBatch(int64_t(n), wi, wo, nullptr, rgb);
+            if (m) invalid += kernel.sampleBatch(int64_t(m), skyWo, skyU, nullptr, skyWi, batch.skyPdf.data(), skyWeight);
             kernelNanos += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() -
                                                                                 kernelStart).count();
             evaluations += int64_t(n);
+            samples += int64_t(m);
             pixels += int64_t(batch.pixelX.size());
             shader.accumulateRow(y, batch, image);
         }
@@ -344,6 +322,7 @@ SphereImage renderSphere(const Kernel& kernel, const SphereScene& scene) {
     image.stats.threads = threads;
     image.stats.invalidLanes = invalid;
     image.stats.evaluations = evaluations;
+    image.stats.samples = samples;
     image.stats.pixels = pixels;
     return image;
 }

@@ -4,14 +4,14 @@
 // (any backend: the SIMD kernel for speed, the interpreter as reference)
 // under one directional light plus a sky (constant, or an analytic
 // horizon-to-zenith gradient over a darker ground) integrated with a fixed
-// number of samples per pixel. The sky estimator combines cosine-weighted
-// samples with samples of a GGX distribution of the material's roughness
-// (multi-sample balance heuristic), so smooth and rough materials both
-// converge at 64 samples; it stays unbiased whatever the material's NDF,
-// because the sampling density is only a choice of where to look.
+// number of samples per pixel. The sky directions are drawn by the kernel's
+// own importance sampler (Kernel::sampleBatch: the material's NDF, visible
+// normals where it has them, and its cosine lobe, mixed by their albedos),
+// and each contributes the sky's radiance times the sampler's weight
+// f cos / pdf: the estimator a path tracer using Facet would run.
 //
-// Every pixel uses the same deterministic sample set (Hammersley points
-// rotated per pixel by a hash), so two renders of the same material with
+// Every pixel uses the same deterministic uniform numbers (one 3D point set,
+// shifted per pixel by a hash), so two renders of the same material with
 // different backends differ only by the kernels' own differences: that is
 // how the tests compare the SIMD kernel with the interpreter.
 //
@@ -49,12 +49,13 @@ struct SphereScene {
 };
 
 struct RenderStats {
-    double seconds = 0;       // wall time of the shading (sample generation + kernel + accumulation)
-    double kernelSeconds = 0; // time inside the kernel's batch calls, summed over the threads
+    double seconds = 0;       // wall time of the shading (lane set-up + kernel + accumulation)
+    double kernelSeconds = 0; // time inside the kernel's eval and sample batch calls, summed over the threads
     int threads = 1;
     int64_t pixels = 0;       // pixels covered by the sphere
-    int64_t evaluations = 0;  // kernel lanes evaluated
-    int64_t invalidLanes = 0; // lanes the kernel reported invalid (0 for a valid material)
+    int64_t evaluations = 0;  // kernel lanes evaluated (the light's)
+    int64_t samples = 0;      // sky directions drawn by the kernel's sampler
+    int64_t invalidLanes = 0; // eval and sample lanes the kernel reported invalid (0 for a valid material)
 };
 
 struct SphereImage {

@@ -26,7 +26,7 @@ size_of() { oiiotool --info "$1" | sed -E 's/^[^:]*: *([0-9]+) x +([0-9]+),.*/\1
 
 check "sphere png" 0 "$facet" render "$src/materials/gold.mat" -o "$out/gold.png" --size 96 --samples 8
 expect_text "sphere png" "$out/stdout" "rendered 96x96"
-expect_text "sphere png timing" "$out/stdout" "evaluations in [0-9.]* s on [0-9]* threads"
+expect_text "sphere png timing" "$out/stdout" "kernel lanes in [0-9.]* s on [0-9]* threads"
 [[ "$(size_of "$out/gold.png")" == "96 x 96" ]] || { echo "FAIL: gold.png is $(size_of "$out/gold.png")"; fail=1; }
 
 check "sphere exr" 0 "$facet" render "$src/materials/brushed_metal.mat" -o "$out/brushed.exr" --size 64 \
