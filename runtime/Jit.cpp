@@ -274,16 +274,6 @@ void* FacetJit::lookup(llvm::orc::JITDylib& dylib, const std::string& symbol) {
     return addr->toPtr<void*>();
 }
 
-void* FacetJit::lookupIfDefined(llvm::orc::JITDylib& dylib, const std::string& symbol) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    auto addr = jit_->lookup(dylib, symbol);
-    if (!addr) {
-        llvm::consumeError(addr.takeError());
-        return nullptr;
-    }
-    return addr->toPtr<void*>();
-}
-
 void FacetJit::release(llvm::orc::JITDylib& dylib) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (llvm::Error err = jit_->getExecutionSession().removeJITDylib(dylib))

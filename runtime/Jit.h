@@ -49,11 +49,9 @@ public:
     static constexpr const char* kPipelineId = "early-cse,reassociate,instcombine;codegen-O3";
 
     // Links an object into a fresh JITDylib; returns it. lookup() finds a
-    // symbol in it (throws if it is missing; lookupIfDefined() returns null
-    // then); release() unloads it.
+    // symbol in it; release() unloads it.
     llvm::orc::JITDylib& addObject(std::unique_ptr<llvm::MemoryBuffer> object);
     void* lookup(llvm::orc::JITDylib& dylib, const std::string& symbol);
-    void* lookupIfDefined(llvm::orc::JITDylib& dylib, const std::string& symbol);
     void release(llvm::orc::JITDylib& dylib);
 
 private:

@@ -285,6 +285,7 @@ struct KernelCode {
     std::atomic<PdfScalarFn> pdfScalar{nullptr};
     std::atomic<SampleBatchFn> sampleBatch{nullptr};
     std::atomic<PdfBatchFn> pdfBatch{nullptr};
+    std::once_flag samplerOnce;
 
     mutable std::mutex mutex;  // guards the members below
     mutable std::condition_variable settled;
@@ -443,7 +444,55 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
     return invalid;
 }
 
+void Kernel::ensureSampler() const {
+    if (!code_) return;
+    std::call_once(code_->samplerOnce, [this] {
+        // A failure leaves the entry points null: the reference samples.
+        try {
+            LoweringOptions lowering = samplerLowering_;
+            lowering.emitEval = false;
+            lowering.emitSampling = true;
+            if (planLowering(material_, lowering.variant, lowering.x86Target).sampling.specular ==
+                SpecularSampling::None)
+                return;
+            PipelineRun run = PipelineRun::fromSpecialized(material_, energyTable_);
+            PipelineControl control;
+            control.symbolPrefix = samplerPrefix_;
+            control.lowering = lowering;
+            PipelineTarget target;
+            target.jit = code_->jit.get();
+            target.level = FacetJit::Level::Optimized;
+            target.naturalWidth = code_->jit->hostVectorWidth();
+            TableCache tables("");  // unused: the run starts specialized, with its table
+            DiagnosticEngine diags;
+            if (!runKernelPipeline(run, control, target, tables, diags)) return;
+            KernelCode& code = *code_;
+            llvm::orc::JITDylib& dylib =
+                code.jit->addObject(llvm::MemoryBuffer::getMemBufferCopy(run.object, samplerPrefix_ + ".sampler"));
+            {
+                std::lock_guard<std::mutex> lock(code.mutex);
+                code.dylibs.push_back(&dylib);
+            }
+            const std::string& p = samplerPrefix_;
+            if (lowering.emitScalar) {
+                code.sampleScalar.store(reinterpret_cast<SampleScalarFn>(code.jit->lookup(dylib, p + "_sample_scalar")),
+                                        std::memory_order_release);
+                code.pdfScalar.store(reinterpret_cast<PdfScalarFn>(code.jit->lookup(dylib, p + "_pdf_scalar")),
+                                     std::memory_order_release);
+            }
+            if (lowering.emitBatch) {
+                code.sampleBatch.store(reinterpret_cast<SampleBatchFn>(code.jit->lookup(dylib, p + "_sample_batch")),
+                                       std::memory_order_release);
+                code.pdfBatch.store(reinterpret_cast<PdfBatchFn>(code.jit->lookup(dylib, p + "_pdf_batch")),
+                                    std::memory_order_release);
+            }
+        } catch (const std::exception&) {
+        }
+    });
+}
+
 std::string Kernel::samplerTier() const {
+    ensureSampler();
     bool jit = code_ && (code_->sampleScalar.load(std::memory_order_acquire) ||
                          code_->sampleBatch.load(std::memory_order_acquire));
     return jit ? "jit" : "reference";
@@ -475,6 +524,7 @@ int64_t forEachLane(const CheckedMaterial& material, int64_t n, const float* con
 
 bool Kernel::sample(const float wo[3], const float u[3], const float* inputs, float wi[3], float* pdf,
                     float weight[3]) const {
+    ensureSampler();
     if (SampleScalarFn fn = code_ ? code_->sampleScalar.load(std::memory_order_acquire) : nullptr)
         return fn(wo, u, inputs, wi, pdf, weight) == 0;
     // One lane through the batch entry (or the reference).
@@ -489,6 +539,7 @@ bool Kernel::sample(const float wo[3], const float u[3], const float* inputs, fl
 }
 
 float Kernel::pdf(const float wi[3], const float wo[3], const float* inputs) const {
+    ensureSampler();
     float out = 0;
     if (PdfScalarFn fn = code_ ? code_->pdfScalar.load(std::memory_order_acquire) : nullptr) {
         fn(wi, wo, inputs, &out);
@@ -506,6 +557,7 @@ float Kernel::pdf(const float wi[3], const float wo[3], const float* inputs) con
 int64_t Kernel::sampleBatch(int64_t n, const float* const wo[3], const float* const u[3], const float* const* inputs,
                             float* const wi[3], float* pdf, float* const weight[3]) const {
     if (n <= 0) return n == 0 ? 0 : -1;
+    ensureSampler();
     if (SampleBatchFn fn = code_ ? code_->sampleBatch.load(std::memory_order_acquire) : nullptr)
         return fn(n, wo, u, inputs, wi, pdf, weight);
     SampleScalarFn scalar = code_ ? code_->sampleScalar.load(std::memory_order_acquire) : nullptr;
@@ -536,6 +588,7 @@ int64_t Kernel::sampleBatch(int64_t n, const float* const wo[3], const float* co
 int64_t Kernel::pdfBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
                          float* pdf) const {
     if (n <= 0) return n == 0 ? 0 : -1;
+    ensureSampler();
     if (PdfBatchFn fn = code_ ? code_->pdfBatch.load(std::memory_order_acquire) : nullptr)
         return fn(n, wi, wo, inputs, pdf);
     PdfScalarFn scalar = code_ ? code_->pdfScalar.load(std::memory_order_acquire) : nullptr;
@@ -687,6 +740,8 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
     kernel->code_->jit = jit_;
     kernel->code_->optimized = level == FacetJit::Level::Optimized;
     link(*kernel->code_, cached->object, prefix, lowering);
+    kernel->samplerLowering_ = lowering;
+    kernel->samplerPrefix_ = prefix;
     kernel->variant_ = cached->variant;
     kernel->measuredError_ = cached->measuredError;
     if (tiered) {
@@ -772,20 +827,7 @@ void Compiler::link(KernelCode& code, const std::string& object, const std::stri
     if (lowering.emitBatch)
         code.batch.store(reinterpret_cast<BatchKernelFn>(jit_->lookup(dylib, prefix + "_batch")),
                          std::memory_order_release);
-    // The sampler's entry points exist where the plan has a sampler in IR
-    // for the material (LoweringPlan::sampling).
-    if (lowering.emitSampling && lowering.emitScalar) {
-        code.sampleScalar.store(reinterpret_cast<SampleScalarFn>(jit_->lookupIfDefined(dylib, prefix + "_sample_scalar")),
-                                std::memory_order_release);
-        code.pdfScalar.store(reinterpret_cast<PdfScalarFn>(jit_->lookupIfDefined(dylib, prefix + "_pdf_scalar")),
-                             std::memory_order_release);
-    }
-    if (lowering.emitSampling && lowering.emitBatch) {
-        code.sampleBatch.store(reinterpret_cast<SampleBatchFn>(jit_->lookupIfDefined(dylib, prefix + "_sample_batch")),
-                               std::memory_order_release);
-        code.pdfBatch.store(reinterpret_cast<PdfBatchFn>(jit_->lookupIfDefined(dylib, prefix + "_pdf_batch")),
-                            std::memory_order_release);
-    }
+
 }
 
 CachedKernel Compiler::searchVariants(const CheckedMaterial& material, LoweringOptions lowering, double tolerance,

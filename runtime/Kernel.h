@@ -173,12 +173,19 @@ public:
     // scalar or SIMD as eval), or "reference" (the interpreter's sampler in
     // double, lane by lane: interp kernels, and materials whose NDF has no
     // sampler in IR, which `facet ir --plan` shows as sampling:
-    // specular=none).
+    // specular=none). A JIT kernel compiles its sampler (optimized, the
+    // kernel's math variant and width, not cached) on the first call of
+    // any sampling function, this one included: eval-only hosts never pay
+    // for it.
     std::string samplerTier() const;
 
 private:
     friend class Compiler;
     Kernel() = default;
+    // Compiles and links the sampler's entry points once (see samplerTier).
+    void ensureSampler() const;
+    LoweringOptions samplerLowering_;  // the eval kernel's lowering options
+    std::string samplerPrefix_;
     CheckedMaterial material_;  // holds its expression trees by shared pointer
     Backend backend_ = Backend::Simd;
     int width_ = 1;

@@ -481,8 +481,10 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
     out.module = std::make_unique<llvm::Module>(symbolPrefix, context);
     const bool sampling = options.emitSampling && plan.sampling.specular != SpecularSampling::None;
     if (options.emitScalar) {
-        out.scalarSymbol = symbolPrefix + "_scalar";
-        emitScalarEntry(k, *out.module, out.scalarSymbol);
+        if (options.emitEval) {
+            out.scalarSymbol = symbolPrefix + "_scalar";
+            emitScalarEntry(k, *out.module, out.scalarSymbol);
+        }
         if (sampling) {
             out.sampleScalarSymbol = symbolPrefix + "_sample_scalar";
             out.pdfScalarSymbol = symbolPrefix + "_pdf_scalar";
@@ -493,8 +495,10 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
         }
     }
     if (options.emitBatch) {
-        out.batchSymbol = symbolPrefix + "_batch";
-        emitBatchEntry(k, *out.module, out.batchSymbol);
+        if (options.emitEval) {
+            out.batchSymbol = symbolPrefix + "_batch";
+            emitBatchEntry(k, *out.module, out.batchSymbol);
+        }
         if (sampling) {
             out.sampleBatchSymbol = symbolPrefix + "_sample_batch";
             out.pdfBatchSymbol = symbolPrefix + "_pdf_batch";

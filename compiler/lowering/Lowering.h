@@ -42,9 +42,13 @@ struct LoweringOptions {
     int width = 16;  // lanes of the batch kernel: 4, 8 or 16
     bool emitScalar = true;
     bool emitBatch = true;
-    // The sampler's entry points next to eval's (where the plan has a JIT
-    // sampler for the material: LoweringPlan::sampling).
-    bool emitSampling = true;
+    // Which entry points: eval's, and the sampler's sample and pdf (where
+    // the plan has a JIT sampler for the material: LoweringPlan::sampling),
+    // scalar and/or batch as above. JIT kernels compile the sampler in a
+    // module of its own on first use (runtime/Kernel.h), so that eval-only
+    // hosts do not pay for it.
+    bool emitEval = true;
+    bool emitSampling = false;
     // Whether the target is x86, whose MXCSR fast kernels set to flush
     // subnormals (LoweringPlan::flushDenormals). The host's by default; an
     // ahead-of-time build for another target sets its own.

@@ -95,7 +95,9 @@ int64_t facet_pdf_batch(const facet_kernel* k, int64_t n, const float* const wi[
 /* Which code samples: "jit" (the kernel's own compiled sampler, scalar or
    SIMD as its eval), or "reference" (the interpreter's sampler in double,
    one lane at a time: backend=interp, and the materials whose NDF has no
-   compiled sampler, e.g. gaussian); "" for a NULL kernel. */
+   compiled sampler: gaussian, and beckmann under a Smith masking); "" for
+   a NULL kernel. A kernel compiles its sampler on the first call of any
+   sampling function (this one included), once, thread-safely. */
 const char* facet_sampler(const facet_kernel* k);
 
 /* The message of the last batch call that returned -1 in this thread
