@@ -36,7 +36,6 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <optional>
-#include <random>
 
 namespace facet {
 
@@ -325,10 +324,8 @@ int pdfPlotCommand(const RenderArgs& r) {
     preview::SampleHistogram h;
     h.rows = grid.rings(), h.columns = grid.sectors();
     h.observed.assign(size_t(grid.cellCount()), 0.0);
-    // The uniform numbers of `facet sample`: a seeded 64-bit Mersenne
-    // Twister, 53 bits each, so a seed draws the same samples everywhere.
-    std::mt19937_64 rng(r.seed);
-    auto uniform = [&] { return double(rng() >> 11) * 0x1p-53; };
+    SampleUniforms uniforms(r.seed);  // those of `facet sample`: a seed draws the same samples
+    auto uniform = [&] { return uniforms.next(); };
     long invalid = 0, none = 0;
     for (long i = 0; i < r.samples; ++i) {
         double u[3] = {uniform(), uniform(), uniform()};

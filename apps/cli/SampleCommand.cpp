@@ -26,7 +26,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fmt/format.h>
-#include <random>
 
 namespace facet {
 
@@ -99,8 +98,8 @@ int runSample(const std::vector<std::string>& args) {
     }
     const CheckedMaterial* m = program.find(material);
     if (!m) throw SampleUsageError{fmt::format("no material named '{}' in {}", material, file)};
-    std::mt19937_64 rng(seed);
-    auto uniform = [&] { return double(rng() >> 11) * 0x1p-53; };  // [0, 1), the same on every platform
+    SampleUniforms uniforms(seed);
+    auto uniform = [&] { return uniforms.next(); };
     std::string csv = "wi_x,wi_y,wi_z,pdf,weight_r,weight_g,weight_b\n";
     std::array<double, 3> sum{};
     long below = 0, invalid = 0;

@@ -6,7 +6,9 @@
 #include "Interpreter.h"
 
 #include <array>
+#include <cstdint>
 #include <memory>
+#include <random>
 #include <string>
 
 namespace facet {
@@ -15,6 +17,18 @@ namespace facet {
 // kUnitTolerance, pointing away from the surface: z > 0) into `view`.
 // Returns "" or the reason, naming the option `option`.
 std::string parseViewDirection(const std::string& option, const std::string& text, std::array<double, 3>& view);
+
+// The uniform numbers of `facet sample` and `facet render --plot pdf`: a
+// 64-bit Mersenne Twister seeded with `seed`, 53 bits per number, in [0, 1),
+// so that a seed draws the same samples on every platform.
+class SampleUniforms {
+public:
+    explicit SampleUniforms(uint64_t seed) : rng_(seed) {}
+    double next() { return double(rng_() >> 11) * 0x1p-53; }
+
+private:
+    std::mt19937_64 rng_;
+};
 
 // The double interpreter of `material`, with its Kulla-Conty table from the
 // table cache where the material compensates energy (a cache that cannot be
