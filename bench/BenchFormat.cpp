@@ -56,6 +56,58 @@ const std::vector<Column>& columns() {
     return c;
 }
 
+std::vector<std::string> samplerCells(const SamplerRow& r) {
+    return {r.backend,
+            r.mode,
+            r.tier,
+            std::to_string(r.width),
+            num(r.nsPerSample, "{:.2f}"),
+            num(1e3 / r.nsPerSample, "{:.1f}"),
+            num(r.nsPerPdf, "{:.2f}"),
+            r.tier == "jit" ? opt(r.firstUseMs, "{:.1f}") : "-",
+            opt(r.aotRatio, "{:.2f}")};
+}
+
+const std::vector<Column>& samplerColumns() {
+    static const std::vector<Column> c = {
+        {"backend", 7, true},       {"mode", 12, true},     {"sampler", 9, true},  {"width", 5, false},
+        {"ns/sample", 9, false},    {"Msample/s", 9, false}, {"ns/pdf", 8, false},  {"first-use ms", 12, false},
+        {"JIT/AOT", 7, false},
+    };
+    return c;
+}
+
+// The columns of `rows` as aligned text lines, the header first.
+template <typename Row, typename Cells>
+std::string textTable(const std::vector<Column>& columns, const std::vector<Row>& rows, Cells&& cellsOf) {
+    auto line = [&](const std::vector<std::string>& v) {
+        std::string out;
+        for (size_t i = 0; i < v.size(); ++i)
+            out += fmt::format(fmt::runtime(columns[i].left ? "{:<{}} " : "{:>{}} "), v[i], columns[i].width);
+        return out + "\n";
+    };
+    std::vector<std::string> titles;
+    for (const Column& c : columns) titles.push_back(c.title);
+    std::string out = line(titles);
+    for (const Row& r : rows) out += line(cellsOf(r));
+    return out;
+}
+
+template <typename Row, typename Cells>
+std::string markdownTable(const std::vector<Column>& columns, const std::vector<Row>& rows, Cells&& cellsOf) {
+    std::string md = "|";
+    for (const Column& c : columns) md += fmt::format(" {} |", c.title);
+    md += "\n|";
+    for (const Column& c : columns) md += c.left ? "---|" : "--:|";
+    md += "\n";
+    for (const Row& r : rows) {
+        md += "|";
+        for (const std::string& v : cellsOf(r)) md += fmt::format(" {} |", v);
+        md += "\n";
+    }
+    return md;
+}
+
 std::string header(const BenchReport& report, const MaterialBench& m) {
     const BenchSettings& s = report.settings;
     std::string aot = m.aotModel.empty() ? (m.aotNote.empty() ? "none" : m.aotNote) : m.aotModel;
@@ -93,27 +145,40 @@ std::string summaryLine(const MaterialBench& m) {
     return s;
 }
 
+std::string samplerSummaryLine(const MaterialBench& m) {
+    auto find = [&](const char* backend, const char* mode) -> const SamplerRow* {
+        for (const SamplerRow& r : m.samplerRows)
+            if (r.backend == backend && r.mode == mode) return &r;
+        return nullptr;
+    };
+    const SamplerRow* simd = find("simd", "exact");
+    if (!simd) return "";
+    std::string s = fmt::format("simd exact {:.2f} ns/sample, {:.2f} ns/pdf ({} sampler)", simd->nsPerSample,
+                                simd->nsPerPdf, simd->tier);
+    if (const SamplerRow* fast = find("simd", "fast")) s += fmt::format("; simd fast {:.2f} ns/sample", fast->nsPerSample);
+    if (const SamplerRow* scalar = find("scalar", "exact"))
+        s += fmt::format("; simd/scalar speed-up {:.1f}x", scalar->nsPerSample / simd->nsPerSample);
+    if (const SamplerRow* aot = find("aot", "hand-written"))
+        s += fmt::format("; aot {:.2f} ns/sample, JIT/AOT {:.2f}", aot->nsPerSample, simd->nsPerSample / aot->nsPerSample);
+    return s;
+}
+
 void printTable(const BenchReport& report, std::FILE* out) {
     for (const MaterialBench& m : report.materials) {
         std::fprintf(out, "\n%s\n", header(report, m).c_str());
         if (m.energyTable) std::fprintf(out, "  %s\n", energyTableLine(m).c_str());
-        std::string line;
-        for (const Column& c : columns())
-            line += fmt::format(fmt::runtime(c.left ? "{:<{}} " : "{:>{}} "), c.title, c.width);
-        std::fprintf(out, "%s\n", line.c_str());
-        for (const BenchRow& r : m.rows) {
-            std::vector<std::string> v = cells(r);
-            line.clear();
-            for (size_t i = 0; i < v.size(); ++i)
-                line += fmt::format(fmt::runtime(columns()[i].left ? "{:<{}} " : "{:>{}} "), v[i], columns()[i].width);
-            std::fprintf(out, "%s\n", line.c_str());
-        }
+        std::fprintf(out, "%s", textTable(columns(), m.rows, cells).c_str());
         std::fprintf(out, "worst inputs (regular | hard):\n");
         for (const BenchRow& r : m.rows) {
             std::fprintf(out, "  %-19s %s\n", r.label().c_str(), r.regular.worst.str().c_str());
             std::fprintf(out, "  %-19s %s\n", "", r.hard.worst.str().c_str());
         }
         std::fprintf(out, "summary: %s\n", summaryLine(m).c_str());
+        if (!m.samplerRows.empty()) {
+            std::fprintf(out, "sampling (sample and pdf batches):\n%s",
+                         textTable(samplerColumns(), m.samplerRows, samplerCells).c_str());
+            std::fprintf(out, "sampling summary: %s\n", samplerSummaryLine(m).c_str());
+        }
     }
 }
 
@@ -138,19 +203,18 @@ std::string markdown(const BenchReport& report) {
                           m.aotModel.empty() ? (m.aotNote.empty() ? "none" : m.aotNote) : "`" + m.aotModel + "`");
         md += fmt::format(". Regular sample {} lanes, hard-case sample {} lanes.\n\n", m.regularLanes, m.hardLanes);
         if (m.energyTable) md += energyTableLine(m) + ".\n\n";
-        md += "|";
-        for (const Column& c : columns()) md += fmt::format(" {} |", c.title);
-        md += "\n|";
-        for (const Column& c : columns()) md += c.left ? "---|" : "--:|";
-        md += "\n";
-        for (const BenchRow& r : m.rows) {
-            md += "|";
-            for (const std::string& v : cells(r)) md += fmt::format(" {} |", v);
-            md += "\n";
-        }
+        md += markdownTable(columns(), m.rows, cells);
         md += fmt::format("\n**Summary:** {}\n\nWorst inputs:\n\n", summaryLine(m));
         for (const BenchRow& r : m.rows)
             md += fmt::format("- {}: regular `{}`; hard `{}`\n", r.label(), r.regular.worst.str(), r.hard.worst.str());
+        if (!m.samplerRows.empty()) {
+            md += "\nSampling: `Kernel::sampleBatch` and `Kernel::pdfBatch` (the AOT row: the hand-written sampler) on "
+                  "the regular sample's directions with uniform u; `sampler` says which code sampled (the kernel's "
+                  "compiled sampler, or the interpreter's reference sampler), `first-use ms` the first sampling "
+                  "call of a fresh kernel, which compiles its sampler.\n\n";
+            md += markdownTable(samplerColumns(), m.samplerRows, samplerCells);
+            md += fmt::format("\n**Sampling summary:** {}\n", samplerSummaryLine(m));
+        }
     }
     return md;
 }
@@ -349,6 +413,23 @@ std::string json(const BenchReport& report) {
             writeError(j, r.regular);
             j.key("error_hard");
             writeError(j, r.hard);
+            j.close('}');
+        }
+        j.close(']');
+        j.field("sampling_summary", samplerSummaryLine(m));
+        j.key("sampler_rows");
+        j.open('[');
+        for (const SamplerRow& r : m.samplerRows) {
+            j.open('{');
+            j.field("backend", r.backend);
+            j.field("mode", r.mode);
+            j.field("sampler", r.tier);
+            j.field("width", int64_t(r.width));
+            j.field("lanes", int64_t(r.lanes));
+            j.field("ns_per_sample", r.nsPerSample);
+            j.field("ns_per_pdf", r.nsPerPdf);
+            j.field("first_use_ms", r.firstUseMs);
+            j.field("jit_over_aot", r.aotRatio);
             j.close('}');
         }
         j.close(']');

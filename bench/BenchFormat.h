@@ -18,6 +18,9 @@ std::string json(const BenchReport& report);
 
 // One line per material: SIMD exact vs AOT and vs scalar, compile times.
 std::string summaryLine(const MaterialBench& m);
+// One line per material for the sampler rows: SIMD exact ns/sample and
+// ns/pdf, SIMD fast, speed-up over scalar, JIT/AOT ("" without them).
+std::string samplerSummaryLine(const MaterialBench& m);
 
 // "Kulla-Conty tables: ggx x smith_height_correlated (key), built in X ms
 // (cold, 64 x 64 grid; ...) / loaded from cache in Y ms" for a material with

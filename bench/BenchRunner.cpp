@@ -239,6 +239,7 @@ public:
                 if (r.backend != "aot" && r.backend != "interp" && row.nsPerEval > 0)
                     r.aotRatio = r.nsPerEval / row.nsPerEval;
         }
+        if (settings_.sampling) samplerRows(mb, aot::findReferenceModel(mb.aotModel));
     }
 
 private:
@@ -378,6 +379,88 @@ private:
         row.hard = errorOn(*kernel, hard_, refHard_);
         if (interp) interpRegular = row.regular, interpHard = row.hard;
         return true;
+    }
+
+    // The sampler rows (SamplerRow): sample and pdf on the regular sample's
+    // directions, u uniform in [0, 1).
+    void samplerRows(MaterialBench& mb, const aot::ReferenceModel* model) {
+        const size_t n = regular_.size();
+        std::mt19937_64 rng(settings_.seed + 1);
+        std::uniform_real_distribution<float> uniform(0, 1);
+        std::array<std::vector<float>, 3> u, wi, weight;
+        for (int c = 0; c < 3; ++c) {
+            u[c].resize(n);
+            for (float& x : u[c]) x = std::min(uniform(rng), 1 - 0x1p-24f);
+            wi[c].assign(n, 0), weight[c].assign(n, 0);
+        }
+        std::vector<float> pdf(n);
+        const float* uP[3] = {u[0].data(), u[1].data(), u[2].data()};
+        float* wiP[3] = {wi[0].data(), wi[1].data(), wi[2].data()};
+        float* weightP[3] = {weight[0].data(), weight[1].data(), weight[2].data()};
+
+        auto timeRow = [&](SamplerRow& row, bool interp, auto&& sample, auto&& density) {
+            size_t lanes = interp ? std::min(settings_.interpLanes, n) : n;
+            int runs = interp ? std::max(3, settings_.runs / 3) : settings_.runs;
+            int warmup = interp ? 1 : settings_.warmup;
+            row.lanes = lanes;
+            row.nsPerSample = timeBatches(warmup, runs, lanes, [&] { sample(lanes); }).first;
+            row.nsPerPdf = timeBatches(warmup, runs, lanes, [&] { density(lanes); }).first;
+        };
+        for (const char* backend : kBackends)
+            for (const char* math : {"exact", "fast"}) {
+                bool interp = std::string(backend) == "interp";
+                if (interp && std::string(math) == "fast") continue;  // the interpreter has one math
+                CompileOptions options;
+                std::string error = CompileOptions::parse(fmt::format("backend={};math={};cache=off", backend, math),
+                                                          options);
+                if (!error.empty()) throw std::runtime_error("bench: " + error);
+                std::unique_ptr<Kernel> kernel = compile(compiler_, options);
+                SamplerRow row;
+                row.backend = backend;
+                row.mode = math;
+                row.width = kernel->width();
+                // The first sampling call compiles a JIT sampler.
+                auto start = Clock::now();
+                kernel->sampleBatch(1, regular_.wo(), uP, regular_.inputs(), wiP, pdf.data(), weightP);
+                row.firstUseMs = millisSince(start);
+                row.tier = kernel->samplerTier();
+                timeRow(
+                    row, interp,
+                    [&](size_t lanes) {
+                        kernel->sampleBatch(int64_t(lanes), regular_.wo(), uP, regular_.inputs(), wiP, pdf.data(),
+                                            weightP);
+                    },
+                    [&](size_t lanes) {
+                        kernel->pdfBatch(int64_t(lanes), regular_.wi(), regular_.wo(), regular_.inputs(), pdf.data());
+                    });
+                reportSampler(row);
+                mb.samplerRows.push_back(std::move(row));
+            }
+        if (model && model->sample && model->pdf) {
+            SamplerRow row;
+            row.backend = "aot";
+            row.mode = "hand-written";
+            row.tier = "aot";
+            timeRow(
+                row, false,
+                [&](size_t lanes) {
+                    model->sample(int64_t(lanes), regular_.wo(), uP, regular_.inputs(), wiP, pdf.data(), weightP);
+                },
+                [&](size_t lanes) {
+                    model->pdf(int64_t(lanes), regular_.wi(), regular_.wo(), regular_.inputs(), pdf.data());
+                });
+            reportSampler(row);
+            for (SamplerRow& r : mb.samplerRows)
+                if (r.backend != "interp" && row.nsPerSample > 0) r.aotRatio = r.nsPerSample / row.nsPerSample;
+            mb.samplerRows.push_back(std::move(row));
+        }
+    }
+
+    void reportSampler(const SamplerRow& row) {
+        if (!progress_) return;
+        std::fprintf(progress_, "  %-7s %-9s %10.2f ns/sample %8.2f ns/pdf  (%s sampler)\n", row.backend.c_str(),
+                     row.mode.c_str(), row.nsPerSample, row.nsPerPdf, row.tier.c_str());
+        std::fflush(progress_);
     }
 
     ErrorStats errorOn(const Kernel& kernel, const LaneBatch& s, const ReferenceValues& ref) {

@@ -3,7 +3,7 @@
 // For every material: one row per backend (interp, scalar, simd) x math
 // mode (exact, fast, tolerance 1e-3, tolerance 1e-5), plus the hand-written
 // ahead-of-time model (bench/aot) when the material file is tagged
-// `// aot: NAME`. Each row has
+// `// aot: NAME`, and the sampler rows (SamplerRow). Each eval row has
 // - speed: median ns/eval over repeated warm runs: the SIMD batch entry and
 //   the AOT batch function on the whole batch per run; the scalar entry
 //   (called lane by lane) and the interpreter (Kernel::evalBatch, on fewer
@@ -39,6 +39,7 @@ struct BenchSettings {
     int compileRuns = 7;        // cold compiles and memory-cache hits (median)
     int diskRuns = 3;           // disk-cache hits (a fresh Compiler each)
     bool quick = false;
+    bool sampling = true;  // the sampler rows
     uint64_t seed = 20240607;
 
     static BenchSettings quickSettings();
@@ -87,6 +88,27 @@ struct BenchRow {
     std::string label() const { return backend + " " + mode; }
 };
 
+// The importance sampler of a material (SPEC 8): one row per backend x
+// math mode (interp; scalar and simd, exact and fast) and the hand-written
+// sampler of its AOT model where there is one. Speed of Kernel::sampleBatch
+// and Kernel::pdfBatch on the regular sample's wo (and wi for pdf) with
+// uniform u, medians like eval's rows (the interpreter on fewer lanes);
+// `tier` says whether the kernel's own compiled sampler ran ("jit") or the
+// interpreter's reference sampler ("reference"); firstUseMs is the first
+// sampling call of a fresh kernel, which compiles a JIT sampler (the
+// kernel's eval entry points were compiled already).
+struct SamplerRow {
+    std::string backend;  // interp | scalar | simd | aot
+    std::string mode;     // exact | fast | hand-written
+    std::string tier;     // jit | reference | aot
+    int width = 1;
+    size_t lanes = 0;
+    double nsPerSample = 0, nsPerPdf = 0;
+    std::optional<double> firstUseMs;
+    std::optional<double> aotRatio;  // ns/sample over the AOT sampler's
+    std::string label() const { return backend + " " + mode; }
+};
+
 // The Kulla-Conty E table of a material with energy = kulla_conty: its
 // (NDF, masking) pair, the time to build it by quadrature (cold: directly,
 // not through any cache; wall time, on `threads` threads) and the time to
@@ -113,6 +135,7 @@ struct MaterialBench {
     std::optional<EnergyTableBench> energyTable;  // energy = kulla_conty only
     size_t regularLanes = 0, hardLanes = 0;
     std::vector<BenchRow> rows;
+    std::vector<SamplerRow> samplerRows;  // empty with BenchSettings::sampling off
     const BenchRow* find(const std::string& backend, const std::string& mode) const;
 };
 

@@ -43,15 +43,32 @@ bool hasCosineLobe(const ResolvedMaterial<Real>& r) {
 template <typename Real>
 Real cosinePdf(const Vec3<Real>& wi) { return wi.z > 0 ? wi.z / kPi<Real> : Real(0); }
 
+// The cosine lobe takes part: the material has one, or it is the technique.
 template <typename Real>
-Real mixturePdf(const ResolvedMaterial<Real>& r, Real pSpec, Real spec, Real cosine) {
-    return hasCosineLobe(r) ? pSpec * spec + (1 - pSpec) * cosine : spec;
+bool mixesCosineLobe(const ResolvedMaterial<Real>& r, SamplingTechnique technique) {
+    return hasCosineLobe(r) || technique == SamplingTechnique::Cosine;
+}
+
+template <typename Real>
+Real mixturePdf(const ResolvedMaterial<Real>& r, SamplingTechnique technique, Real pSpec, Real spec, Real cosine) {
+    return mixesCosineLobe(r, technique) ? pSpec * spec + (1 - pSpec) * cosine : spec;
 }
 
 }  // namespace
 
+const char* samplingTechniqueName(SamplingTechnique t) {
+    switch (t) {
+        case SamplingTechnique::Material: return "material";
+        case SamplingTechnique::VisibleNormals: return "visible normals";
+        case SamplingTechnique::Normals: return "NDF";
+        case SamplingTechnique::Cosine: return "cosine";
+    }
+    return "?";
+}
+
 template <typename Real>
-Real specularProbability(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo) {
+Real specularProbability(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, SamplingTechnique technique) {
+    if (technique == SamplingTechnique::Cosine) return 0;
     if (!hasCosineLobe(r)) return 1;
     Real c = wo.z < 1 ? wo.z : Real(1);
     Real fresnel = 0, diffuse = 0, compensation = 0;
@@ -72,9 +89,10 @@ Real specularProbability(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo) 
 }
 
 template <typename Real>
-Real specularNormalPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, const Vec3<Real>& m) {
+Real specularNormalPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, const Vec3<Real>& m,
+                       SamplingTechnique technique) {
     if (!(m.z > 0)) return 0;
-    if (visibleNormalSampling(r)) {
+    if (visibleNormalSampling(r, technique)) {
         // G1(wo) (wo.m)+ D(m) / (n.wo) with G1 = (n.wo) / ((n.wo) + (n.wo) Lambda(wo)).
         Real om = dot(wo, m);
         if (!(om > 0)) return 0;
@@ -84,7 +102,8 @@ Real specularNormalPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, co
 }
 
 template <typename Real>
-Real specularPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo) {
+Real specularPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo,
+                 SamplingTechnique technique) {
     using std::sqrt;
     Vec3<Real> s{wi.x + wo.x, wi.y + wo.y, wi.z + wo.z};
     Real len = sqrt(dot(s, s));
@@ -93,32 +112,34 @@ Real specularPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Ve
     // sampler's normals have m.z > 0.
     Vec3<Real> m{s.x / len, s.y / len, s.z / len};
     if (m.z < 0) m = {-m.x, -m.y, -m.z};
-    if (visibleNormalSampling(r)) {
+    if (visibleNormalSampling(r, technique)) {
         // pdf_m / (4 wo.m) = D(m) / (4 ((n.wo) + (n.wo) Lambda(wo))) for
         // wo.m > 0, which holds for m = h (and fails for m = -h).
         if (!(s.z > 0)) return 0;
         return r.D(m) / (4 * (wo.z + r.cosLambda(wo)));
     }
-    return specularNormalPdf(r, wo, m) / (2 * len);
+    return specularNormalPdf(r, wo, m, technique) / (2 * len);
 }
 
 template <typename Real>
-Real brdfPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo) {
+Real brdfPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo, SamplingTechnique technique) {
     if (!(wo.z > 0)) return 0;
-    return mixturePdf(r, specularProbability(r, wo), specularPdf(r, wi, wo), cosinePdf(wi));
+    return mixturePdf(r, technique, specularProbability(r, wo, technique), specularPdf(r, wi, wo, technique),
+                      cosinePdf(wi));
 }
 
 template <typename Real>
-SampleResult<Real> sampleBrdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, const std::array<Real, 3>& u) {
+SampleResult<Real> sampleBrdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, const std::array<Real, 3>& u,
+                              SamplingTechnique technique) {
     using std::cos; using std::sin; using std::sqrt;
     SampleResult<Real> out;
     if (!(wo.z > 0)) return out;
-    Real pSpec = specularProbability(r, wo);
+    Real pSpec = specularProbability(r, wo, technique);
     Real spec, cosine;
     Vec3<Real> wi, sum;
     if (u[0] < pSpec) {
         const NdfFormulas<Real>& ndf = r.ndf->formulas.template get<Real>();
-        Vec3<Real> m = visibleNormalSampling(r) ? ndf.sampleVisibleNormal(r.ndfArgs, wo, u[1], u[2])
+        Vec3<Real> m = visibleNormalSampling(r, technique) ? ndf.sampleVisibleNormal(r.ndfArgs, wo, u[1], u[2])
                                                 : ndf.sampleNormal(r.ndfArgs, u[1], u[2]);
         Real om = dot(wo, m);
         wi = {2 * om * m.x - wo.x, 2 * om * m.y - wo.y, 2 * om * m.z - wo.z};
@@ -127,17 +148,17 @@ SampleResult<Real> sampleBrdf(const ResolvedMaterial<Real>& r, const Vec3<Real>&
         // from m.
         sum = {2 * om * m.x, 2 * om * m.y, 2 * om * m.z};
         // From the drawn normal (pdf() finds it again as the half vector).
-        spec = om != 0 ? specularNormalPdf(r, wo, m) / (4 * (om > 0 ? om : -om)) : Real(0);
+        spec = om != 0 ? specularNormalPdf(r, wo, m, technique) / (4 * (om > 0 ? om : -om)) : Real(0);
         cosine = cosinePdf(wi);
     } else {
         Real radius = sqrt(u[1]), phi = 2 * kPi<Real> * u[2];
         wi = {radius * cos(phi), radius * sin(phi), sqrt(1 - u[1])};
         cosine = cosinePdf(wi);
-        spec = specularPdf(r, wi, wo);
+        spec = specularPdf(r, wi, wo, technique);
         sum = {wi.x + wo.x, wi.y + wo.y, wi.z + wo.z};
     }
     out.wi = wi;
-    out.pdf = mixturePdf(r, pSpec, spec, cosine);
+    out.pdf = mixturePdf(r, technique, pSpec, spec, cosine);
     if (out.pdf > 0 && wi.z > 0) {
         std::array<Real, 3> f = r.brdf(wi, wo, sum);
         for (int ch = 0; ch < 3; ++ch) out.weight[ch] = f[ch] * wi.z / out.pdf;
@@ -179,12 +200,15 @@ PdfResult<Real> Interpreter<Real>::pdf(const Real wi[3], const Real wo[3], const
 }
 
 #define FACET_SAMPLING(Real)                                                                                 \
-    template Real specularProbability(const ResolvedMaterial<Real>&, const Vec3<Real>&);                     \
-    template Real specularNormalPdf(const ResolvedMaterial<Real>&, const Vec3<Real>&, const Vec3<Real>&);    \
-    template Real specularPdf(const ResolvedMaterial<Real>&, const Vec3<Real>&, const Vec3<Real>&);          \
-    template Real brdfPdf(const ResolvedMaterial<Real>&, const Vec3<Real>&, const Vec3<Real>&);              \
+    template Real specularProbability(const ResolvedMaterial<Real>&, const Vec3<Real>&, SamplingTechnique);  \
+    template Real specularNormalPdf(const ResolvedMaterial<Real>&, const Vec3<Real>&, const Vec3<Real>&,     \
+                                    SamplingTechnique);                                                      \
+    template Real specularPdf(const ResolvedMaterial<Real>&, const Vec3<Real>&, const Vec3<Real>&,           \
+                              SamplingTechnique);                                                            \
+    template Real brdfPdf(const ResolvedMaterial<Real>&, const Vec3<Real>&, const Vec3<Real>&,               \
+                          SamplingTechnique);                                                                \
     template SampleResult<Real> sampleBrdf(const ResolvedMaterial<Real>&, const Vec3<Real>&,                 \
-                                           const std::array<Real, 3>&);                                      \
+                                           const std::array<Real, 3>&, SamplingTechnique);                   \
     template SampleResult<Real> Interpreter<Real>::sample(const Real[3], const Real[3], const Real*) const;  \
     template PdfResult<Real> Interpreter<Real>::pdf(const Real[3], const Real[3], const Real*) const;
 FACET_SAMPLING(double)

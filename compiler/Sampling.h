@@ -30,6 +30,18 @@
 
 namespace facet {
 
+// Which technique draws the specular lobe. `Material` is the sampler every
+// evaluator uses (visible normals where the catalog has them under a Smith
+// masking, NDF sampling otherwise, and the cosine lobe where the material
+// has one). The others exist to measure what the choice is worth (`facet
+// bench`'s variance table, SamplingVariance.h): VisibleNormals forces
+// visible normals (only for NDFs with a visible-normal sampler:
+// hasVisibleNormalSampler), Normals forces NDF sampling, Cosine draws every
+// direction from the cosine lobe. Each keeps its pdf exact, so all are
+// unbiased estimators of the same integral.
+enum class SamplingTechnique { Material, VisibleNormals, Normals, Cosine };
+const char* samplingTechniqueName(SamplingTechnique t);
+
 template <typename Real>
 struct SampleResult {
     Vec3<Real> wi{};              // (0, 0, 0) when there is no sample
@@ -54,31 +66,46 @@ struct PdfResult {
 // p = specular / (specular + cosine), clamped to [0.05, 0.95] so that a
 // poor estimate (F = 0 at n.wo but not at other angles) cannot starve a
 // lobe whose f is not zero; p = 1 when the material has no cosine lobe.
+// With SamplingTechnique::Cosine: 0 (every direction from the cosine lobe).
 template <typename Real>
-Real specularProbability(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo);
+Real specularProbability(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo,
+                         SamplingTechnique technique = SamplingTechnique::Material);
 
 // True when the material's specular lobe is sampled through visible normals.
 template <typename Real>
-bool visibleNormalSampling(const ResolvedMaterial<Real>& r) {
+bool visibleNormalSampling(const ResolvedMaterial<Real>& r, SamplingTechnique technique = SamplingTechnique::Material) {
+    if (technique == SamplingTechnique::VisibleNormals) return true;
+    if (technique == SamplingTechnique::Normals) return false;
     return samplesVisibleNormals(*r.ndf, *r.masking);
+}
+
+// True when the material's NDF has an exact visible-normal sampler (what
+// SamplingTechnique::VisibleNormals needs).
+template <typename Real>
+bool hasVisibleNormalSampler(const ResolvedMaterial<Real>& r) {
+    return r.ndf->visibleNormals;
 }
 
 // The specular lobe's density of wi (solid angle; wi anywhere on the
 // sphere), through the half vector h = (wi + wo) / |wi + wo|.
 template <typename Real>
-Real specularPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo);
+Real specularPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo,
+                SamplingTechnique technique = SamplingTechnique::Material);
 
 // The density of the microfacet normal m that the specular lobe draws.
 template <typename Real>
-Real specularNormalPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, const Vec3<Real>& m);
+Real specularNormalPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, const Vec3<Real>& m,
+                SamplingTechnique technique = SamplingTechnique::Material);
 
 // The mixture density of wi given wo (unit vectors, n.wo > 0; else 0).
 template <typename Real>
-Real brdfPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo);
+Real brdfPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo,
+                SamplingTechnique technique = SamplingTechnique::Material);
 
 // One sample for the unit direction wo and u0, u1, u2 in [0, 1) (not
 // checked here: Interpreter::sample validates its inputs).
 template <typename Real>
-SampleResult<Real> sampleBrdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, const std::array<Real, 3>& u);
+SampleResult<Real> sampleBrdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, const std::array<Real, 3>& u,
+                              SamplingTechnique technique = SamplingTechnique::Material);
 
 }  // namespace facet

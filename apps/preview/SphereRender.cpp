@@ -277,7 +277,7 @@ std::string validateScene(const SphereScene& s) {
     return "";
 }
 
-SphereImage renderSphere(const Kernel& kernel, const SphereScene& scene) {
+SphereImage renderSphere(const Kernel& kernel, const SphereScene& scene, const SkySampler& sampler) {
     SphereImage image;
     image.size = scene.size;
     image.radiance.assign(size_t(scene.size) * scene.size * 3, 0.0f);
@@ -303,7 +303,8 @@ SphereImage renderSphere(const Kernel& kernel, const SphereScene& scene) {
             float* skyWeight[3] = {batch.skyWeight[0].data(), batch.skyWeight[1].data(), batch.skyWeight[2].data()};
             auto kernelStart = std::chrono::steady_clock::now();
             invalid += kernel.evalBatch(int64_t(n), wi, wo, nullptr, rgb);
-            if (m) invalid += kernel.sampleBatch(int64_t(m), skyWo, skyU, nullptr, skyWi, batch.skyPdf.data(), skyWeight);
+            if (m && sampler) invalid += sampler(int64_t(m), skyWo, skyU, skyWi, batch.skyPdf.data(), skyWeight);
+            else if (m) invalid += kernel.sampleBatch(int64_t(m), skyWo, skyU, nullptr, skyWi, batch.skyPdf.data(), skyWeight);
             kernelNanos += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() -
                                                                                 kernelStart).count();
             evaluations += int64_t(n);

@@ -28,6 +28,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -70,9 +71,15 @@ struct SphereImage {
 // Checks the scene's numbers; returns "" or a message naming the bad field.
 std::string validateScene(const SphereScene& scene);
 
+// Draws n sky directions as Kernel::sampleBatch does (the material's
+// default inputs); returns the number of invalid lanes.
+using SkySampler = std::function<int64_t(int64_t n, const float* const wo[3], const float* const u[3],
+                                         float* const wi[3], float* pdf, float* const weight[3])>;
+
 // Renders the sphere with `kernel` at its default inputs. The scene must be
-// valid (validateScene).
-SphereImage renderSphere(const Kernel& kernel, const SphereScene& scene);
+// valid (validateScene). The sky is sampled by `sampler` when given (e.g.
+// another technique, SamplingVariance.h), else by the kernel's own sampler.
+SphereImage renderSphere(const Kernel& kernel, const SphereScene& scene, const SkySampler& sampler = nullptr);
 
 // Writes the image. .exr/.hdr: linear RGBA, colour premultiplied by
 // coverage. Other formats (PNG, ...): 8-bit sRGB, radiance * 2^EV through

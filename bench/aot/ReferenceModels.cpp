@@ -25,6 +25,8 @@
 #if defined(__GNUC__) && !defined(__clang__)
 extern "C" float expf(float) __attribute__((simd("notinbranch")));
 extern "C" float erfcf(float) __attribute__((simd("notinbranch")));
+extern "C" float sinf(float) __attribute__((simd("notinbranch")));
+extern "C" float cosf(float) __attribute__((simd("notinbranch")));
 #endif
 
 namespace facet::aot {
@@ -198,6 +200,117 @@ template <bool HasRough>
     return invalid;
 }
 
+// ---- (a)'s sampler: GGX visible normals by spherical caps ----
+
+// 1 + Lambda(w) of isotropic GGX times 2 n.w: n.w + sqrt((n.w)^2 + a^2
+// (wx^2 + wy^2)), without the division by n.w (the ratios below cancel it).
+inline float ggxLambdaTerm(float x, float y, float z, float a2) { return std::sqrt(z * z + a2 * (x * x + y * y)); }
+
+// wo's validity and unit vector (SPEC 2), shared by sample and pdf.
+struct View {
+    float x, y, z;
+    bool ok;
+};
+inline View view(float x, float y, float z) {
+    float len = std::sqrt(x * x + y * y + z * z);
+    View v;
+    v.ok = finite3(x, y, z) & (std::fabs(len - 1.0f) <= kUnitTolerance);
+    float r = 1.0f / len;
+    v.x = x * r, v.y = y * r, v.z = z * r;
+    return v;
+}
+
+// D(m) / (4 (n.wo) (1 + Lambda(wo))) = D(m) / (2 (co + So)), So =
+// ggxLambdaTerm(wo); m unit with m.z >= 0.
+inline float ggxVisiblePdf(float mx, float my, float mz, float a2, float co, float so) {
+    float den = mx * mx + my * my + a2 * mz * mz;
+    float d = a2 * kInvPi / (den * den);
+    return d / (2.0f * (co + so));
+}
+
+template <bool HasRough>
+[[gnu::noinline]] int32_t ggxSchlickSampleLoop(int64_t n, const float* __restrict vx, const float* __restrict vy,
+                                               const float* __restrict vz, const float* __restrict u0,
+                                               const float* __restrict u1, const float* __restrict u2,
+                                               float* __restrict outX, float* __restrict outY,
+                                               float* __restrict outZ, float* __restrict outPdf,
+                                               float* __restrict outR, float* __restrict outG,
+                                               float* __restrict outB, const float* __restrict rough) {
+    int32_t invalid = 0;
+    for (int64_t i = 0; i < n; ++i) {
+        View o = view(vx[i], vy[i], vz[i]);
+        bool ok = o.ok & (u0[i] >= 0.0f) & (u0[i] < 1.0f) & (u1[i] >= 0.0f) & (u1[i] < 1.0f) & (u2[i] >= 0.0f) &
+                  (u2[i] < 1.0f);
+        float alpha = alphaOf(HasRough ? rough[i] : kGgxSchlickRoughness, ok);
+        float a2 = alpha * alpha;
+        // wo in the stretched (alpha = 1) configuration, where the visible
+        // normals are uniform on the spherical cap above -wo'.
+        float sx = alpha * o.x, sy = alpha * o.y, sz = o.z;
+        float rs = 1.0f / std::sqrt(sx * sx + sy * sy + sz * sz);
+        sx *= rs, sy *= rs, sz *= rs;
+        float phi = 2.0f * kPi * u1[i];
+        float z = (1.0f - u2[i]) * (1.0f + sz) - sz;
+        float r = std::sqrt(maxf((1.0f - z) * (1.0f + z), 0.0f));
+        float hx = r * cosf(phi) + sx, hy = r * sinf(phi) + sy, hz = z + sz;
+        float mx = alpha * hx, my = alpha * hy, mz = maxf(hz, 0.0f);
+        float ml2 = mx * mx + my * my + mz * mz;
+        float rm = ml2 > 0.0f ? 1.0f / std::sqrt(ml2) : 0.0f;
+        mx *= rm, my *= rm, mz = ml2 > 0.0f ? mz * rm : 1.0f;
+        float om = o.x * mx + o.y * my + o.z * mz;
+        float ix = 2.0f * om * mx - o.x, iy = 2.0f * om * my - o.y, iz = 2.0f * om * mz - o.z;
+        float so = ggxLambdaTerm(o.x, o.y, o.z, a2);
+        float pdf = om > 0.0f ? ggxVisiblePdf(mx, my, mz, a2, o.z, so) : 0.0f;
+        // weight = F G2 / G1(wo) = F ci (co + So) / (ci So + co Si).
+        float si = ggxLambdaTerm(ix, iy, iz, a2);
+        float ratio = iz * (o.z + so) / (iz * so + o.z * si);
+        float q = 1.0f - minf(maxf(om, 0.0f), 1.0f);
+        float q2 = q * q, q5 = q2 * q2 * q;
+        float fr = kGgxSchlickF0[0] + (1.0f - kGgxSchlickF0[0]) * q5;
+        float fg = kGgxSchlickF0[1] + (1.0f - kGgxSchlickF0[1]) * q5;
+        float fb = kGgxSchlickF0[2] + (1.0f - kGgxSchlickF0[2]) * q5;
+        bool lit = (iz > 0.0f) & (om > 0.0f);
+        float wr = lit ? fr * ratio : 0.0f, wg = lit ? fg * ratio : 0.0f, wb = lit ? fb * ratio : 0.0f;
+        bool sane = std::isfinite(pdf) & (pdf >= 0.0f) & std::isfinite(wr) & std::isfinite(wg) & std::isfinite(wb) &
+                    (wr >= 0.0f) & (wg >= 0.0f) & (wb >= 0.0f);
+        bool above = o.z > 0.0f;
+        bool valid = ok & (sane | !above);
+        bool show = valid & above;
+        outX[i] = show ? ix : 0.0f, outY[i] = show ? iy : 0.0f, outZ[i] = show ? iz : 0.0f;
+        outPdf[i] = show ? pdf : 0.0f;
+        outR[i] = show ? wr : 0.0f, outG[i] = show ? wg : 0.0f, outB[i] = show ? wb : 0.0f;
+        invalid += valid ? 0 : 1;
+    }
+    return invalid;
+}
+
+template <bool HasRough>
+[[gnu::noinline]] int32_t ggxSchlickPdfLoop(int64_t n, const float* __restrict wx, const float* __restrict wy,
+                                            const float* __restrict wz, const float* __restrict vx,
+                                            const float* __restrict vy, const float* __restrict vz,
+                                            float* __restrict outPdf, const float* __restrict rough) {
+    int32_t invalid = 0;
+    for (int64_t i = 0; i < n; ++i) {
+        View w = view(wx[i], wy[i], wz[i]), o = view(vx[i], vy[i], vz[i]);
+        bool ok = w.ok & o.ok;
+        float alpha = alphaOf(HasRough ? rough[i] : kGgxSchlickRoughness, ok);
+        float a2 = alpha * alpha;
+        // The half vector, turned to the upper hemisphere.
+        float hx = w.x + o.x, hy = w.y + o.y, hz = w.z + o.z;
+        float hl2 = hx * hx + hy * hy + hz * hz;
+        float rh = hl2 > 0.0f ? 1.0f / std::sqrt(hl2) : 0.0f;
+        rh = hz < 0.0f ? -rh : rh;
+        float mx = hx * rh, my = hy * rh, mz = hz * rh;
+        float om = o.x * mx + o.y * my + o.z * mz;
+        float so = ggxLambdaTerm(o.x, o.y, o.z, a2);
+        float pdf = ggxVisiblePdf(mx, my, mz, a2, o.z, so);
+        bool counted = (o.z > 0.0f) & (om > 0.0f) & (hl2 > 0.0f);
+        bool valid = ok & (!counted | (std::isfinite(pdf) & (pdf >= 0.0f)));
+        outPdf[i] = valid & counted ? pdf : 0.0f;
+        invalid += valid ? 0 : 1;
+    }
+    return invalid;
+}
+
 // ---- (b) Beckmann + separable Smith + conductor ----
 
 template <bool HasRough>
@@ -319,10 +432,42 @@ int64_t anisoGgxDielectric(int64_t n, const float* const wi[3], const float* con
     });
 }
 
+int64_t ggxSchlickSample(int64_t n, const float* const wo[3], const float* const u[3], const float* const* inputs,
+                         float* const wi[3], float* pdf, float* const weight[3]) {
+    const float* rough = inputs ? inputs[0] : nullptr;
+    int64_t invalid = 0;
+    for (int64_t start = 0; start < n; start += kChunk) {
+        int64_t m = std::min(kChunk, n - start);
+        auto at = [&](auto* p) { return p + start; };
+        invalid += rough ? ggxSchlickSampleLoop<true>(m, at(wo[0]), at(wo[1]), at(wo[2]), at(u[0]), at(u[1]), at(u[2]),
+                                                      at(wi[0]), at(wi[1]), at(wi[2]), at(pdf), at(weight[0]),
+                                                      at(weight[1]), at(weight[2]), at(rough))
+                         : ggxSchlickSampleLoop<false>(m, at(wo[0]), at(wo[1]), at(wo[2]), at(u[0]), at(u[1]),
+                                                       at(u[2]), at(wi[0]), at(wi[1]), at(wi[2]), at(pdf),
+                                                       at(weight[0]), at(weight[1]), at(weight[2]), nullptr);
+    }
+    return invalid;
+}
+
+int64_t ggxSchlickPdf(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                      float* pdf) {
+    const float* rough = inputs ? inputs[0] : nullptr;
+    int64_t invalid = 0;
+    for (int64_t start = 0; start < n; start += kChunk) {
+        int64_t m = std::min(kChunk, n - start);
+        auto at = [&](auto* p) { return p + start; };
+        invalid += rough ? ggxSchlickPdfLoop<true>(m, at(wi[0]), at(wi[1]), at(wi[2]), at(wo[0]), at(wo[1]),
+                                                   at(wo[2]), at(pdf), at(rough))
+                         : ggxSchlickPdfLoop<false>(m, at(wi[0]), at(wi[1]), at(wi[2]), at(wo[0]), at(wo[1]),
+                                                    at(wo[2]), at(pdf), nullptr);
+    }
+    return invalid;
+}
+
 const std::vector<ReferenceModel>& referenceModels() {
     static const std::vector<ReferenceModel> models = {
         {"ggx_schlick", "ggx_schlick.mat", "GGX + Smith height-correlated + Schlick (rgb f0)", {"roughness"},
-         &ggxSchlick},
+         &ggxSchlick, &ggxSchlickSample, &ggxSchlickPdf},
         {"beckmann_conductor", "beckmann_conductor.mat", "Beckmann + Smith separable + conductor (gold)",
          {"roughness"}, &beckmannConductor},
         {"aniso_ggx_dielectric", "aniso_ggx_dielectric.mat",

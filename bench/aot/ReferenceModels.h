@@ -27,18 +27,46 @@ namespace facet::aot {
 using BatchFn = int64_t (*)(int64_t n, const float* const wi[3], const float* const wo[3],
                             const float* const* inputs, float* const rgb[3]);
 
+// The sampler's batch functions, SoA as facet_sample_batch and
+// facet_pdf_batch (facet.h): wo[0..2], u[0..2], wi[0..2], weight[0..2]
+// each point to n floats, pdf to n floats; inputs as for BatchFn. Return
+// the number of invalid lanes.
+using SampleBatchFn = int64_t (*)(int64_t n, const float* const wo[3], const float* const u[3],
+                                  const float* const* inputs, float* const wi[3], float* pdf, float* const weight[3]);
+using PdfBatchFn = int64_t (*)(int64_t n, const float* const wi[3], const float* const wo[3],
+                               const float* const* inputs, float* pdf);
+
 struct ReferenceModel {
     const char* name;         // the `// aot: NAME` tag
     const char* modelFile;    // bench/models/<modelFile>, relative to the source tree
     const char* description;  // one line: ndf + masking + fresnel
     std::vector<const char*> inputs;  // slot names, in slot order (as Kernel::inputName)
     BatchFn batch;
+    SampleBatchFn sample = nullptr;  // a hand-written sampler, where there is one
+    PdfBatchFn pdf = nullptr;
 };
 
 // (a) isotropic GGX + Smith height-correlated + Schlick with an rgb f0.
 // Input: roughness (alpha = roughness^2).
 int64_t ggxSchlick(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
                    float* const rgb[3]);
+// The importance sampler of (a), the baseline of the JIT samplers (SPEC
+// section 8): visible-normal sampling of GGX by spherical caps (Dupuy &
+// Benyoub 2023), pdf = D(m) / (4 (n.wo) (1 + Lambda(wo))), weight =
+// F(wo.m) G2 / G1(wo), written like the BRDFs here (float, one branch-free
+// vectorized loop) with the conventions of facet_sample_batch: a lane with
+// a non-finite or non-unit wo (within 1e-3), u outside [0, 1) or a
+// non-finite input gives wi = 0, pdf = 0, weight = 0 and is counted; n.wo
+// <= 0 gives no sample (zeros, valid); a sample below the horizon is valid
+// with weight 0 and its pdf. The material has no diffuse lobe: u[0] (the
+// lobe choice) is checked, not used; u[1] is the azimuth and u[2] the
+// height on the cap, as in Facet's GGX sampler.
+int64_t ggxSchlickSample(int64_t n, const float* const wo[3], const float* const u[3], const float* const* inputs,
+                         float* const wi[3], float* pdf, float* const weight[3]);
+// The density of wi given wo for (a), as facet_pdf_batch.
+int64_t ggxSchlickPdf(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                      float* pdf);
+
 // (b) isotropic Beckmann + Smith separable + conductor (complex eta + ik, rgb).
 // Input: roughness (alpha = roughness^2).
 int64_t beckmannConductor(int64_t n, const float* const wi[3], const float* const wo[3],

@@ -237,6 +237,22 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
     } else {
         for (int i = 0; i < 3; ++i) geo.slopeH[i] = pm.select(fromDrawn, m[i], geo.slopeH[i]);
     }
+    // wo.h of the drawn normal too (h = m, or -m where wo.m < 0): the
+    // masking and Fresnel terms that read it (Kelemen's (wo.h)^2, F(wo.h))
+    // would otherwise take |wi + wo| / 2 of the rounded directions, which at
+    // grazing mirror pairs (wi + wo of size n.wo) is off by several percent
+    // while the density uses the exact wo.m. 1 - wo.h = |wo - h|^2 / 2
+    // without cancellation near wo = h.
+    {
+        Value* sign = pm.select(pm.lt(om, pm.c(0.0)), pm.c(-1.0), pm.c(1.0));
+        Vec d = {pm.sub(t.wo[0], pm.mul(sign, m[0])), pm.sub(t.wo[1], pm.mul(sign, m[1])),
+                 pm.sub(t.wo[2], pm.mul(sign, m[2]))};
+        Value* cosM = pm.minnum(pm.abs(om), pm.c(1.0));
+        Value* oneMinusCosM = pm.minnum(pm.mul(dot(pm, d, d), pm.c(0.5)), pm.c(1.0));
+        geo.cosD = pm.select(fromDrawn, cosM, geo.cosD);
+        geo.oneMinusCosD = pm.select(fromDrawn, oneMinusCosM, geo.oneMinusCosD);
+        geo.sin2D = pm.select(fromDrawn, pm.mul(oneMinusCosM, pm.add(pm.c(1.0), cosM)), geo.sin2D);
+    }
     Value* fValid = nullptr;
     Vec f = brdfPrecise(geo, fValid);
 

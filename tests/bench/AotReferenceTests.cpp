@@ -7,6 +7,7 @@
 #include "Checker.h"
 #include "ReferenceComparison.h"
 #include "ReferenceModels.h"
+#include "Sampling.h"
 
 #include <doctest/doctest.h>
 
@@ -14,6 +15,8 @@
 #include <fmt/format.h>
 #include <fstream>
 #include <limits>
+#include <random>
+#include <array>
 #include <sstream>
 
 using namespace facet;
@@ -105,6 +108,82 @@ TEST_CASE("AOT reference models match the interpreter within 1e-4 relative on ra
             CHECK_MESSAGE(err <= 1e-4, fmt::format("max rel {:.3g} at {}", err, worst));
         }
     }
+}
+
+// The hand-written sampler of ggx_schlick draws what Facet's reference
+// sampler draws for the same u (both follow the spherical caps with u[1]
+// the azimuth and u[2] the height), with the same pdf and weight, and its
+// pdf function returns the density it sampled with; its invalid lanes
+// follow facet_sample_batch.
+TEST_CASE("the AOT sampler matches the reference sampler for the same u") {
+    const aot::ReferenceModel* model = aot::findReferenceModel("ggx_schlick");
+    REQUIRE(model);
+    REQUIRE(model->sample != nullptr);
+    REQUIRE(model->pdf != nullptr);
+    CheckedProgram p = load(modelPath(*model));
+    const CheckedMaterial& m = p.materials.front();
+    Interpreter<double> interp(m);
+    LaneBatch s = bench::regularSample(m, 20000, 5);
+    for (auto& column : s.slots)
+        for (float& r : column) r = 0.1f + 0.9f * r;  // alpha >= 0.01, as above
+    const size_t n = s.size();
+    std::mt19937_64 rng(9);
+    std::uniform_real_distribution<float> uniform(0, 1);
+    std::array<std::vector<float>, 3> u, wi, weight;
+    for (int c = 0; c < 3; ++c) {
+        for (size_t i = 0; i < n; ++i) u[c].push_back(std::min(uniform(rng), 1 - 0x1p-24f));
+        wi[c].assign(n, -1), weight[c].assign(n, -1);
+    }
+    std::vector<float> pdf(n, -1), pdfAgain(n, -1);
+    const float* uP[3] = {u[0].data(), u[1].data(), u[2].data()};
+    float* wiP[3] = {wi[0].data(), wi[1].data(), wi[2].data()};
+    float* weightP[3] = {weight[0].data(), weight[1].data(), weight[2].data()};
+    CHECK(model->sample(int64_t(n), s.wo(), uP, s.inputs(), wiP, pdf.data(), weightP) == 0);
+    const float* wiC[3] = {wi[0].data(), wi[1].data(), wi[2].data()};
+    CHECK(model->pdf(int64_t(n), wiC, s.wo(), s.inputs(), pdfAgain.data()) == 0);
+    double worstWi = 0, worstPdf = 0, worstWeight = 0, worstAgain = 0;
+    int sampled = 0;
+    for (size_t i = 0; i < n; ++i) {
+        double wo[3] = {s.wo()[0][i], s.wo()[1][i], s.wo()[2][i]}, ud[3] = {u[0][i], u[1][i], u[2][i]};
+        double slot = s.slots[0][i];
+        SampleResult<double> ref = interp.sample(wo, ud, &slot);
+        REQUIRE(ref.valid);
+        worstWi = std::max({worstWi, std::abs(wi[0][i] - ref.wi.x), std::abs(wi[1][i] - ref.wi.y),
+                            std::abs(wi[2][i] - ref.wi.z)});
+        worstPdf = std::max(worstPdf, relativeError(pdf[i], ref.pdf));
+        for (int c = 0; c < 3; ++c) worstWeight = std::max(worstWeight, relativeError(weight[c][i], ref.weight[c]));
+        // pdf() at the returned float wi: where the pdf is well conditioned.
+        if (wi[2][i] > 0.01f && wo[2] > 0.01) worstAgain = std::max(worstAgain, relativeError(pdfAgain[i], pdf[i]));
+        sampled += ref.pdf > 0;
+    }
+    MESSAGE(fmt::format("{} lanes ({} sampled): wi within {:.3g}, pdf {:.3g}, weight {:.3g}; pdf() again {:.3g}", n,
+                        sampled, worstWi, worstPdf, worstWeight, worstAgain));
+    CHECK(sampled > int(n) * 9 / 10);
+    CHECK(worstWi <= 1e-4);
+    CHECK(worstPdf <= 1e-3);
+    CHECK(worstWeight <= 1e-3);
+    CHECK(worstAgain <= 1e-3);
+
+    // Invalid lanes: non-unit wo, u = 1, NaN roughness; n.wo < 0 is valid
+    // without a sample; NULL inputs means the default roughness.
+    float wox[4] = {0.6f, 0, 0, 0}, woy[4] = {0, 0, 0, 0}, woz[4] = {0.8f, 0.5f, -1, 1};
+    float u0[4] = {0.5f, 0.5f, 0.5f, 0.5f}, u1[4] = {0.3f, 0.3f, 0.3f, 1.0f}, u2[4] = {0.7f, 0.7f, 0.7f, 0.7f};
+    float rough[4] = {NAN, 0.4f, 0.4f, 0.4f};
+    float ox[4], oy[4], oz[4], op[4], wr[4], wg[4], wb[4];
+    const float* woL[3] = {wox, woy, woz};
+    const float* uL[3] = {u0, u1, u2};
+    const float* inL[1] = {rough};
+    float* wiL[3] = {ox, oy, oz};
+    float* wL[3] = {wr, wg, wb};
+    CHECK(model->sample(4, woL, uL, inL, wiL, op, wL) == 3);  // NaN input, |wo| = 0.5, u = 1
+    for (int i = 0; i < 4; ++i) {
+        CHECK(op[i] == 0);
+        CHECK(ox[i] == 0);
+        CHECK(wr[i] == 0);
+    }
+    rough[0] = 0.4f;
+    CHECK(model->sample(1, woL, uL, nullptr, wiL, op, wL) == 0);
+    CHECK(op[0] > 0);
 }
 
 TEST_CASE("AOT defaults: a null inputs array or a null slot means the material's defaults") {

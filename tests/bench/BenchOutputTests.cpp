@@ -312,6 +312,36 @@ TEST_CASE("bench --json output parses and has every field") {
         for (const char* mode : {"exact", "fast", "tol 1e-3", "tol 1e-5"}) CHECK(seen.count({b, mode}));
     CHECK(seen.count({"aot", "hand-written"}));
     CHECK(seen.size() == 13);
+
+    // The sampler rows: interp, scalar and simd (exact, fast), and the
+    // hand-written GGX visible-normal sampler of the AOT twin.
+    checkField(m, "sampling_summary", Kind::String);
+    checkField(m, "sampler_rows", Kind::Array);
+    std::set<std::pair<std::string, std::string>> sampled;
+    for (const JsonValue& rv : m.at("sampler_rows").arr()) {
+        const JsonObject& r = rv.obj();
+        for (const char* k : {"backend", "mode", "sampler"}) checkField(r, k, Kind::String);
+        for (const char* k : {"width", "lanes", "ns_per_sample", "ns_per_pdf"}) checkField(r, k, Kind::Number);
+        for (const char* k : {"first_use_ms", "jit_over_aot"}) checkField(r, k, Kind::NumberOrNull);
+        std::string backend = r.at("backend").str(), mode = r.at("mode").str();
+        CAPTURE(backend);
+        CAPTURE(mode);
+        sampled.insert({backend, mode});
+        CHECK(r.at("ns_per_sample").num() > 0);
+        CHECK(r.at("ns_per_pdf").num() > 0);
+        // GGX under Smith masking has a compiled sampler.
+        std::string expected = backend == "interp" ? "reference" : backend == "aot" ? "aot" : "jit";
+        CHECK(r.at("sampler").str() == expected);
+        if (backend == "scalar" || backend == "simd") {
+            CHECK(r.at("jit_over_aot").isNumber());
+            CHECK(r.at("first_use_ms").num() > 0);
+        }
+    }
+    for (const char* b : {"scalar", "simd"})
+        for (const char* mode : {"exact", "fast"}) CHECK(sampled.count({b, mode}));
+    CHECK(sampled.count({"interp", "exact"}));
+    CHECK(sampled.count({"aot", "hand-written"}));
+    CHECK(sampled.size() == 6);
 }
 
 TEST_CASE("a kulla_conty material reports its table: cold build and cached load") {
@@ -389,6 +419,9 @@ TEST_CASE("the Markdown and terminal reports name every row") {
     CHECK(md.find("| aot | hand-written |") != std::string::npos);
     CHECK(md.find("JIT/AOT") != std::string::npos);
     CHECK(!bench::summaryLine(report.materials.at(0)).empty());
+    CHECK(md.find("| simd | fast | jit |") != std::string::npos);  // a sampler row
+    CHECK(md.find("| aot | hand-written | aot |") != std::string::npos);
+    CHECK(bench::samplerSummaryLine(report.materials.at(0)).find("JIT/AOT") != std::string::npos);
 }
 
 TEST_CASE("the scatter plot is written as a PNG of the expected size") {
