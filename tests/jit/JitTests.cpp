@@ -294,6 +294,19 @@ TEST_CASE("disk cache: the compiled sampler is cached, and a damaged sampler fil
     flipByte(samplerFile, size - 100);  // corrupted payload byte
     reload("compiled");
     reload("disk cache");
+    // The trust rules of eval's files: a sampler file others can write is
+    // refused, with the cache's one warning, and not loaded.
+    std::filesystem::permissions(samplerFile, std::filesystem::perms::group_write, std::filesystem::perm_options::add);
+    {
+        Compiler c;
+        c.setCacheDir(dir);
+        auto k = compile(c, kGold, "backend=simd;codegen=optimized");
+        CHECK(k->samplerOrigin() == "compiled");
+        CHECK_MESSAGE(c.cacheWarning().find("is writable by group or others") != std::string::npos, c.cacheWarning());
+        CHECK(sampleOutputs(*k, lanes) == reference);
+    }
+    std::filesystem::permissions(samplerFile, std::filesystem::perms::group_write, std::filesystem::perm_options::remove);
+    reload("disk cache");
     // cache=memory and cache=off never write the directory.
     {
         Compiler c;
