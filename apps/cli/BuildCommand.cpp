@@ -117,7 +117,8 @@ std::string samplerDeclarations(const std::string& p, const std::string& macro, 
         h += fmt::format("/* No importance sampler: Facet has no compiled sampler for ndf {} under\n", m.ndf.model->name);
         h += fmt::format("   masking {} (`facet ir --plan` shows sampling: specular=none), so this\n",
                          m.masking.model->name);
-        h += fmt::format("   object has no {}_sample, {}_sample_batch, {}_pdf or {}_pdf_batch.\n", p, p, p, p);
+        h += fmt::format("   object has no {}_sample, {}_sample_batch,\n", p, p);
+        h += fmt::format("   {}_pdf or {}_pdf_batch.\n", p, p);
         h += "   libfacet's facet_sample samples such materials through its reference\n";
         h += "   sampler. */\n";
         h += fmt::format("#define {}_HAS_SAMPLER 0\n\n", macro);
