@@ -7,9 +7,11 @@
 // does not need:
 //   - a target machine for a triple, CPU and features named on the command
 //     line, checked against LLVM's target registry;
-//   - the C entry points PREFIX_eval / PREFIX_eval_batch, with the
-//     conventions of facet_eval / facet_eval_batch (facet.h), emitted in IR
-//     into the kernel's module so that the object needs nothing else;
+//   - the C entry points PREFIX_eval / PREFIX_eval_batch, and where the
+//     module has the sampler's entry points PREFIX_sample / _sample_batch /
+//     _pdf / _pdf_batch, with the conventions of facet_eval, facet_sample
+//     and the rest (facet.h), emitted in IR into the kernel's module so that
+//     the object needs nothing else;
 //   - writing the module as an object, assembly, IR text or bitcode.
 #pragma once
 
@@ -43,10 +45,13 @@ struct AotTarget {
 // knows.
 AotTarget createAotTarget(const AotTargetRequest& request, std::string& error);
 
-// Adds PREFIX_eval and PREFIX_eval_batch over the lowered entry points
-// (which become internal: the C entry points are the object's only
-// symbols). `material` is the specialized material the module was lowered
-// from (its slot defaults feed the scalar kernel's batch loop).
+// Adds PREFIX_eval and PREFIX_eval_batch over the lowered entry points,
+// and PREFIX_sample, PREFIX_sample_batch, PREFIX_pdf and PREFIX_pdf_batch
+// over the sampler's where the module has them (LoweringOptions::
+// emitSampling and a plan with a compiled sampler); the lowered functions
+// become internal: the C entry points are the object's only symbols.
+// `material` is the specialized material the module was lowered from (its
+// slot defaults feed the scalar kernel's batch loops).
 void addAotEntryPoints(LoweredModule& lowered, const CheckedMaterial& material, const std::string& prefix);
 
 // The module, optimized, in the requested form.

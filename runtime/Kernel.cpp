@@ -152,6 +152,73 @@ std::vector<MathVariant> toleranceCandidates(const CheckedMaterial& m) {
     return out;
 }
 
+// The math variant a cached record names: the compile's own, or for a
+// tolerance build one of the candidates the search tries (named as the
+// search names them); nullopt for any other name (a record that is not
+// this compile's: recompiled).
+std::optional<MathVariant> cachedVariant(const CheckedMaterial& material, const MathVariant& variant, bool tolerance,
+                                         const std::string& name) {
+    if (!tolerance) return name == variant.name() ? std::optional<MathVariant>(variant) : std::nullopt;
+    for (MathVariant v : toleranceCandidates(material))
+        if (v.name() == name) {
+            v.floatFirst = variant.floatFirst;
+            return v;
+        }
+    return std::nullopt;
+}
+
+}  // namespace
+
+// A Compiler's in-memory cache of compiled objects, eval kernels' and
+// samplers'. Shared with the kernels it built: a kernel gets its sampler on
+// first use, which may come after the Compiler is gone.
+struct MemoryCache {
+    std::mutex mutex;
+    std::map<std::string, CachedKernel> objects;  // key -> record
+};
+
+namespace {
+
+// The record cached under `key`: from memory (cache=on or memory), else
+// from the disk file `cachePath` (cache=on; "" = no disk cache), which is
+// then kept in memory too. `origin` says which ("memory cache", "disk
+// cache"). A file that does not parse as this key's record (truncated,
+// corrupted, another key) is a miss: the caller compiles and overwrites it.
+std::optional<CachedKernel> lookUpCaches(MemoryCache& memory, CacheDirectory& disk, const std::string& key,
+                                         const std::string& cachePath, CompileOptions::Cache cache,
+                                         std::string& origin) {
+    if (cache == CompileOptions::Cache::Off) return std::nullopt;
+    {
+        std::lock_guard<std::mutex> lock(memory.mutex);
+        auto it = memory.objects.find(key);
+        if (it != memory.objects.end()) {
+            origin = "memory cache";
+            return it->second;
+        }
+    }
+    if (cache != CompileOptions::Cache::On || cachePath.empty()) return std::nullopt;
+    std::optional<std::string> bytes = disk.read(cachePath, kMaxCacheFileBytes);
+    std::optional<CachedKernel> record = bytes ? parseCacheFile(*bytes, key) : std::nullopt;
+    if (record) {
+        origin = "disk cache";
+        std::lock_guard<std::mutex> lock(memory.mutex);
+        memory.objects.emplace(key, *record);
+    }
+    return record;
+}
+
+// Stores `record` in memory (cache=on or memory) and in the disk file
+// `cachePath` (cache=on; "" = memory only). A cache that cannot be
+// written is only slower.
+void storeInCaches(MemoryCache& memory, CacheDirectory& disk, const std::string& key, const std::string& cachePath,
+                   CompileOptions::Cache cache, const CachedKernel& record) {
+    if (cache == CompileOptions::Cache::On && !cachePath.empty()) disk.write(cachePath, cacheFileBytes(key, record));
+    if (cache != CompileOptions::Cache::Off) {
+        std::lock_guard<std::mutex> lock(memory.mutex);
+        memory.objects.emplace(key, record);
+    }
+}
+
 }  // namespace
 
 double measureKernelError(const Kernel& kernel, const CheckedMaterial& material, size_t samples) {
@@ -286,6 +353,7 @@ struct KernelCode {
     std::atomic<SampleBatchFn> sampleBatch{nullptr};
     std::atomic<PdfBatchFn> pdfBatch{nullptr};
     std::once_flag samplerOnce;
+    std::string samplerOrigin;  // set once, inside samplerOnce (Kernel::samplerOrigin)
 
     mutable std::mutex mutex;  // guards the members below
     mutable std::condition_variable settled;
@@ -445,7 +513,7 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
 }
 
 void Kernel::ensureSampler() const {
-    if (!code_) return;
+    if (!code_ || !memoryCache_) return;  // (a tolerance search's probe kernels only evaluate)
     std::call_once(code_->samplerOnce, [this] {
         // A failure leaves the entry points null: the reference samples.
         try {
@@ -455,20 +523,28 @@ void Kernel::ensureSampler() const {
             if (planLowering(material_, lowering.variant, lowering.x86Target).sampling.specular ==
                 SpecularSampling::None)
                 return;
-            PipelineRun run = PipelineRun::fromSpecialized(material_, energyTable_);
-            PipelineControl control;
-            control.symbolPrefix = samplerPrefix_;
-            control.lowering = lowering;
-            PipelineTarget target;
-            target.jit = code_->jit.get();
-            target.level = FacetJit::Level::Optimized;
-            target.naturalWidth = code_->jit->hostVectorWidth();
-            TableCache tables("");  // unused: the run starts specialized, with its table
-            DiagnosticEngine diags;
-            if (!runKernelPipeline(run, control, target, tables, diags)) return;
             KernelCode& code = *code_;
+            std::string origin;
+            std::optional<CachedKernel> cached =
+                lookUpCaches(*memoryCache_, *diskCache_, samplerKey_, samplerCachePath_, samplerCache_, origin);
+            if (!cached) {
+                PipelineRun run = PipelineRun::fromSpecialized(material_, energyTable_);
+                PipelineControl control;
+                control.symbolPrefix = samplerPrefix_;
+                control.lowering = lowering;
+                PipelineTarget target;
+                target.jit = code.jit.get();
+                target.level = FacetJit::Level::Optimized;
+                target.naturalWidth = code.jit->hostVectorWidth();
+                TableCache tables("");  // unused: the run starts specialized, with its table
+                DiagnosticEngine diags;
+                if (!runKernelPipeline(run, control, target, tables, diags)) return;
+                cached = CachedKernel{std::move(run.object), lowering.variant.name(), -1.0};
+                origin = "compiled";
+                storeInCaches(*memoryCache_, *diskCache_, samplerKey_, samplerCachePath_, samplerCache_, *cached);
+            }
             llvm::orc::JITDylib& dylib =
-                code.jit->addObject(llvm::MemoryBuffer::getMemBufferCopy(run.object, samplerPrefix_ + ".sampler"));
+                code.jit->addObject(llvm::MemoryBuffer::getMemBufferCopy(cached->object, samplerPrefix_ + ".sampler"));
             {
                 std::lock_guard<std::mutex> lock(code.mutex);
                 code.dylibs.push_back(&dylib);
@@ -486,9 +562,15 @@ void Kernel::ensureSampler() const {
                 code.pdfBatch.store(reinterpret_cast<PdfBatchFn>(code.jit->lookup(dylib, p + "_pdf_batch")),
                                     std::memory_order_release);
             }
+            code.samplerOrigin = origin;  // read only after the call_once
         } catch (const std::exception&) {
         }
     });
+}
+
+std::string Kernel::samplerOrigin() const {
+    ensureSampler();
+    return code_ ? code_->samplerOrigin : "";
 }
 
 std::string Kernel::samplerTier() const {
@@ -615,6 +697,7 @@ Compiler::Compiler()
     : jit_(FacetJit::Create()),
       cache_(std::make_shared<CacheDirectory>(defaultCacheRoot())),
       tables_(std::make_unique<TableCache>(cache_, "tables")),
+      memoryCache_(std::make_shared<MemoryCache>()),
       tierUpWorker_(std::make_unique<TierUpWorker>()) {}
 Compiler::~Compiler() {
     tierUpWorker_.reset();  // first: its running job uses the JIT and the caches
@@ -703,22 +786,15 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
     std::shared_ptr<CacheDirectory> disk = cache_;
     std::string cachePath = disk->usable() ? key + ".fko" : "";  // relative to the cache root
 
-    std::optional<CachedKernel> cached;
-    if (options.cache != CompileOptions::Cache::Off) {
-        std::lock_guard<std::mutex> lock(cacheMutex_);
-        auto it = memoryCache_.find(key);
-        if (it != memoryCache_.end()) {
-            cached = it->second;
-            kernel->origin_ = "memory cache";
-        }
-    }
-    if (!cached && options.cache == CompileOptions::Cache::On && !cachePath.empty()) {
-        if (std::optional<std::string> bytes = disk->read(cachePath, kMaxCacheFileBytes))
-            cached = parseCacheFile(*bytes, key);
-        if (cached) {
-            kernel->origin_ = "disk cache";
-            storeInCaches(key, "", options.cache, *cached);  // memory only
-        }
+    std::string origin;
+    std::optional<CachedKernel> cached = lookUpCaches(*memoryCache_, *disk, key, cachePath, options.cache, origin);
+    if (cached) {
+        // The variant the object was compiled with (a tolerance search's
+        // choice): the sampler is compiled with it too.
+        std::optional<MathVariant> variant =
+            cachedVariant(kernel->material_, lowering.variant, options.tolerance.has_value(), cached->variant);
+        if (variant) lowering.variant = *variant, kernel->origin_ = origin;
+        else cached.reset();
     }
     // Cached objects are optimized, except under codegen=quick's own key.
     const bool tiered = !cached && options.codegen == CompileOptions::Codegen::Tiered;
@@ -734,7 +810,7 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
         lowering.variant = chosen;
         kernel->origin_ = "compiled";
         // A tiered kernel's caches are filled by its tier-up, with optimized code.
-        if (!tiered) storeInCaches(key, cachePath, options.cache, *cached);
+        if (!tiered) storeInCaches(*memoryCache_, *disk, key, cachePath, options.cache, *cached);
     }
     kernel->code_ = std::make_shared<KernelCode>();
     kernel->code_->jit = jit_;
@@ -742,6 +818,14 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
     link(*kernel->code_, cached->object, prefix, lowering);
     kernel->samplerLowering_ = lowering;
     kernel->samplerPrefix_ = prefix;
+    // The sampler's key: the kernel's, the sampler, and the variant its
+    // eval code was compiled with.
+    kernel->samplerKey_ = llvm::toHex(
+        llvm::SHA256::hash(llvm::arrayRefFromStringRef(keyText + "|sampler|" + lowering.variant.name())), true);
+    kernel->samplerCachePath_ = cachePath.empty() ? "" : kernel->samplerKey_ + ".fko";
+    kernel->samplerCache_ = options.cache;
+    kernel->memoryCache_ = memoryCache_;
+    kernel->diskCache_ = disk;
     kernel->variant_ = cached->variant;
     kernel->measuredError_ = cached->measuredError;
     if (tiered) {
@@ -754,16 +838,6 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
     }
     kernel->compileMillis_ = millisSince(start);
     return kernel;
-}
-
-void Compiler::storeInCaches(const std::string& key, const std::string& cachePath, CompileOptions::Cache cache,
-                             const CachedKernel& record) {
-    // A cache that cannot be written is only slower.
-    if (cache == CompileOptions::Cache::On && !cachePath.empty()) cache_->write(cachePath, cacheFileBytes(key, record));
-    if (cache != CompileOptions::Cache::Off) {
-        std::lock_guard<std::mutex> lock(cacheMutex_);
-        memoryCache_.emplace(key, record);
-    }
 }
 
 namespace {
@@ -789,7 +863,7 @@ void Compiler::tierUp(const TierUpJob& job, bool closing) {
     try {
         CachedKernel record = job.record;
         record.object = compileObject(job.material, job.lowering, job.prefix, FacetJit::Level::Optimized);
-        storeInCaches(job.key, job.cachePath, job.cache, record);
+        storeInCaches(*memoryCache_, *cache_, job.key, job.cachePath, job.cache, record);
         if (code) link(*code, record.object, job.prefix, job.lowering);
     } catch (const std::exception& e) {
         // Internal (LLVM) failure; the quick code computes the same values.
@@ -876,6 +950,11 @@ std::optional<AotKernel> Compiler::compileAot(const CheckedMaterial& material, c
     aot.material = run.specialized;
     aot.width = run.simd ? run.lowering.width : 1;
     aot.variant = run.lowering.variant.name();
+    // The eval kernel's lowering with the sampler's entry points in the same
+    // module: lowering and the middle end work function by function, so
+    // they are the code the JIT kernel compiles in a module of its own.
+    LoweringOptions lowering = run.lowering;
+    lowering.emitSampling = true;
     if (options.tolerance) {
         // The variant compileMaterial chooses for the host: the same search,
         // measuring JIT kernels of the host's width against the interpreter.
@@ -883,16 +962,16 @@ std::optional<AotKernel> Compiler::compileAot(const CheckedMaterial& material, c
         MathVariant chosen = host.variant;
         CachedKernel probe = searchVariants(run.specialized, host, *options.tolerance, "facet_aot_probe",
                                             FacetJit::Level::Quick, chosen);
-        LoweringOptions lowering = run.lowering;
         lowering.variant = chosen;
         aot.variant = probe.variant;
         aot.measuredError = probe.measuredError;
-        run.rewindTo(PipelineStage::Specialized);
-        control.lowering = lowering;
     }
+    run.rewindTo(PipelineStage::Specialized);
+    control.lowering = lowering;
     control.stopAfter = PipelineStage::Emitted;
     if (!runKernelPipeline(run, control, aotTarget, *tables_, diags)) return std::nullopt;
     aot.output = std::move(run.object);
+    aot.hasSampler = !run.lowered.sampleScalarSymbol.empty() || !run.lowered.sampleBatchSymbol.empty();
     return aot;
 }
 

@@ -2,7 +2,8 @@
 //
 // A Compiler owns one JIT and the compiled-kernel caches (in memory, and on
 // disk under FACET_CACHE_DIR, $XDG_CACHE_HOME/facet or ~/.cache/facet, used
-// only when trusted: CacheFiles.h). Several Compilers may live
+// only when trusted: CacheFiles.h), which hold the kernels' eval objects
+// and, under keys of their own, their samplers'. Several Compilers may live
 // in one process. A Kernel is immutable once built and safe to evaluate from
 // many threads at once.
 //
@@ -51,6 +52,7 @@ class TierUpWorker;
 class EnergyTable;
 class TableCache;
 class CacheDirectory;
+struct MemoryCache;
 
 // A compiled kernel as the caches keep it: object code, the math variant it
 // was compiled with, and (for tolerance builds) its measured error.
@@ -173,19 +175,31 @@ public:
     // scalar or SIMD as eval), or "reference" (the interpreter's sampler in
     // double, lane by lane: interp kernels, and materials whose NDF has no
     // sampler in IR, which `facet ir --plan` shows as sampling:
-    // specular=none). A JIT kernel compiles its sampler (optimized, the
-    // kernel's math variant and width, not cached) on the first call of
-    // any sampling function, this one included: eval-only hosts never pay
-    // for it.
+    // specular=none). A JIT kernel gets its sampler (optimized, with the
+    // lowering options of its eval code: math variant, a tolerance search's
+    // choice included, and width) on the first call of any sampling
+    // function, this one included, so that eval-only hosts never pay for
+    // it: from the caches of the Compiler that built the kernel, as eval's
+    // object (same key plus a sampler component, same cache= option), or
+    // compiled and stored there.
     std::string samplerTier() const;
+    // How the sampler's code was obtained: "compiled", "memory cache" or
+    // "disk cache"; "" where the reference samples. Gets the sampler first.
+    std::string samplerOrigin() const;
 
 private:
     friend class Compiler;
     Kernel() = default;
-    // Compiles and links the sampler's entry points once (see samplerTier).
+    // Gets and links the sampler's entry points once (see samplerTier).
     void ensureSampler() const;
-    LoweringOptions samplerLowering_;  // the eval kernel's lowering options
-    std::string samplerPrefix_;
+    // What ensureSampler() needs: the eval kernel's lowering options and
+    // symbol prefix, the sampler's cache entry, and the caches (shared with
+    // the Compiler, which the kernel may outlive).
+    LoweringOptions samplerLowering_;
+    std::string samplerPrefix_, samplerKey_, samplerCachePath_;
+    CompileOptions::Cache samplerCache_ = CompileOptions::Cache::Off;
+    std::shared_ptr<MemoryCache> memoryCache_;
+    std::shared_ptr<CacheDirectory> diskCache_;
     CheckedMaterial material_;  // holds its expression trees by shared pointer
     Backend backend_ = Backend::Simd;
     int width_ = 1;
@@ -207,6 +221,11 @@ struct AotKernel {
     std::string variant;       // the math variant compiled ("exact", "fast", ...)
     double measuredError = -1; // tolerance builds: the chosen variant's error on the host
     int width = 1;             // SIMD lanes (1: scalar kernel)
+    // Whether the object has PREFIX_sample, _sample_batch, _pdf and
+    // _pdf_batch: false where the plan has no compiled sampler for the NDF
+    // (sampling: specular=none), which the JIT samples through the
+    // interpreter and an object cannot.
+    bool hasSampler = false;
 };
 
 class Compiler {
@@ -223,9 +242,11 @@ public:
     std::unique_ptr<Kernel> compileMaterial(const CheckedMaterial& material, const CompileOptions& options,
                                             DiagnosticEngine& diags);
 
-    // The kernel `compileMaterial` would build with `options`, lowered with
-    // `prefix` for `target` (Aot.h) and given the C entry points
-    // PREFIX_eval / PREFIX_eval_batch: the same specialization, lowering,
+    // The kernel `compileMaterial` would build with `options`, with its
+    // sampler, lowered with `prefix` for `target` (Aot.h) and given the C
+    // entry points PREFIX_eval / PREFIX_eval_batch and (where the material
+    // has a compiled sampler) PREFIX_sample / _sample_batch / _pdf /
+    // _pdf_batch: the same specialization, lowering,
     // middle end and codegen, so that on the host the object computes what
     // the JIT kernel computes. A tolerance is resolved on the host (the
     // variant search measures JIT kernels). `width`: the target's natural
@@ -281,14 +302,11 @@ private:
         CachedKernel record;  // variant name and measured error, for the caches
     };
     void tierUp(const TierUpJob& job, bool closing);
-    void storeInCaches(const std::string& key, const std::string& cachePath, CompileOptions::Cache cache,
-                       const CachedKernel& record);
 
     std::shared_ptr<FacetJit> jit_;
     std::shared_ptr<CacheDirectory> cache_;  // kernel objects; tables/ below it
     std::unique_ptr<TableCache> tables_;     // Kulla-Conty E tables (memory + EXR on disk)
-    std::mutex cacheMutex_;
-    std::map<std::string, CachedKernel> memoryCache_;  // key -> compiled kernel
+    std::shared_ptr<MemoryCache> memoryCache_;  // key -> compiled object (eval and sampler)
     // Its thread starts with the first tiered compile; the destructor stops
     // it first, because its running job uses everything above.
     std::unique_ptr<TierUpWorker> tierUpWorker_;

@@ -6,8 +6,10 @@
 //               [--features +a,-b] [--prefix SYMBOL_PREFIX] [--emit obj|asm|llvm-ir|bitcode]
 //               -o OUT [--header OUT.h]
 //
-// The kernel is built by Compiler::compileAot, the JIT's pipeline for
-// another target machine (runtime/Aot.h). Outputs are written to temporary
+// The kernel and its sampler are built by Compiler::compileAot, the JIT's
+// pipeline for another target machine (runtime/Aot.h). A material whose NDF
+// has no compiled sampler gets an object without sampler symbols, a header
+// saying PREFIX_HAS_SAMPLER 0, and a note on stderr. Outputs are written to temporary
 // files in their own directory and renamed into place once both are
 // complete, so a failed build leaves no partial file. Exit codes: 0 ok,
 // 2 usage (bad options, an unknown target, CPU or feature, an output that
@@ -106,6 +108,49 @@ private:
 
 std::string formatNumber(double v) { return fmt::format("{:.9g}", v); }
 
+// The sampler's part of the header: PREFIX_HAS_SAMPLER, and where it is 1
+// the four sampling functions (facet.h's conventions without the kernel).
+std::string samplerDeclarations(const std::string& p, const std::string& macro, const AotKernel& aot) {
+    const CheckedMaterial& m = aot.material;
+    std::string h;
+    if (!aot.hasSampler) {
+        h += fmt::format("/* No importance sampler: Facet has no compiled sampler for ndf {} under\n", m.ndf.model->name);
+        h += fmt::format("   masking {} (`facet ir --plan` shows sampling: specular=none), so this\n",
+                         m.masking.model->name);
+        h += fmt::format("   object has no {}_sample, {}_sample_batch,\n", p, p);
+        h += fmt::format("   {}_pdf or {}_pdf_batch.\n", p, p);
+        h += "   libfacet's facet_sample samples such materials through its reference\n";
+        h += "   sampler. */\n";
+        h += fmt::format("#define {}_HAS_SAMPLER 0\n\n", macro);
+        return h;
+    }
+    const std::string indent(p.size() + 22, ' ');
+    h += "/* Importance sampling, as facet_sample / facet_pdf and their batch calls in\n";
+    h += "   facet/facet.h. u: three uniform numbers in [0, 1) (u[0] picks the lobe,\n";
+    h += "   u[1] and u[2] place the direction). Outputs: wi, the whole mixture's pdf of\n";
+    h += "   wi per solid angle, weight = f (n.wi) / pdf per channel. n.wo <= 0: no\n";
+    h += "   sample (all 0, a valid lane); a sample below the horizon is valid with\n";
+    h += "   weight 0. An invalid lane (a non-finite or non-unit wo, u outside [0, 1),\n";
+    h += "   a non-finite input, a result float cannot hold) gives wi = 0, pdf = 0,\n";
+    h += fmt::format("   weight = 0. {}_sample returns 1 for an invalid lane (a NULL wo or u is\n", p);
+    h += fmt::format("   one), else 0, and does not write a NULL output. {}_pdf returns 0 for an\n", p);
+    h += "   invalid lane or a NULL wi or wo. */\n";
+    h += fmt::format("#define {}_HAS_SAMPLER 1\n", macro);
+    h += fmt::format("int {}_sample(const float wo[3], const float u[3], const float* inputs, float wi[3],\n", p);
+    h += std::string(p.size() + 12, ' ') + "float* pdf, float weight[3]);\n";
+    h += fmt::format("float {}_pdf(const float wi[3], const float wo[3], const float* inputs);\n\n", p);
+    h += "/* SoA: wo[0..2], u[0..2], wi[0..2], weight[0..2] each point to n floats, pdf\n";
+    h += "   to n floats; inputs as in the eval batch. Return the number of invalid\n";
+    h += "   lanes, 0 for n = 0, -1 for n < 0 or a NULL array (or a NULL entry of\n";
+    h += "   one). */\n";
+    h += fmt::format("int64_t {}_sample_batch(int64_t n, const float* const wo[3], const float* const u[3],\n", p);
+    h += indent + "const float* const* inputs, float* const wi[3], float* pdf,\n";
+    h += indent + "float* const weight[3]);\n";
+    h += fmt::format("int64_t {}_pdf_batch(int64_t n, const float* const wi[3], const float* const wo[3],\n", p);
+    h += std::string(p.size() + 19, ' ') + "const float* const* inputs, float* pdf);\n\n";
+    return h;
+}
+
 std::string headerText(const BuildOptions& opt, const AotKernel& aot, const AotTarget& target,
                        const std::string& optionText, const std::string& materialHash) {
     const std::string& p = opt.prefix;
@@ -141,7 +186,8 @@ std::string headerText(const BuildOptions& opt, const AotKernel& aot, const AotT
     h += " *\n";
     h += " * Self-contained: link the object built with this header and nothing else\n";
     h += " * (no libfacet, no LLVM, no table files; at most libm). The functions are\n";
-    h += " * thread-safe and have the conventions of facet_eval / facet_eval_batch in\n";
+    h += " * thread-safe and have the conventions of facet_eval / facet_eval_batch\n";
+    h += fmt::format(" * (and, where {}_HAS_SAMPLER is 1, facet_sample / facet_pdf) in\n", macro);
     h += " * facet/facet.h: the BRDF f_r in 1/sr, rgb, without the cosine factor;\n";
     h += " * n = +z, wi (towards the light) and wo (towards the viewer) unit vectors\n";
     h += " * pointing away from the surface. A non-finite input or a direction whose\n";
@@ -168,9 +214,10 @@ std::string headerText(const BuildOptions& opt, const AotKernel& aot, const AotT
     h += "/* SoA batch: wi[0..2], wo[0..2], rgb[0..2] each point to n floats; inputs is\n";
     h += "   NULL (all defaults) or inputs[s] points to n floats (or is NULL: that slot's\n";
     h += "   default). Returns the number of invalid lanes (their rgb is 0), 0 for n = 0,\n";
-    h += "   -1 for n < 0 or a NULL wi, wo or rgb. */\n";
+    h += "   -1 for n < 0 or a NULL wi, wo or rgb (or a NULL entry of one). */\n";
     h += fmt::format("int64_t {}_eval_batch(int64_t n, const float* const wi[3], const float* const wo[3],\n", p);
     h += std::string(p.size() + 20, ' ') + "const float* const* inputs, float* const rgb[3]);\n\n";
+    h += samplerDeclarations(p, macro, aot);
     h += "#ifdef __cplusplus\n}\n#endif\n\n";
     h += fmt::format("#endif /* FACET_AOT_{}_H */\n", macro);
     return h;
@@ -271,6 +318,12 @@ int runBuild(const std::vector<std::string>& args) {
         std::fputs(diags.str().c_str(), stderr);
         return kExitMaterialError;
     }
+    if (!aot->hasSampler)
+        std::fprintf(stderr,
+                     "facet: note: material %s has no compiled sampler (ndf %s, masking %s): the object has "
+                     "%s_eval and %s_eval_batch only, and the header says %s_HAS_SAMPLER 0\n",
+                     aot->material.name.c_str(), aot->material.ndf.model->name, aot->material.masking.model->name,
+                     opt.prefix.c_str(), opt.prefix.c_str(), upper(opt.prefix).c_str());
     auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(printMaterial(aot->material)));
     std::string optionText = fmt::format("backend={};{};width={}", opt.backend,
                                          options.tolerance ? opt.math : "math=" + opt.math, aot->width);

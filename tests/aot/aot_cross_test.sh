@@ -4,7 +4,10 @@
 # qemu-user on the hard-case sample and 100k random pairs of gold, plastic
 # and brushed_metal (exact mode); facet_aot_reference checks the outputs
 # against the double interpreter as the hard-case tests check the host JIT
-# (same bound; no NaN, Inf or negative output; invalid lanes 0 and counted).
+# (same bound; no NaN, Inf or negative output; invalid lanes 0 and counted),
+# and the objects' samplers (sample and pdf, batch and one lane, and their
+# argument and invalid-lane conventions in aot_run.c) against the host JIT
+# kernel's sampler.
 # Installs the toolchain with apt if it is missing; exits 77 (skipped) with a
 # message only if that is impossible.
 set -euo pipefail

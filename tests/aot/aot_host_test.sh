@@ -3,8 +3,11 @@
 # brushed_metal in SIMD exact, SIMD fast, SIMD with a tolerance (the variant
 # chosen on the host) and scalar exact, a plain C99
 # program (aot_run.c, compiled by the system cc, linked against the object
-# and libm only) evaluates the hard-case sample and 100k random pairs, and
+# and libm only) evaluates the hard-case sample and 100k random pairs, samples
+# wi for each lane's wo and evaluates the pdf of each pair, and
 # facet_aot_reference requires its outputs to be the JIT kernel's bit for bit.
+# satin_gaussian (no compiled sampler for gaussian) must give an object
+# without sampler symbols and a header saying so.
 # Also: the objects reference no symbol outside themselves but libm's.
 set -euo pipefail
 build=$1 source=$2
@@ -14,10 +17,12 @@ random=100000
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 failed=0
-for material in gold plastic brushed_metal; do
+for material in gold plastic brushed_metal satin_gaussian; do
   mat=$source/materials/$material.mat
   "$reference" inputs "$mat" "$material" "" $random "$work/$material.in"
-  for config in "simd exact" "simd fast" "simd tolerance=1e-4" "scalar exact"; do
+  configs=("simd exact" "simd fast" "simd tolerance=1e-4" "scalar exact") has_sampler=1
+  [ $material = satin_gaussian ] && configs=("simd exact") has_sampler=0
+  for config in "${configs[@]}"; do
     set -- $config
     backend=$1 math=$2 prefix=${material}_${1}_${2%%=*}
     options="backend=$backend;math=$math"
@@ -30,10 +35,18 @@ for material in gold plastic brushed_metal; do
       echo "FAIL $prefix.o needs symbols outside itself and libm: $undefined"
       failed=1
     fi
-    # Exported: the two entry points and nothing else.
-    exported=$(nm -g --defined-only "$work/$prefix.o" | awk '{print $3}' | sort | tr '\n' ' ')
-    if [ "$exported" != "${prefix}_eval ${prefix}_eval_batch " ]; then
-      echo "FAIL $prefix.o exports '$exported'"
+    # Exported: the entry points and nothing else; the sampler's exactly
+    # where the header says the object has them.
+    expected="${prefix}_eval ${prefix}_eval_batch"
+    [ $has_sampler = 1 ] && expected+=" ${prefix}_sample ${prefix}_sample_batch ${prefix}_pdf ${prefix}_pdf_batch"
+    expected=$(tr ' ' '\n' <<<"$expected" | LC_ALL=C sort | tr '\n' ' ')
+    exported=$(nm -g --defined-only "$work/$prefix.o" | awk '{print $3}' | LC_ALL=C sort | tr '\n' ' ')
+    if [ "$exported" != "$expected" ]; then
+      echo "FAIL $prefix.o exports '$exported', expected '$expected'"
+      failed=1
+    fi
+    if ! grep -q "^#define ${prefix^^}_HAS_SAMPLER $has_sampler\$" "$work/$prefix.h"; then
+      echo "FAIL $prefix.h does not say ${prefix^^}_HAS_SAMPLER $has_sampler"
       failed=1
     fi
     "$cc" -std=c99 -pedantic -Wall -Wextra -Werror -O2 -DAOT_PREFIX="$prefix" -DAOT_MACRO="${prefix^^}" -include "$work/$prefix.h" \

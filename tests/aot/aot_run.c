@@ -4,13 +4,16 @@
 
      aot_run INPUTS.bin OUTPUTS.bin
 
-   Reads the lanes facet_aot_reference wrote (SoA directions and input
-   slots), evaluates them through PREFIX_eval_batch (one call over all lanes)
-   and PREFIX_eval (lane by lane), finds each lane's invalid status with a
-   one-lane batch call where the output is all zero, and writes everything
-   for facet_aot_reference to compare. It also checks the argument
-   conventions of the two entry points itself. Exit 0, or 1 on a failed
-   check or an I/O error. */
+   Reads the lanes facet_aot_reference wrote (SoA directions, input slots
+   and three uniform numbers), evaluates them through PREFIX_eval_batch (one
+   call over all lanes) and PREFIX_eval (lane by lane), finds each lane's
+   invalid status with a one-lane batch call where the output is all zero,
+   and where the header says PREFIX_HAS_SAMPLER 1 samples wi for each lane's
+   wo and u and evaluates the pdf of each lane's (wi, wo), through the batch
+   and the one-lane entry points; it writes everything for
+   facet_aot_reference to compare. It also checks the argument and
+   invalid-lane conventions of the entry points itself. Exit 0, or 1 on a
+   failed check or an I/O error. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -22,6 +25,11 @@
 #define AOT_EVAL AOT_CAT(AOT_PREFIX, _eval)
 #define AOT_EVAL_BATCH AOT_CAT(AOT_PREFIX, _eval_batch)
 #define AOT_INPUT_COUNT_OF(p) AOT_CAT(p, _INPUT_COUNT)
+#define AOT_SAMPLE AOT_CAT(AOT_PREFIX, _sample)
+#define AOT_SAMPLE_BATCH AOT_CAT(AOT_PREFIX, _sample_batch)
+#define AOT_PDF AOT_CAT(AOT_PREFIX, _pdf)
+#define AOT_PDF_BATCH AOT_CAT(AOT_PREFIX, _pdf_batch)
+#define AOT_HAS_SAMPLER AOT_CAT(AOT_MACRO, _HAS_SAMPLER)
 
 static int failures = 0;
 #define EXPECT(cond, ...)                                        \
@@ -37,6 +45,123 @@ static int failures = 0;
 static int readAll(FILE* f, void* data, size_t bytes) { return fread(data, 1, bytes, f) == bytes; }
 static int writeAll(FILE* f, const void* data, size_t bytes) { return fwrite(data, 1, bytes, f) == bytes; }
 
+#if AOT_HAS_SAMPLER
+/* The sampler's part: sample and pdf through the batch and the one-lane
+   entry points, their conventions, and the results appended to `out`.
+   u[0..2] are the lanes' uniform numbers. */
+static int runSampler(FILE* out, int64_t n, int slots, const float* const wi[3], const float* const wo[3],
+                      const float* const u[3], const float** inputs) {
+    float* sb = malloc(sizeof(float) * (size_t)n * 7); /* batch: wi, pdf, weight */
+    float* ss = malloc(sizeof(float) * (size_t)n * 7); /* one lane at a time */
+    float* pb = malloc(sizeof(float) * (size_t)n * 2); /* pdf batch, one-lane pdf */
+    char* sInvalid = malloc((size_t)n);
+    const float** nulls = calloc((size_t)slots + 1, sizeof(const float*));
+    float* swi[3];
+    float* sweight[3];
+    int64_t sampleCount, pdfCount, scalarInvalid = 0, i;
+    int c, s, ok;
+    if (!sb || !ss || !pb || !sInvalid || !nulls) return 0;
+    for (c = 0; c < 3; ++c) {
+        swi[c] = sb + (size_t)c * (size_t)n;
+        sweight[c] = sb + (size_t)(4 + c) * (size_t)n;
+    }
+    sampleCount = AOT_SAMPLE_BATCH(n, wo, u, slots ? inputs : NULL, swi, sb + 3 * n, sweight);
+    pdfCount = AOT_PDF_BATCH(n, wi, wo, slots ? inputs : NULL, pb);
+    for (i = 0; i < n; ++i) {
+        float a[3], b[3], uu[3], lane[64], w[3], p, weight[3], w2[3] = {7, 7, 7}, p2 = 7;
+        for (c = 0; c < 3; ++c) {
+            a[c] = wi[c][i];
+            b[c] = wo[c][i];
+            uu[c] = u[c][i];
+        }
+        for (s = 0; s < slots && s < 64; ++s) lane[s] = inputs[s][i];
+        sInvalid[i] = (char)AOT_SAMPLE(b, uu, slots ? lane : NULL, w, &p, weight);
+        scalarInvalid += sInvalid[i];
+        for (c = 0; c < 3; ++c) {
+            ss[(size_t)c * (size_t)n + (size_t)i] = w[c];
+            ss[(size_t)(4 + c) * (size_t)n + (size_t)i] = weight[c];
+        }
+        ss[3 * (size_t)n + (size_t)i] = p;
+        pb[(size_t)n + (size_t)i] = AOT_PDF(a, b, slots ? lane : NULL);
+        /* Invalid lanes give zeros; NULL outputs are skipped, the others written as before. */
+        if (sInvalid[i])
+            EXPECT(w[0] == 0 && w[1] == 0 && w[2] == 0 && p == 0 && weight[0] == 0 && weight[1] == 0 &&
+                       weight[2] == 0,
+                   "lane %lld: an invalid sample must give zeros", (long long)i);
+        if (i % 97 == 0) {
+            EXPECT(AOT_SAMPLE(b, uu, slots ? lane : NULL, NULL, &p2, NULL) == sInvalid[i] && p2 == p,
+                   "lane %lld: a sample with NULL wi and weight differs", (long long)i);
+            EXPECT(AOT_SAMPLE(b, uu, slots ? lane : NULL, w2, NULL, NULL) == sInvalid[i] && w2[0] == w[0] &&
+                       w2[1] == w[1] && w2[2] == w[2],
+                   "lane %lld: a sample with NULL pdf and weight differs", (long long)i);
+        }
+    }
+    EXPECT(scalarInvalid == sampleCount, "sample: %lld invalid lanes one at a time, %lld in the batch",
+           (long long)scalarInvalid, (long long)sampleCount);
+
+    /* The argument conventions (facet_sample_batch, facet_pdf_batch, facet_sample, facet_pdf). */
+    EXPECT(AOT_SAMPLE_BATCH(0, wo, u, NULL, swi, sb + 3 * n, sweight) == 0, "sample: n = 0 must return 0");
+    EXPECT(AOT_SAMPLE_BATCH(-1, wo, u, NULL, swi, sb + 3 * n, sweight) == -1, "sample: n < 0 must return -1");
+    EXPECT(AOT_SAMPLE_BATCH(n, NULL, u, NULL, swi, sb + 3 * n, sweight) == -1, "sample: NULL wo must return -1");
+    EXPECT(AOT_SAMPLE_BATCH(n, wo, NULL, NULL, swi, sb + 3 * n, sweight) == -1, "sample: NULL u must return -1");
+    EXPECT(AOT_SAMPLE_BATCH(n, wo, u, NULL, NULL, sb + 3 * n, sweight) == -1, "sample: NULL wi must return -1");
+    EXPECT(AOT_SAMPLE_BATCH(n, wo, u, NULL, swi, NULL, sweight) == -1, "sample: NULL pdf must return -1");
+    EXPECT(AOT_SAMPLE_BATCH(n, wo, u, NULL, swi, sb + 3 * n, NULL) == -1, "sample: NULL weight must return -1");
+    {
+        const float* holed[3];
+        float* holedOut[3];
+        holed[0] = u[0], holed[1] = NULL, holed[2] = u[2];
+        holedOut[0] = swi[0], holedOut[1] = swi[1], holedOut[2] = NULL;
+        EXPECT(AOT_SAMPLE_BATCH(n, wo, holed, NULL, swi, sb + 3 * n, sweight) == -1,
+               "sample: a NULL entry of u must return -1");
+        EXPECT(AOT_SAMPLE_BATCH(n, wo, u, NULL, holedOut, sb + 3 * n, sweight) == -1,
+               "sample: a NULL entry of wi must return -1");
+        holed[0] = wi[0], holed[1] = wi[1], holed[2] = NULL;
+        EXPECT(AOT_PDF_BATCH(n, holed, wo, NULL, pb) == -1, "pdf: a NULL entry of wi must return -1");
+    }
+    EXPECT(AOT_PDF_BATCH(0, wi, wo, NULL, pb) == 0, "pdf: n = 0 must return 0");
+    EXPECT(AOT_PDF_BATCH(-1, wi, wo, NULL, pb) == -1, "pdf: n < 0 must return -1");
+    EXPECT(AOT_PDF_BATCH(n, NULL, wo, NULL, pb) == -1, "pdf: NULL wi must return -1");
+    EXPECT(AOT_PDF_BATCH(n, wi, NULL, NULL, pb) == -1, "pdf: NULL wo must return -1");
+    EXPECT(AOT_PDF_BATCH(n, wi, wo, NULL, NULL) == -1, "pdf: NULL pdf must return -1");
+    {
+        float n3[3] = {0, 0, 1}, half[3] = {0.5f, 0.5f, 0.5f}, w[3] = {7, 7, 7}, p = 7, weight[3] = {7, 7, 7};
+        EXPECT(AOT_SAMPLE(NULL, half, NULL, w, &p, weight) == 1 && w[0] == 0 && w[1] == 0 && w[2] == 0 && p == 0 &&
+                   weight[0] == 0 && weight[1] == 0 && weight[2] == 0,
+               "sample with NULL wo must return 1 and zeros");
+        EXPECT(AOT_SAMPLE(n3, NULL, NULL, w, &p, weight) == 1 && p == 0, "sample with NULL u must return 1");
+        EXPECT(AOT_SAMPLE(n3, half, NULL, NULL, NULL, NULL) == 0, "sample with NULL outputs must still run");
+        EXPECT(AOT_PDF(NULL, n3, NULL) == 0 && AOT_PDF(n3, NULL, NULL) == 0, "pdf with a NULL direction must be 0");
+    }
+    /* NULL inputs and per-slot NULL inputs both mean the defaults. */
+    if (slots > 0) {
+        int64_t m = n < 1000 ? n : 1000;
+        float* d = malloc(sizeof(float) * (size_t)m * 14);
+        float *wiA[3], *wtA[3], *wiB[3], *wtB[3];
+        if (!d) return 0;
+        for (c = 0; c < 3; ++c) {
+            wiA[c] = d + (size_t)c * (size_t)m, wtA[c] = d + (size_t)(4 + c) * (size_t)m;
+            wiB[c] = d + (size_t)(7 + c) * (size_t)m, wtB[c] = d + (size_t)(11 + c) * (size_t)m;
+        }
+        EXPECT(AOT_SAMPLE_BATCH(m, wo, u, NULL, wiA, d + 3 * m, wtA) ==
+                   AOT_SAMPLE_BATCH(m, wo, u, nulls, wiB, d + 10 * m, wtB),
+               "sample: NULL slots and NULL inputs count differently");
+        EXPECT(memcmp(d, d + 7 * m, sizeof(float) * (size_t)m * 7) == 0,
+               "sample: NULL slots and NULL inputs give different values");
+        free(d);
+    }
+    ok = writeAll(out, &sampleCount, 8) && writeAll(out, sb, sizeof(float) * (size_t)n * 7) &&
+         writeAll(out, ss, sizeof(float) * (size_t)n * 7) && writeAll(out, sInvalid, (size_t)n) &&
+         writeAll(out, &pdfCount, 8) && writeAll(out, pb, sizeof(float) * (size_t)n * 2);
+    free(sb);
+    free(ss);
+    free(pb);
+    free(sInvalid);
+    free((void*)nulls);
+    return ok;
+}
+#endif
+
 int main(int argc, char** argv) {
     FILE* in;
     FILE* out;
@@ -44,12 +169,14 @@ int main(int argc, char** argv) {
     int32_t slots;
     int64_t n, i, batchCount, nullCount;
     int c, s;
-    float* lanes; /* 6 + slots streams of n floats */
+    float* lanes; /* 6 + slots + 3 streams of n floats: wi, wo, the slots, u */
     float* results; /* 6 streams: batch rgb, eval rgb */
     char* invalid;
     const float* wi[3];
     const float* wo[3];
+    const float* u[3];
     const float** inputs;
+    int32_t hasSampler = AOT_HAS_SAMPLER;
     float* rgb[3];
 
     if (argc != 3) {
@@ -67,12 +194,12 @@ int main(int argc, char** argv) {
                 AOT_INPUT_COUNT_OF(AOT_MACRO));
         return 1;
     }
-    lanes = malloc(sizeof(float) * (size_t)n * (size_t)(6 + slots));
+    lanes = malloc(sizeof(float) * (size_t)n * (size_t)(9 + slots));
     results = malloc(sizeof(float) * (size_t)n * 6);
     invalid = malloc((size_t)n);
     inputs = malloc(sizeof(const float*) * (size_t)(slots + 1));
     if (!lanes || !results || !invalid || !inputs) return 1;
-    if (!readAll(in, lanes, sizeof(float) * (size_t)n * (size_t)(6 + slots)) || fgetc(in) != EOF) {
+    if (!readAll(in, lanes, sizeof(float) * (size_t)n * (size_t)(9 + slots)) || fgetc(in) != EOF) {
         fprintf(stderr, "%s: truncated or too long\n", argv[1]);
         return 1;
     }
@@ -81,8 +208,12 @@ int main(int argc, char** argv) {
         wi[c] = lanes + (size_t)c * (size_t)n;
         wo[c] = lanes + (size_t)(3 + c) * (size_t)n;
         rgb[c] = results + (size_t)c * (size_t)n;
+        u[c] = lanes + (size_t)(6 + slots + c) * (size_t)n;
     }
     for (s = 0; s < slots; ++s) inputs[s] = lanes + (size_t)(6 + s) * (size_t)n;
+#if !AOT_HAS_SAMPLER
+    (void)u; /* read, not used: the object has no sampler */
+#endif
 
     batchCount = AOT_EVAL_BATCH(n, wi, wo, slots ? inputs : NULL, rgb);
 
@@ -152,7 +283,11 @@ int main(int argc, char** argv) {
     out = fopen(argv[2], "wb");
     if (!out || !writeAll(out, "FACETRUN", 8) || !writeAll(out, &n, 8) ||
         !writeAll(out, results, sizeof(float) * (size_t)n * 6) || !writeAll(out, &batchCount, 8) ||
-        !writeAll(out, invalid, (size_t)n) || fclose(out) != 0) {
+        !writeAll(out, invalid, (size_t)n) || !writeAll(out, &hasSampler, 4)
+#if AOT_HAS_SAMPLER
+        || !runSampler(out, n, slots, wi, wo, u, inputs)
+#endif
+        || fclose(out) != 0) {
         fprintf(stderr, "%s: cannot write\n", argv[2]);
         return 1;
     }

@@ -3,7 +3,8 @@
 # project against it with find_package(Facet), and runs both consumers on a
 # material whose normal-incidence value is known: GGX alpha = 0.25, F = 1,
 # f = 1/(4 pi alpha^2) = 1.27323954. The third consumer gets the material
-# compiled ahead of time through facet_add_material() and must not link Facet.
+# compiled ahead of time through facet_add_material() and must not link Facet;
+# it also checks the object's sampler (pdf at normal incidence, one sample).
 set -euo pipefail
 build_dir=$1 source_dir=$2
 work=$(mktemp -d)

@@ -96,8 +96,12 @@ int64_t facet_pdf_batch(const facet_kernel* k, int64_t n, const float* const wi[
    SIMD as its eval), or "reference" (the interpreter's sampler in double,
    one lane at a time: backend=interp, and the materials whose NDF has no
    compiled sampler: gaussian, and beckmann under a Smith masking); "" for
-   a NULL kernel. A kernel compiles its sampler on the first call of any
-   sampling function (this one included), once, thread-safely. */
+   a NULL kernel. A kernel gets its sampler on the first call of any
+   sampling function (this one included), once, thread-safely: from the
+   kernel caches (memory and disk, as its eval code, option cache=), else
+   compiled and stored there. Objects of `facet build` carry the same
+   sampler as PREFIX_sample / PREFIX_sample_batch / PREFIX_pdf /
+   PREFIX_pdf_batch, where their header says PREFIX_HAS_SAMPLER 1. */
 const char* facet_sampler(const facet_kernel* k);
 
 /* The message of the last batch call that returned -1 in this thread
