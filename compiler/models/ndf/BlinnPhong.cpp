@@ -91,9 +91,12 @@ struct BlinnPhongFormulas final : NdfFormulas<Real> {
             return d > 0 ? norm * powSin(c * c, s * s, e) * d : Real(0);
         };
         Real psiMax = atan2(wo.z, sxy);
-        // u = 0 takes the end of the bracket (the limit; the CDF underflows
-        // there for large e, and any point of that region would do).
-        Real psi = u1 > 0 ? invertIncreasing(cdfPsi, pdfPsi, u1 * cdfPsi(psiMax), -halfPi, psiMax) : -halfPi;
+        // Quantiles below 2^-32 (u = 0 in float) are taken at 2^-32: the
+        // limit u = 0 is the horizon, where the CDF underflows for large e
+        // (the inversion could stop anywhere there) and where m.z = 0 would
+        // make the sample's pdf ill-conditioned.
+        const Real floorU = Real(0x1p-32);
+        Real psi = invertIncreasing(cdfPsi, pdfPsi, (u1 > floorU ? u1 : floorU) * cdfPsi(psiMax), -halfPi, psiMax);
         // tan chi from its tail q = min(u2, 1 - u2), the sign from the side.
         Real nuY = e + 3, normY = studentSlopeNorm(nuY), q = u2 < Real(0.5) ? u2 : 1 - u2;
         auto minusTail = [&](Real chi) {
@@ -104,7 +107,7 @@ struct BlinnPhongFormulas final : NdfFormulas<Real> {
             Real s = sin(chi), c = cos(chi);
             return normY * powSin(c * c, s * s, nuY - 1);
         };
-        Real chi = q > 0 ? invertIncreasing(minusTail, pdfChi, -q, Real(0), halfPi) : halfPi;
+        Real chi = invertIncreasing(minusTail, pdfChi, -(q > floorU ? q : floorU), Real(0), halfPi);
         if (u2 < Real(0.5)) chi = -chi;
         Real mx = -sin(psi) * cos(chi), my = -sin(chi), mz = cos(psi) * cos(chi);
         return {cosPhi * mx - sinPhi * my, sinPhi * mx + cosPhi * my, mz};
