@@ -49,6 +49,14 @@ bool mixesCosineLobe(const ResolvedMaterial<Real>& r, SamplingTechnique techniqu
     return hasCosineLobe(r) || technique == SamplingTechnique::Cosine;
 }
 
+// (n.wo) / G1(wo) of the visible-normal density: (n.wo) + (n.wo) Lambda(wo)
+// with the Lambda exact for the NDF (NdfFormulas::visibleCosLambda), which
+// need not be the masking term's.
+template <typename Real>
+Real visibleNormalScale(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo) {
+    return wo.z + r.ndf->formulas.template get<Real>().visibleCosLambda(r.ndfArgs, wo);
+}
+
 template <typename Real>
 Real mixturePdf(const ResolvedMaterial<Real>& r, SamplingTechnique technique, Real pSpec, Real spec, Real cosine) {
     return mixesCosineLobe(r, technique) ? pSpec * spec + (1 - pSpec) * cosine : spec;
@@ -96,7 +104,7 @@ Real specularNormalPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, co
         // G1(wo) (wo.m)+ D(m) / (n.wo) with G1 = (n.wo) / ((n.wo) + (n.wo) Lambda(wo)).
         Real om = dot(wo, m);
         if (!(om > 0)) return 0;
-        return r.D(m) * om / (wo.z + r.cosLambda(wo));
+        return r.D(m) * om / visibleNormalScale(r, wo);
     }
     return r.ndf->formulas.template get<Real>().normalPdf(r.ndfArgs, m);
 }
@@ -116,7 +124,7 @@ Real specularPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Ve
         // pdf_m / (4 wo.m) = D(m) / (4 ((n.wo) + (n.wo) Lambda(wo))) for
         // wo.m > 0, which holds for m = h (and fails for m = -h).
         if (!(s.z > 0)) return 0;
-        return r.D(m) / (4 * (wo.z + r.cosLambda(wo)));
+        return r.D(m) / (4 * visibleNormalScale(r, wo));
     }
     return specularNormalPdf(r, wo, m, technique) / (2 * len);
 }

@@ -27,7 +27,9 @@
 #include <llvm/IR/Module.h>
 
 #include <array>
+#include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace facet {
@@ -187,6 +189,14 @@ public:
     std::array<llvm::Value*, 3> stretchedSlopeNormal(const NdfParams& n, llvm::Value* r2, llvm::Value* u);
     // expm1(y), precise type.
     llvm::Value* expm1(llvm::Value* y);
+    // x in [lo, hi] with cdf(x) = target, for a cdf increasing on [lo, hi]:
+    // `steps` Newton steps, each replaced by a bisection of the bracket
+    // where it would leave it, in a loop of the IR (a fixed number of
+    // branch-free steps per lane), starting at (lo + hi)/2, in the type of
+    // `math`. `cdfAndPdf(x)` emits cdf(x) and its derivative.
+    using CdfAndPdf = std::function<std::pair<llvm::Value*, llvm::Value*>(llvm::Value* x)>;
+    llvm::Value* invertIncreasing(MathEmitter& math, const CdfAndPdf& cdfAndPdf, llvm::Value* target, llvm::Value* lo,
+                                  llvm::Value* hi, int steps);
     // Upper clamp of eta and k for the exact Fresnel terms (float: |N|^4 must stay finite).
     double maxFresnelIndex() const { return body.precise == Precision::Double ? INFINITY : 1e9; }
 

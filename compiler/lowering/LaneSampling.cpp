@@ -42,14 +42,13 @@ struct LaneEmitter::SamplingTerms {
     NdfParams n;
     Vec wo;                     // unit, n.wo > 0 (other lanes read (0, 0, 1)), precise type
     Value* p = nullptr;         // the specular lobe's probability
-    Value* smithDen = nullptr;  // visible normals: 4 ((n.wo) + (n.wo) Lambda(wo)), precise type
+    Value* smithDen = nullptr;  // visible normals: 4 ((n.wo) + (n.wo) Lambda(wo)), precise type (visibleCosLambda)
     Value* above = nullptr;     // n.wo > 0 (else no sample and pdf 0)
 };
 
 // The NDF's parameters, the lobe probability and the Smith term of the
 // lane's wo (unit, precise type), after lowerInputsAndLets.
 LaneEmitter::SamplingTerms LaneEmitter::samplingTerms(const Vec& wo) {
-    MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
     SamplingTerms t;
     t.n = emitters_.ndf.params(*this);
@@ -57,12 +56,8 @@ LaneEmitter::SamplingTerms LaneEmitter::samplingTerms(const Vec& wo) {
     // Those lanes compute with wo = n, so that nothing below is NaN there.
     t.above = pm.gt(wo[2], pm.c(0.0));
     t.wo = selectVec(pm, t.above, wo, constantVec(pm, 0, 0, 1));
-    if (plan.sampling.specular == SpecularSampling::VisibleNormals) {
-        Vec woLane;
-        for (int i = 0; i < 3; ++i) woLane[i] = fm.convert(t.wo[i], fm.type());
-        Value* cl = pm.convert(emitters_.ndf.cosLambda(*this, t.n, woLane), pm.type());
-        t.smithDen = pm.mul(pm.c(4.0), pm.add(t.wo[2], cl));
-    }
+    if (plan.sampling.specular == SpecularSampling::VisibleNormals)
+        t.smithDen = pm.mul(pm.c(4.0), pm.add(t.wo[2], emitters_.ndf.visibleCosLambda(*this, t.n, t.wo)));
     t.p = specularProbability(t);
     return t;
 }
@@ -90,6 +85,48 @@ Vec LaneEmitter::stretchedSlopeNormal(const NdfParams& n, Value* r2, Value* u) {
 }
 
 Value* LaneEmitter::expm1(Value* y) { return preciseMath_.mul(y, expm1OverX(y)); }
+
+// The bracket closes on the side of x the sign of cdf(x) - target says; a
+// Newton step within the closed bracket is taken (so that a converged x
+// stays), any other becomes the bracket's midpoint.
+Value* LaneEmitter::invertIncreasing(MathEmitter& pm, const CdfAndPdf& cdfAndPdf, Value* target, Value* lo, Value* hi,
+                                     int steps) {
+    llvm::IRBuilder<>& b = builder;
+    llvm::Function* fn = b.GetInsertBlock()->getParent();
+    llvm::BasicBlock* pre = b.GetInsertBlock();
+    auto* loop = llvm::BasicBlock::Create(b.getContext(), "invert.step", fn);
+    auto* done = llvm::BasicBlock::Create(b.getContext(), "invert.done", fn);
+    Value* start = pm.mul(pm.add(lo, hi), pm.c(0.5));
+    b.CreateBr(loop);
+
+    b.SetInsertPoint(loop);
+    llvm::PHINode* k = b.CreatePHI(b.getInt32Ty(), 2, "invert.k");
+    llvm::PHINode* x = b.CreatePHI(pm.type(), 2, "invert.x");
+    llvm::PHINode* l = b.CreatePHI(pm.type(), 2, "invert.lo");
+    llvm::PHINode* h = b.CreatePHI(pm.type(), 2, "invert.hi");
+    k->addIncoming(b.getInt32(0), pre);
+    x->addIncoming(start, pre);
+    l->addIncoming(lo, pre);
+    h->addIncoming(hi, pre);
+    auto [cdf, pdf] = cdfAndPdf(x);
+    Value* f = pm.sub(cdf, target);
+    Value* above = pm.gt(f, pm.c(0.0));
+    Value* nextLo = pm.select(above, l, x);
+    Value* nextHi = pm.select(above, x, h);
+    Value* newton = pm.sub(x, pm.div(f, pdf));
+    Value* inside = b.CreateAnd(pm.ge(newton, nextLo), pm.le(newton, nextHi));  // false for NaN
+    Value* next = pm.select(inside, newton, pm.mul(pm.add(nextLo, nextHi), pm.c(0.5)));
+    Value* k1 = b.CreateAdd(k, b.getInt32(1));
+    llvm::BasicBlock* latch = b.GetInsertBlock();
+    k->addIncoming(k1, latch);
+    x->addIncoming(next, latch);
+    l->addIncoming(nextLo, latch);
+    h->addIncoming(nextHi, latch);
+    b.CreateCondBr(b.CreateICmpSLT(k1, b.getInt32(steps)), loop, done);
+
+    b.SetInsertPoint(done);
+    return next;
+}
 
 // p = A_spec / (A_spec + A_other), clamped to [0.05, 0.95], with the
 // albedo estimates at n.wo (channel means): A_spec = F(n.wo) E(n.wo) (E =

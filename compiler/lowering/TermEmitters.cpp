@@ -101,6 +101,15 @@ std::array<llvm::Value*, 3> NdfEmitter::sampleVisibleNormal(LaneEmitter&, const 
     internal_error << "visible-normal sampling of an NDF without it in IR (NdfLoweringTraits::samplesVisibleNormals)";
 }
 
+llvm::Value* NdfEmitter::visibleCosLambda(LaneEmitter& lane, const NdfParams& n,
+                                          const std::array<llvm::Value*, 3>& v) const {
+    MathEmitter& fm = lane.floatMath();
+    MathEmitter& pm = lane.preciseMath();
+    std::array<llvm::Value*, 3> vLane;
+    for (int i = 0; i < 3; ++i) vLane[i] = fm.convert(v[i], fm.type());
+    return pm.convert(cosLambda(lane, n, vLane), pm.type());
+}
+
 FresnelAverageArgs FresnelEmitter::averageArgs(LaneEmitter&) const { return {}; }
 
 LVal DiffuseEmitter::diffuse(LaneEmitter&) const { internal_error << "diffuse term of `none`"; }

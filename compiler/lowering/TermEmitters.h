@@ -98,10 +98,17 @@ public:
     // geometry whose h, hD and slopeH are m): D(m) (n.m) by default.
     virtual llvm::Value* normalPdf(LaneEmitter& lane, const NdfParams& n, const LaneGeometry& atM) const;
     // Visible-normal sampling (traits.samplesVisibleNormals) for the unit
-    // wo, n.wo > 0: m with density G1(wo) (wo.m)+ D(m) / (n.wo).
+    // wo, n.wo > 0: m with density G1(wo) (wo.m)+ D(m) / (n.wo), G1 from
+    // visibleCosLambda.
     virtual std::array<llvm::Value*, 3> sampleVisibleNormal(LaneEmitter& lane, const NdfParams& n,
                                                             const std::array<llvm::Value*, 3>& wo, llvm::Value* u1,
                                                             llvm::Value* u2) const;
+    // (n.v) Lambda(v) with the Lambda that normalizes the visible normals
+    // (the exact Smith Lambda of D, the catalog's visibleCosLambda), for the
+    // unit v (n.v > 0), both in the precise type. By default cosLambda (in
+    // float, widened).
+    virtual llvm::Value* visibleCosLambda(LaneEmitter& lane, const NdfParams& n,
+                                          const std::array<llvm::Value*, 3>& v) const;
 };
 
 struct MaskingLoweringTraits {

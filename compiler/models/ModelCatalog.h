@@ -166,9 +166,14 @@ struct NdfFormulas {
     virtual Real normalPdf(const ModelArgs<Real>& a, const Vec3<Real>& m) const { return D(a, m) * m.z; }
     // Visible-normal sampling for n.wo > 0, NdfEntry::visibleNormals only:
     // m with density G1(wo) (wo.m)+ D(m) / (n.wo), G1 = 1 / (1 + Lambda(wo))
-    // from cosLambda, which must be Lambda exactly for this D (or the
+    // from visibleCosLambda, which must be Lambda exactly for this D (or the
     // density does not integrate to 1).
     virtual Vec3<Real> sampleVisibleNormal(const ModelArgs<Real>& a, const Vec3<Real>& wo, Real u1, Real u2) const;
+    // (n.v) Lambda(v) with the Lambda that normalizes the visible normals:
+    // the exact Smith Lambda of D. cosLambda, unless the masking's Lambda is
+    // an approximation for this D (blinn_phong: Beckmann's at an equivalent
+    // roughness, SPEC 3), where the entry gives the exact one here.
+    virtual Real visibleCosLambda(const ModelArgs<Real>& a, const Vec3<Real>& v) const { return cosLambda(a, v); }
 };
 
 // The geometry a masking term sees: the directions, the microfacet normal,
@@ -255,8 +260,9 @@ struct NdfEntry : ModelInfo {
     ModelArgs<double> (*argsAtAlpha)(double alpha, const std::vector<double>& shape) = nullptr;
     // Short text of the resolved parameters, for reports ("alpha=(0.1,0.2)").
     std::string (*describe)(const ModelArgs<double>& a) = nullptr;
-    // Has sampleVisibleNormal: an exact visible-normal sampler and a Lambda
-    // exact for its D, so that the visible-normal density integrates to 1.
+    // Has sampleVisibleNormal: an exact visible-normal sampler and a
+    // visibleCosLambda exact for its D, so that the visible-normal density
+    // integrates to 1.
     bool visibleNormals = false;
     FormulaSet<NdfFormulas> formulas;
 };

@@ -320,5 +320,5 @@ TEST_CASE("visible-normal sampling has the lowest image error of the three techn
         CHECK(*r.rmse[0] < *r.rmse[1]);
         CHECK(*r.rmse[0] < *r.rmse[2]);
     }
-    CHECK(withVisible == 4);  // GGX and Beckmann at both roughnesses
+    CHECK(withVisible == 6);  // GGX, Beckmann and Blinn-Phong at both roughnesses
 }
