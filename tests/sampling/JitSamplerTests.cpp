@@ -96,9 +96,9 @@ struct Lanes {
     }
 };
 
-// The first material of each combination, at the
-// roughness its index picks (every combination covers one of the four; the
-// combinations of one NDF cover them all between them).
+// The first material of each combination, at the roughness its index
+// picks (every combination covers one of the four; the combinations of one
+// NDF cover them all between them).
 struct JitCase {
     const Combo* combo;
     double alpha;
@@ -259,10 +259,10 @@ TEST_CASE("jit sampling: pdf and weight agree with the kernel's pdf and eval; sc
 }
 
 // Chi-square goodness of fit of the SIMD exact sampler's samples against
-// the reference pdf, on every fifth combination at one
-// (roughness, view) pair each (the reference sampler's own test covers the
-// whole grid); and the test of the test: the same samples against the pdf
-// scaled by 1.01 fail the normalization check.
+// the reference pdf, on every fifth combination at one (roughness, view)
+// pair each (the reference sampler's own test covers the whole grid); and
+// the test of the test: the same samples against the pdf scaled by 1.01
+// fail the normalization check.
 TEST_CASE("jit sampling: chi-square of the JIT samples against the reference pdf") {
     std::vector<JitCase> cases = jitCases();
     std::vector<std::pair<JitCase*, std::unique_ptr<facet::Kernel>>> runs;

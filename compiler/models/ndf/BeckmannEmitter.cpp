@@ -52,25 +52,28 @@ constexpr double kSlopeTail = 8;
 // from tan = 1e8, whose slopes differ from the limit's by ~1e-8.
 constexpr double kMaxTan = 1e8;
 constexpr int kNewtonSteps = 5;
+constexpr double kLowerPart = 0.7;  // u below: invert C; above: the tail mass S
 
 // One standard (alpha = 1) visible slope for the view at tan(theta_o) =
 // tanT (Heitz & d'Eon 2014): x in [-8, hi], hi = min(cot theta_o, 8), with
 // the CDF C(x) = erfc(-x)/2 + tanT exp(-x^2) / (2 sqrt(pi)) at the fraction
 // u of C(hi); tanT = 0 gives the Gaussian erfc(-x)/2 = u. Both C and the
 // tail mass S(x) = C(hi) - C(x) are log-concave (the density is), and their
-// logarithms are nearly linear in the variables the two halves invert in:
-// below the median (u < 1/2) log C in x, which goes as -x^2 in the tail;
-// above it log S in z = ln(hi - x), which goes as 2 z where the density
-// vanishes linearly at hi (tanT > 1/8) and as -x^2 in the Gaussian tail.
-// The starting points bound the root from the bounds C <= exp(-x^2) (1 +
-// tanT/sqrt(pi))/2 below the median and, above it, S >= the mass of each
-// of the density's parts (the quadratic at hi, the Rayleigh term
-// -x tanT exp(-x^2), the Gaussian) where that part is the whole; five
-// bracketed Newton steps then reach 1e-12 in x (checked against a long
-// double bisection over 2e5 (tanT, u) pairs, tanT from 0 to 1e14, u down to
-// 1e-17 and up to 1 - 2^-24). Always in double, fast kernels too: near
-// u = 1 the root moves by S's relative error, S = C(hi) - C(x) is 6e-8 of C
-// there, and C needs erfc to double precision. tanT and u in double.
+// logarithms are nearly linear in the variables the two parts of [0, 1)
+// invert in: for u < 0.7 log C in x, which goes as -x^2 in the tail; above
+// it log S in z = ln(hi - x), which goes as 2 z where the density vanishes
+// linearly at hi (tanT > 1/8) and as -x^2 in the Gaussian tail. The
+// starting points bound the root: from C <= exp(-x^2) (1 + tanT/sqrt(pi))/2
+// for x <= 0 below, and above from S >= the mass of each of the density's
+// parts (the quadratic at hi, the Rayleigh term -x tanT exp(-x^2), the
+// Gaussian) where that part is the whole, which is why those starts serve
+// the tail above 0.7 and not the middle; five bracketed Newton steps then
+// reach 1e-12 in x (checked against a long double bisection over 5e5
+// (tanT, u) pairs, tanT from 0 to 1e14, u down to 1e-17 and up to
+// 1 - 2^-24, and densely over u in [0.45, 0.8]). Always in double, fast
+// kernels too: near u = 1 the root moves by S's relative error, S = C(hi) -
+// C(x) is 6e-8 of C there, and C needs erfc to double precision. tanT and u
+// in double.
 Value* visibleSlope(LaneEmitter& lane, Value* tanT, Value* u) {
     MathEmitter& pm = lane.doubleMath();
     llvm::IRBuilder<>& b = lane.builder;
@@ -89,9 +92,9 @@ Value* visibleSlope(LaneEmitter& lane, Value* tanT, Value* u) {
         return pm.select(pm.gt(x, pm.c(0.0)), above, below);
     };
     Value* total = cdf(hi, nullptr);
-    Value* lower = pm.lt(u, pm.c(0.5));
-    Value* target = pm.mul(u, total);                         // C(x) below the median
-    Value* rest = pm.mul(pm.sub(pm.c(1.0), u), total);       // S(x) above it (1 - u exact)
+    Value* lower = pm.lt(u, pm.c(kLowerPart));
+    Value* target = pm.mul(u, total);                    // C(x) for u below 0.7
+    Value* rest = pm.mul(pm.sub(pm.c(1.0), u), total);  // S(x) above (1 - u exact)
     // Below: C(x) <= exp(-x^2) A0 with A0 = C(0) bounds x from below.
     Value* a0 = pm.mul(pm.add(pm.c(1.0), k), pm.c(0.5));
     Value* xLow = pm.neg(pm.sqrt(pm.maxnum(pm.log(pm.div(a0, target)), pm.c(0.0))));  // target = 0: -inf
