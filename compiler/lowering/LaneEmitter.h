@@ -197,6 +197,16 @@ public:
     using CdfAndPdf = std::function<std::pair<llvm::Value*, llvm::Value*>(llvm::Value* x)>;
     llvm::Value* invertIncreasing(MathEmitter& math, const CdfAndPdf& cdfAndPdf, llvm::Value* target, llvm::Value* lo,
                                   llvm::Value* hi, int steps);
+    // For the samplers that invert a CDF: the root of phi, increasing in v,
+    // in [lo, hi], per lane in the type of `math`. `steps` Newton steps from
+    // v0, branch-free: each sign of phi narrows the bracket, and a step that
+    // would leave it (or is not a number: phi infinite or its slope 0)
+    // bisects it instead. `eval` emits phi(v) and phi'(v).
+    struct NewtonTerms {
+        llvm::Value *phi, *slope;
+    };
+    llvm::Value* bracketedNewton(MathEmitter& math, const std::function<NewtonTerms(llvm::Value*)>& eval,
+                                 llvm::Value* v0, llvm::Value* lo, llvm::Value* hi, int steps);
     // Upper clamp of eta and k for the exact Fresnel terms (float: |N|^4 must stay finite).
     double maxFresnelIndex() const { return body.precise == Precision::Double ? INFINITY : 1e9; }
 

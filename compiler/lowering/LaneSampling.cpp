@@ -128,6 +128,21 @@ Value* LaneEmitter::invertIncreasing(MathEmitter& pm, const CdfAndPdf& cdfAndPdf
     return next;
 }
 
+Value* LaneEmitter::bracketedNewton(MathEmitter& pm, const std::function<NewtonTerms(Value*)>& eval, Value* v,
+                                    Value* lo, Value* hi, int steps) {
+    for (int i = 0; i < steps; ++i) {
+        NewtonTerms t = eval(v);
+        // phi(v) > 0: the root is below v. (phi = 0 keeps v: the step is 0.)
+        Value* above = pm.gt(t.phi, pm.c(0.0));
+        hi = pm.select(above, v, hi);
+        lo = pm.select(above, lo, v);
+        Value* next = pm.sub(v, pm.div(t.phi, t.slope));
+        Value* inside = builder.CreateAnd(pm.ge(next, lo), pm.le(next, hi));  // ordered: false for NaN
+        v = pm.select(inside, next, pm.mul(pm.add(lo, hi), pm.c(0.5)));
+    }
+    return v;
+}
+
 // p = A_spec / (A_spec + A_other), clamped to [0.05, 0.95], with the
 // albedo estimates at n.wo (channel means): A_spec = F(n.wo) E(n.wo) (E =
 // 1 without a Kulla-Conty table), A_other = the Lambert albedo plus the

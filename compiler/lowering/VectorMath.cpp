@@ -229,6 +229,32 @@ Value* MathEmitter::erfcx(Value* x) {
     return mul(t, q);
 }
 
+Value* MathEmitter::erfcxWide(Value* x) {
+    // exp(x^2) erfc(x) = t Q(t), t = 1/(1 + x/4) in [1/3, 1] for x in [0, 8],
+    // Q as a Chebyshev series in u = 3t - 2 in [-1, 1]. The 18 coefficients
+    // are the Chebyshev interpolant of Q at 18 nodes, computed in
+    // __float128 (erfcq); the truncation is below 1e-15 relative, and
+    // Clenshaw's recurrence keeps the double rounding at a few ulps (a
+    // monomial form of this degree would lose digits to cancellation).
+    static const double kCheb[] = {
+        0.48852333238058238,     0.36675797417450784,     0.11083299935000804,     0.027366874104304755,
+        0.005512089060919048,    0.00088855482743268384,  0.00010912475423103769,  8.9020243263815163e-06,
+        2.1037045046220292e-07,  -5.4477228202874779e-08, -6.6857616777708028e-09, 4.2354334600089629e-11,
+        7.1580616906876796e-11,  3.0353875627949835e-12,  -6.9592001297247728e-13, -5.5312688443029196e-14,
+        7.4856550041250511e-15,  7.8501817441494034e-16};
+    constexpr int n = sizeof kCheb / sizeof kCheb[0];
+    Value* t = div(c(1.0), fma(x, c(0.25), c(1.0)));
+    Value* u = fma(t, c(3.0), c(-2.0));
+    Value* twoU = add(u, u);
+    Value *b1 = c(0.0), *b2 = c(0.0);
+    for (int k = n - 1; k >= 1; --k) {
+        Value* bk = add(fma(twoU, b1, neg(b2)), c(kCheb[k]));
+        b2 = b1;
+        b1 = bk;
+    }
+    return mul(t, add(fma(u, b1, neg(b2)), c(kCheb[0])));
+}
+
 Value* MathEmitter::atan2(Value* y, Value* x) {
     // Reduce to a = min/max in [0, 1], then to |t| <= tan(pi/8) with
     // atan(a) = pi/4 + atan((a-1)/(a+1)); odd Taylor series to t^21.

@@ -10,6 +10,7 @@
 //   exp, log (float): <= 1 ulp;  log1p (float): <= 2 ulp
 //   pow  (float, computed through double log/exp): <= 1 ulp
 //   erfcx (float, 0 <= x <= 4): fit 1.0e-9 relative + rounding
+//   erfcxWide (double, 0 <= x <= 8): 1e-15 relative (series 1e-15 + rounding)
 //   atan2 (float): <= 3 ulp
 //   sinCosTurns: Taylor remainder below 1e-16 (double), 2e-9 (float)
 #pragma once
@@ -82,6 +83,9 @@ public:
     llvm::Value* pow(llvm::Value* x, llvm::Value* y);
     // exp(x^2) erfc(x), the scaled complementary error function, for 0 <= x <= 4.
     llvm::Value* erfcx(llvm::Value* x);
+    // The same for 0 <= x <= 8 to double precision (for double callers that
+    // invert a CDF built from it, where erfcx()'s 1e-9 moves the root).
+    llvm::Value* erfcxWide(llvm::Value* x);
     // atan2(y, x) for y >= 0, in [0, pi].
     llvm::Value* atan2(llvm::Value* y, llvm::Value* x);
     // sin(2 pi t) and cos(2 pi t) for t in [-1, 1] (turns: an azimuth from a

@@ -145,6 +145,26 @@ TEST_CASE("the Smith Lambda form and the model substitutions") {
     CHECK_FALSE(schlickDielectricApplies(material("ndf = ggx(0.3); fresnel = conductor(eta = 0.2, k = 3);")));
 }
 
+TEST_CASE("every NDF has a compiled sampler of the catalog's technique") {
+    // Visible normals under a Smith masking where the entry has them (GGX,
+    // Beckmann), NDF sampling elsewhere (gaussian: a numerically inverted CDF).
+    CHECK(exactPlan("ndf = beckmann(0.3); masking = smith_separable;").sampling.specular ==
+          SpecularSampling::VisibleNormals);
+    CHECK(fastPlan("ndf = beckmann(0.3, 0.01); masking = smith_height_correlated;").sampling.specular ==
+          SpecularSampling::VisibleNormals);
+    CHECK(exactPlan("ndf = beckmann(0.3); masking = kelemen;").sampling.specular == SpecularSampling::NdfNormals);
+    CHECK(exactPlan("input a = 0.2; ndf = gaussian(a); masking = cook_torrance;").sampling.specular ==
+          SpecularSampling::NdfNormals);
+    for (const ModelInfo* m : catalog())
+        if (m->slot == ModelSlot::Ndf) {
+            CAPTURE(m->name);
+            const NdfEmitter* e = static_cast<const NdfEmitter*>(findTermEmitter(*m));
+            REQUIRE(e);
+            CHECK(e->traits.samplesNormals);
+            CHECK(e->traits.samplesVisibleNormals == ndfEntry(*m).visibleNormals);
+        }
+}
+
 TEST_CASE("every catalog entry has an emitter") {
     for (const ModelInfo* m : catalog()) {
         CAPTURE(modelSlotName(m->slot));
