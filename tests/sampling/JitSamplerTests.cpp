@@ -246,7 +246,11 @@ TEST_CASE("jit sampling: pdf and weight agree with the kernel's pdf and eval; sc
                                          relDiff(lanes.pdf[i], scalarLanes.pdf[i]),
                                          relDiff(lanes.weight[0][i], scalarLanes.weight[0][i])});
                     worstScalar = std::max(worstScalar, s);
-                    CHECK(s <= 1e-6);
+                    // Exact kernels: the same arithmetic per lane. Fast ones:
+                    // the scalar and vector approximations of sqrt and
+                    // division differ (up to 2.3e-5 measured, Beckmann's
+                    // visible slopes at alpha 0.01).
+                    CHECK(s <= (math == "exact" ? 1e-6 : 1e-4));
                     ++checked;
                 }
             }
