@@ -190,10 +190,8 @@ public:
     // expm1(y), precise type.
     llvm::Value* expm1(llvm::Value* y);
     // x in [lo, hi] with cdf(x) = target, for a cdf increasing on [lo, hi]:
-    // `steps` Newton steps, each replaced by a bisection of the bracket
-    // where it would leave it, in a loop of the IR (a fixed number of
-    // branch-free steps per lane), starting at (lo + hi)/2, in the type of
-    // `math`. `cdfAndPdf(x)` emits cdf(x) and its derivative.
+    // bracketedNewton on cdf(x) - target from (lo + hi)/2. `cdfAndPdf(x)`
+    // emits cdf(x) and its derivative.
     using CdfAndPdf = std::function<std::pair<llvm::Value*, llvm::Value*>(llvm::Value* x)>;
     llvm::Value* invertIncreasing(MathEmitter& math, const CdfAndPdf& cdfAndPdf, llvm::Value* target, llvm::Value* lo,
                                   llvm::Value* hi, int steps);

@@ -86,46 +86,13 @@ Vec LaneEmitter::stretchedSlopeNormal(const NdfParams& n, Value* r2, Value* u) {
 
 Value* LaneEmitter::expm1(Value* y) { return preciseMath_.mul(y, expm1OverX(y)); }
 
-// The bracket closes on the side of x the sign of cdf(x) - target says; a
-// Newton step within the closed bracket is taken (so that a converged x
-// stays), any other becomes the bracket's midpoint.
 Value* LaneEmitter::invertIncreasing(MathEmitter& pm, const CdfAndPdf& cdfAndPdf, Value* target, Value* lo, Value* hi,
                                      int steps) {
-    llvm::IRBuilder<>& b = builder;
-    llvm::Function* fn = b.GetInsertBlock()->getParent();
-    llvm::BasicBlock* pre = b.GetInsertBlock();
-    auto* loop = llvm::BasicBlock::Create(b.getContext(), "invert.step", fn);
-    auto* done = llvm::BasicBlock::Create(b.getContext(), "invert.done", fn);
-    Value* start = pm.mul(pm.add(lo, hi), pm.c(0.5));
-    b.CreateBr(loop);
-
-    b.SetInsertPoint(loop);
-    llvm::PHINode* k = b.CreatePHI(b.getInt32Ty(), 2, "invert.k");
-    llvm::PHINode* x = b.CreatePHI(pm.type(), 2, "invert.x");
-    llvm::PHINode* l = b.CreatePHI(pm.type(), 2, "invert.lo");
-    llvm::PHINode* h = b.CreatePHI(pm.type(), 2, "invert.hi");
-    k->addIncoming(b.getInt32(0), pre);
-    x->addIncoming(start, pre);
-    l->addIncoming(lo, pre);
-    h->addIncoming(hi, pre);
-    auto [cdf, pdf] = cdfAndPdf(x);
-    Value* f = pm.sub(cdf, target);
-    Value* above = pm.gt(f, pm.c(0.0));
-    Value* nextLo = pm.select(above, l, x);
-    Value* nextHi = pm.select(above, x, h);
-    Value* newton = pm.sub(x, pm.div(f, pdf));
-    Value* inside = b.CreateAnd(pm.ge(newton, nextLo), pm.le(newton, nextHi));  // false for NaN
-    Value* next = pm.select(inside, newton, pm.mul(pm.add(nextLo, nextHi), pm.c(0.5)));
-    Value* k1 = b.CreateAdd(k, b.getInt32(1));
-    llvm::BasicBlock* latch = b.GetInsertBlock();
-    k->addIncoming(k1, latch);
-    x->addIncoming(next, latch);
-    l->addIncoming(nextLo, latch);
-    h->addIncoming(nextHi, latch);
-    b.CreateCondBr(b.CreateICmpSLT(k1, b.getInt32(steps)), loop, done);
-
-    b.SetInsertPoint(done);
-    return next;
+    auto phi = [&](Value* x) {
+        auto [cdf, pdf] = cdfAndPdf(x);
+        return NewtonTerms{pm.sub(cdf, target), pdf};
+    };
+    return bracketedNewton(pm, phi, pm.mul(pm.add(lo, hi), pm.c(0.5)), lo, hi, steps);
 }
 
 // The steps run in a loop of the IR rather than unrolled: each step holds a
