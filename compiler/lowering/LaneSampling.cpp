@@ -96,8 +96,8 @@ Value* LaneEmitter::invertIncreasing(MathEmitter& pm, const CdfAndPdf& cdfAndPdf
 }
 
 // The steps run in a loop of the IR rather than unrolled: each step holds a
-// whole CDF evaluation (gaussian: a 12-point quadrature), and unrolled they
-// multiplied the sampler module's size and its compile time (0.4-1.3 s).
+// whole CDF evaluation (gaussian: a 12-point quadrature), so unrolling
+// multiplies the sampler module's size and its compile time.
 Value* LaneEmitter::bracketedNewton(MathEmitter& pm, const std::function<NewtonTerms(Value*)>& eval, Value* v0,
                                     Value* lo0, Value* hi0, int steps) {
     llvm::IRBuilder<>& b = builder;

@@ -272,8 +272,9 @@ TEST_CASE("random materials: JIT samplers against the reference sampler for the 
         // Each material gets one kernel, scalar or SIMD 4/8/16 in turn, in
         // one math mode (alternating every four materials); every second
         // scalar material also gets a SIMD kernel, for the scalar-vs-SIMD
-        // check. (Two kernels for every material doubled the test's time
-        // for little more coverage: each kernel compiles eval and sampler.)
+        // check. (Each kernel compiles eval and sampler, so a second kernel
+        // for every material would double the test's time for little more
+        // coverage.)
         const bool exact = (i / 4) % 2 == 0;
         const MathMode math = exact ? MathMode::Exact : MathMode::Fast;
         const int width = i % 4 == 0 ? 1 : widths[i % 4 - 1];
