@@ -82,6 +82,7 @@ public:
         llvm::Value* pdf;                    // float, the mixture's density at wi
         std::array<llvm::Value*, 3> weight;  // float, f (n.wi) / pdf; 0 below the horizon
         llvm::Value* invalid;
+        llvm::Value* untrusted;  // guarded body: lanes to recompute in the other body (includes invalid ones)
     };
     // One sample for the direction wo and the uniform numbers u (float lanes).
     SampleResult emitSample(const std::array<llvm::Value*, 3>& wo, const std::array<llvm::Value*, 3>& u,
@@ -221,7 +222,9 @@ public:
 
 private:
     llvm::Type* boolType();
-    LaneGeometry geometry(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo);
+    // `wiSampled`: wi is a float body's own sample (unit to float rounding).
+    LaneGeometry geometry(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
+                          bool wiSampled = false);
     std::array<llvm::Value*, 3> brdf(const LaneGeometry& geo);
     // f per channel in the precise type and the lanes where it applies (both
     // directions above the horizon, wi + wo not 0; elsewhere f = 0).
@@ -232,6 +235,9 @@ private:
     llvm::Value* checkedLength2(MathEmitter& math, const std::array<llvm::Value*, 3>& w,
                                 std::array<llvm::Value*, 3>& widened);
     std::array<llvm::Value*, 3> unitDirection(const std::array<llvm::Value*, 3>& w, std::array<llvm::Value*, 3>& unitF);
+    // Float body: 1/|w| - 1 in float (the unit w is w + w times it), the
+    // length checked in double as the precise body checks it.
+    llvm::Value* unitCorrection(const std::array<llvm::Value*, 3>& w);
 
     // LaneSampling.cpp
     struct SamplingTerms;

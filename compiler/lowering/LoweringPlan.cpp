@@ -260,6 +260,11 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     plan.sampling.cosineLobe = em.diffuse.present() || material.compensatesEnergy();
     plan.sampling.compensationAlbedo = material.compensatesEnergy();
     plan.sampling.body = plan.scalarBody;
+    plan.sampling.batchBody = plan.scalarBody;
+    if (plan.batchBodies == BatchBodies::FloatFirst && em.ndf.traits.floatFirstSampler) {
+        plan.sampling.batchBodies = BatchBodies::FloatFirst;
+        plan.sampling.batchBody = plan.batchBody;
+    }
     return plan;
 }
 
@@ -298,7 +303,12 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
     os << "sampling: specular=" << specularSamplingName(plan.sampling.specular)
        << " cosine-lobe=" << yesNo(plan.sampling.cosineLobe)
        << " compensation-albedo=" << yesNo(plan.sampling.compensationAlbedo) << "\n";
-    if (plan.sampling.specular != SpecularSampling::None) printBody(os, "sampling-body", plan.sampling.body);
+    if (plan.sampling.specular != SpecularSampling::None) {
+        os << "sampling-batch-bodies: " << batchBodiesName(plan.sampling.batchBodies) << "\n";
+        printBody(os, "sampling-body", plan.sampling.body);
+        if (plan.sampling.batchBodies != BatchBodies::Plain)
+            printBody(os, "sampling-batch-body", plan.sampling.batchBody);
+    }
     return os.str();
 }
 

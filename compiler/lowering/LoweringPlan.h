@@ -131,11 +131,15 @@ struct SamplingPlan {
     SpecularSampling specular = SpecularSampling::None;
     bool cosineLobe = false;          // diffuse base or Kulla-Conty compensation
     bool compensationAlbedo = false;  // the lobe probability reads the Kulla-Conty table
-    // The body the sampler lanes compute in, scalar and SIMD alike: the
-    // plain body (no guarded float-first or fast body: the sampler's
-    // directions and pdf are not guarded, and one body keeps the scalar and
-    // SIMD samplers identical).
+    // The plain body: the scalar sample and pdf entries, the batch pdf
+    // entry, and the lanes a float-first sample batch body distrusts.
     BodyPlan body;
+    // The sample batch entry's bodies: Plain (`body` alone) or FloatFirst
+    // (an exact kernel whose NDF samples well in float: `batchBody`, the
+    // guarded float body, first, and `body` for the lanes it distrusts).
+    // Fast kernels sample in `body`, which is float already.
+    BatchBodies batchBodies = BatchBodies::Plain;
+    BodyPlan batchBody;
 };
 
 struct LoweringPlan {
