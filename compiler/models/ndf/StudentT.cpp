@@ -97,6 +97,10 @@ std::vector<const ModelInfo*> facetModels_ndf_StudentT() {
             {"hcc_student_t_gamma_max", "ndf = student_t(0.3, 1e4); masking = none; fresnel = schlick(0.04);"},
             {"hcc_student_t_alpha_min", "ndf = student_t(1e-4, 2); masking = neumann; fresnel = dielectric(1.5);"},
             {"hcc_student_t_aniso", "ndf = student_t(alpha_x = 1, alpha_y = 1e-4, gamma = 1.6); masking = kelemen;"},
+            {"hcc_student_t_smith_heavy", "ndf = student_t(alpha_x = 1, alpha_y = 1e-3, gamma = 1.55); "
+                                          "masking = smith_height_direction_correlated;"},
+            {"hcc_student_t_smith_beckmann_like", "ndf = student_t(1e-3, 1e4); masking = smith_separable; "
+                                                  "fresnel = dielectric(1.5);"},
         };
         e.formulas = makeFormulas<NdfFormulas, StudentTFormulas>();
         return e;

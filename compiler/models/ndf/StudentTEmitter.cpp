@@ -66,7 +66,7 @@ public:
         const LambdaTable& table = *lane.plan.lambdaTable;
         MathEmitter& fm = lane.floatMath();
         MathEmitter& dm = lane.doubleMath();
-        llvm::GlobalVariable* gv = lane.doubleTable(table.z, "facet_lambda_" + table.name());
+        llvm::GlobalVariable* gv = lane.doubleTable(table.z, "facet_lambda_" + table.name());  // named as in tables()
         Value* proj = lane.smithProjection(*this, n, v);
         Value* projD = dm.convert(proj, dm.type());
         Value* logRoot = dm.mul(dm.log(projD), dm.c(0.5));
@@ -93,7 +93,14 @@ public:
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_StudentTEmitter() {
     static const StudentTEmitter emitter;
-    return {{ModelSlot::Ndf, "student_t", &emitter}};
+    // The Lambda table under a Smith masking (cosLambda).
+    auto tables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {
+        if (!material.masking.model || !material.masking.model->smith) return {};
+        const NdfEntry& ndf = ndfEntry(*material.ndf.model);
+        std::shared_ptr<const LambdaTable> t = lambdaTable(ndf, tabulatedLambdaShape(material));
+        return {{"facet_lambda_" + t->name(), t->z.data(), t->z.size() * sizeof(double)}};  // kept by lambdaTable()
+    };
+    return {{ModelSlot::Ndf, "student_t", &emitter, tables}};
 }
 
 }  // namespace facet
