@@ -214,6 +214,9 @@ public:
     llvm::GlobalVariable* doubleTable(const std::vector<double>& data, const std::string& name);
     // table[index] for an integer-valued index in the precise type (a gather across lanes).
     llvm::Value* fetch(llvm::GlobalVariable* table, llvm::Value* index);
+    // 4-point Lagrange interpolation in a double table of `size` nodes at the
+    // node coordinate u in [0, size - 1], all in double.
+    llvm::Value* lagrangeFetch(llvm::GlobalVariable* table, int size, llvm::Value* u);
     // table[index] + t (table[index + 1] - table[index]).
     llvm::Value* lerpFetch(llvm::GlobalVariable* table, llvm::Value* index, llvm::Value* t);
     // Bilinear interpolation in a row-major table with `stride` entries per row.

@@ -57,6 +57,7 @@ const char* lambdaFormName(LambdaForm l) {
         case LambdaForm::RootSums: return "root-sums";
         case LambdaForm::ClosedForm: return "closed-form";
         case LambdaForm::WalterFit: return "walter-fit";
+        case LambdaForm::Table: return "table";
     }
     return "?";
 }
@@ -221,7 +222,10 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
         plan.lambda = LambdaForm::RootSums;
     else if (variant.walterLambda && em.ndf.traits.beckmannProfileLambda)
         plan.lambda = LambdaForm::WalterFit;
-    else
+    else if (ndfEntry(*material.ndf.model).tabulatedLambda) {
+        plan.lambda = LambdaForm::Table;
+        plan.lambdaTable = lambdaTable(ndfEntry(*material.ndf.model), tabulatedLambdaShape(material));
+    } else
         plan.lambda = LambdaForm::ClosedForm;
 
     const FresnelEmitter& fresnel = em.fresnel;
@@ -294,7 +298,9 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
     printBody(os, "batch-body", plan.batchBody);
     if (plan.fallbackBody) printBody(os, "fallback-body", *plan.fallbackBody);
     os << "ndf-isotropic: " << yesNo(plan.ndfIsotropic) << "\n";
-    os << "smith-lambda: " << lambdaFormName(plan.lambda) << "\n";
+    os << "smith-lambda: " << lambdaFormName(plan.lambda);
+    if (plan.lambdaTable) os << " (" << plan.lambdaTable->name() << ", " << plan.lambdaTable->z.size() << " nodes)";
+    os << "\n";
     os << "fresnel: substitute-schlick=" << yesNo(plan.fresnel.substituteSchlick)
        << " exact-in-float=" << yesNo(plan.fresnel.exactInFloat) << " range-guard=" << yesNo(plan.fresnel.rangeGuard)
        << " at-most-one=" << yesNo(plan.fresnel.atMostOne) << " can-vanish=" << yesNo(plan.fresnel.canVanish) << "\n";

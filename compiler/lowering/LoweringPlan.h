@@ -11,8 +11,10 @@
 // nothing; `facet ir --plan FILE` prints it (printPlan).
 #pragma once
 
+#include "LambdaTable.h"
 #include "Material.h"
 
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -82,6 +84,7 @@ enum class LambdaForm {
     RootSums,   // from R(v) = sqrt((n.v)^2 + proj(v)) (the NDF's root form)
     ClosedForm, // the NDF's closed-form (n.v) Lambda(v)
     WalterFit,  // Walter et al. 2007's rational fit of the Beckmann-profile Lambda
+    Table,      // the NDF's tabulated Lambda (LambdaTable.h), embedded in the kernel
 };
 const char* lambdaFormName(LambdaForm l);
 
@@ -150,6 +153,7 @@ struct LoweringPlan {
     std::optional<BodyPlan> fallbackBody;  // for the lanes a guarded batch body distrusts
     bool ndfIsotropic = false;           // one alpha, or equal constant alphas
     LambdaForm lambda = LambdaForm::None;
+    std::shared_ptr<const LambdaTable> lambdaTable;  // LambdaForm::Table: the material's table
     FresnelPlan fresnel;
     bool compensatesEnergy = false;
     bool flushDenormals = false;  // fast kernels on x86: MXCSR FTZ/DAZ for the call
