@@ -76,7 +76,9 @@ template <typename Real>
 bool visibleNormalSampling(const ResolvedMaterial<Real>& r, SamplingTechnique technique = SamplingTechnique::Material) {
     if (technique == SamplingTechnique::VisibleNormals) return true;
     if (technique == SamplingTechnique::Normals) return false;
-    return samplesVisibleNormals(*r.ndf, *r.masking);
+    std::vector<double> shape;
+    for (int p : r.ndf->tableShapeParams) shape.push_back(double(r.ndfArgs[p]));
+    return samplesVisibleNormals(*r.ndf, *r.masking, shape);
 }
 
 // True when the material's NDF has an exact visible-normal sampler (what

@@ -8,6 +8,8 @@
 
 #include "models/ModelMath.h"
 
+#include "StudentT.h"
+
 #include <cmath>
 #include <limits>
 
@@ -62,6 +64,88 @@ Real invertIncreasing(const Cdf& cdf, const Pdf& pdf, Real target, Real lo, Real
         x = next;
     }
     return x;
+}
+
+// ---- the Student-t slope distribution ----------------------------------------
+//
+// P22(x, y) = (nu/(2 pi)) (1 + x^2 + y^2)^(-(nu + 2)/2), nu > 1, whose
+// marginal is the slope-form Student-t p_nu (numeric/StudentT.h): the slopes
+// of blinn_phong (nu = e + 2) and, stretched by sqrt(gamma - 1) alpha, of
+// student_t (nu = 2 gamma - 2). Its Smith Lambda and visible normals
+// (Heitz & d'Eon 2014), for unit directions in the unstretched frame.
+
+// sqrt(s2)^p for s2 + c2 = 1 (sin^p from sin^2 and cos^2): through
+// log1p(-c2) where c2 is small, so that a large p keeps its accuracy.
+template <typename Real>
+Real powSin(Real s2, Real c2, Real p) {
+    using std::exp; using std::log; using std::log1p;
+    if (p == 0) return 1;
+    if (!(s2 > 0)) return 0;
+    return exp(p / 2 * (c2 < Real(0.5) ? log1p(-c2) : log(s2)));
+}
+
+// The exact (n.v) Lambda(v) of P22: with (1 + mu^2)^(-1/2) = sin theta and
+// Int_mu^inf q p_nu(q) dq = c_nu (1 + mu^2)^(-(nu-1)/2) / (nu - 1),
+// (n.v) Lambda = c_nu sin^nu theta / (nu - 1) - cos theta T_nu(mu), T_nu
+// the tail of p_nu at mu = cot theta (nu = 2 gives GGX's at alpha = 1).
+template <typename Real>
+Real studentSlopeCosLambda(Real nu, const Vec3<Real>& v) {
+    Real s2 = v.x * v.x + v.y * v.y, c2 = v.z * v.z;
+    if (s2 == 0) return 0;  // v = n: nothing is masked
+    Real cl = studentSlopeNorm(nu) * powSin(s2, c2, nu) / (nu - 1) - v.z * studentSlopeTail(nu, c2, s2);
+    return cl > 0 ? cl : Real(0);
+}
+
+// A visible normal of P22 for the unit wo. In the frame turned about n so
+// that wo' = (sin t, 0, cos t), the visible slopes (x, y) have the density
+// (1 - x tan t)+ P22(x, y) up to a constant. With x = tan psi, cos t times
+// the CDF of psi is
+//   G(psi) = cos t F(tan psi) + sin t c_nu cos^(nu-1) psi / (nu - 1),
+// F = 1 - T_nu, with G' = c_nu cos^(nu-2) psi sin(psi_max - psi) on
+// (-pi/2, psi_max], psi_max = pi/2 - t, and G(psi_max) = cos t + (n.wo)
+// Lambda(wo). Given x, y = sqrt(1 + x^2) tan chi, where tan chi has the
+// density p_(nu+1) (from (1 + x^2 + y^2) = (1 + x^2)(1 + tan^2 chi)).
+// Both angles by Newton's method; the normal of the slopes (x, y) is
+// (-sin psi cos chi, -sin chi, cos psi cos chi), turned back.
+template <typename Real>
+Vec3<Real> studentSlopeVisibleNormal(Real nu, const Vec3<Real>& wo, Real u1, Real u2) {
+    using std::atan2; using std::cos; using std::sin; using std::sqrt;
+    const Real halfPi = kPi<Real> / 2;
+    Real sxy = sqrt(wo.x * wo.x + wo.y * wo.y);
+    Real cosPhi = sxy > 0 ? wo.x / sxy : Real(1), sinPhi = sxy > 0 ? wo.y / sxy : Real(0);
+    Real norm = studentSlopeNorm(nu);
+    auto cdfPsi = [&](Real psi) {
+        Real s = sin(psi), c = cos(psi), s2 = s * s, c2 = c * c;
+        Real tail = studentSlopeTail(nu, s2, c2);
+        Real F = psi >= 0 ? 1 - tail : tail;
+        return wo.z * F + sxy * norm * powSin(c2, s2, nu - 1) / (nu - 1);
+    };
+    auto pdfPsi = [&](Real psi) {
+        Real s = sin(psi), c = cos(psi);
+        Real d = wo.z * c - sxy * s;
+        return d > 0 ? norm * powSin(c * c, s * s, nu - 2) * d : Real(0);
+    };
+    Real psiMax = atan2(wo.z, sxy);
+    // Quantiles below 2^-32 (u = 0 in float) are taken at 2^-32: the
+    // limit u = 0 is the horizon, where the CDF underflows for large nu
+    // (the inversion could stop anywhere there) and where m.z = 0 would
+    // make the sample's pdf ill-conditioned.
+    const Real floorU = Real(0x1p-32);
+    Real psi = invertIncreasing(cdfPsi, pdfPsi, (u1 > floorU ? u1 : floorU) * cdfPsi(psiMax), -halfPi, psiMax);
+    // tan chi from its tail q = min(u2, 1 - u2), the sign from the side.
+    Real nuY = nu + 1, normY = studentSlopeNorm(nuY), q = u2 < Real(0.5) ? u2 : 1 - u2;
+    auto minusTail = [&](Real chi) {
+        Real s = sin(chi), c = cos(chi);
+        return -studentSlopeTail(nuY, s * s, c * c);
+    };
+    auto pdfChi = [&](Real chi) {
+        Real s = sin(chi), c = cos(chi);
+        return normY * powSin(c * c, s * s, nuY - 1);
+    };
+    Real chi = invertIncreasing(minusTail, pdfChi, -(q > floorU ? q : floorU), Real(0), halfPi);
+    if (u2 < Real(0.5)) chi = -chi;
+    Real mx = -sin(psi) * cos(chi), my = -sin(chi), mz = cos(psi) * cos(chi);
+    return {cosPhi * mx - sinPhi * my, sinPhi * mx + cosPhi * my, mz};
 }
 
 }  // namespace facet::models

@@ -101,6 +101,7 @@ TEST_CASE("sampling: a wrong pdf is rejected") {
     auto m = makeMaterial(*combo, 0.5);
     REQUIRE(m);
     const facet::ResolvedMaterial<double>& r = m->resolved;
+    REQUIRE(facet::visibleNormalSampling(r));
     V3 wo = viewAt(45);
     CheckSettings s;
     s.samples = kSamples;

@@ -9,6 +9,7 @@
 
 #include <doctest/doctest.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cmath>
 #include <limits>
@@ -96,7 +97,7 @@ TEST_CASE("sampling: visible-normal weights of a Smith lobe are at most G1'/G1")
         const facet::NdfEntry& ndf = facet::ndfEntry(*n);
         if (!ndf.visibleNormals) continue;
         for (const facet::ModelInfo* mk : facet::catalogSlot(facet::ModelSlot::Masking)) {
-            if (!facet::samplesVisibleNormals(ndf, facet::maskingEntry(*mk))) continue;
+            if (!facet::maskingEntry(*mk).smith) continue;
             for (const facet::ModelExample& ex : ndf.examples)
                 for (const char* fresnel : {"none", "schlick(0.9)"}) {
                     std::string text = fmt::format("material t {{ {} ndf = {}; masking = {}; fresnel = {}; {} }}",
@@ -104,13 +105,16 @@ TEST_CASE("sampling: visible-normal weights of a Smith lobe are at most G1'/G1")
                     std::string error;
                     auto m = loadMaterial(text, &error);
                     INFO(text, "\n", error);
+                    // A tabulated Lambda needs constant shape parameters: examples
+                    // that make them inputs have no Smith masking.
+                    if (!m && ndf.tabulatedLambda && error.find("needs a constant") != std::string::npos) continue;
                     REQUIRE(m);
                     ++materials;
                     facet::HardCaseOptions options;
                     for (const facet::HardCase& hc : facet::hardCases(*m->material, options)) {
                         if (hc.invalidInput || !(hc.wo[2] > 0)) continue;
                         facet::ResolvedMaterial<double> r = m->interpreter->resolve(hc.slots.data());
-                        if (!r.valid) continue;
+                        if (!r.valid || !facet::visibleNormalSampling(r)) continue;
                         double len = std::sqrt(hc.wo[0] * hc.wo[0] + hc.wo[1] * hc.wo[1] + hc.wo[2] * hc.wo[2]);
                         V3 wo{hc.wo[0] / len, hc.wo[1] / len, hc.wo[2] / len};
                         double bound = (wo.z + r.ndf->formulas.d->visibleCosLambda(r.ndfArgs, wo)) /
@@ -240,38 +244,62 @@ TEST_CASE("sampling: invalid lanes and directions below the horizon") {
 // with the trait. Where an entry's masking Lambda differs from it
 // (blinn_phong: Beckmann's at an equivalent roughness), the masking Lambda
 // would be off by several percent: that is why the entry has its own.
+// Shape parameters (a tabulated Lambda's) at their typical value and above
+// and below it, one parameter varied at a time. Not closer to the low end:
+// student_t below gamma = 2 has D ~ mz^(2 gamma - 4), singular at the
+// horizon, which the cell quadrature below does not resolve (gamma 1.6
+// integrates to 0.94 with either Lambda); the chi-square runs cover it.
+std::vector<std::vector<double>> shapesToCheck(const facet::NdfEntry& ndf) {
+    std::vector<double> typical;
+    for (int p : ndf.tableShapeParams) typical.push_back(ndf.canonical[p].typical);
+    std::vector<std::vector<double>> shapes{typical};
+    for (size_t i = 0; i < typical.size(); ++i)
+        for (double offset : {0.7, 10.0}) {
+            const facet::ModelParam& param = ndf.canonical[ndf.tableShapeParams[i]];
+            if (param.lo + offset >= param.hi) continue;
+            shapes.push_back(typical);
+            shapes.back()[i] = param.lo + offset;
+        }
+    return shapes;
+}
+
 TEST_CASE("sampling: visibleNormals holds where the visible-normal density integrates to 1") {
     for (const facet::ModelInfo* n : facet::catalogSlot(facet::ModelSlot::Ndf)) {
         const facet::NdfEntry& ndf = facet::ndfEntry(*n);
-        if (!ndf.smith) {
+        if (!facet::hasSmithLambda(ndf)) {
             CHECK_FALSE(ndf.visibleNormals);  // no Lambda, no G1(wo)
             continue;
         }
-        facet::ResolvedMaterial<double> r =
-            facet::lobeAtAlpha(ndf, facet::maskingEntry(facet::modelNamed(facet::ModelSlot::Masking, "none")), 0.5);
-        const facet::NdfFormulas<double>& f = *ndf.formulas.d;
-        double worst = 0, worstMasking = 0, lambdaGap = 0;
-        for (double theta : {30.0, 60.0, 80.0, 89.0}) {
-            V3 wo = viewAt(theta);
-            auto integral = [&](double g) {  // g = (n.wo) / G1(wo)
-                auto density = [&](const V3& m) {
-                    double om = m.x * wo.x + m.y * wo.y + m.z * wo.z;
-                    return m.z > 0 && om > 0 ? r.D(m) * om / g : 0.0;
+        for (const std::vector<double>& shape : shapesToCheck(ndf)) {
+            facet::ResolvedMaterial<double> r = facet::lobeAtAlpha(
+                ndf, facet::maskingEntry(facet::modelNamed(facet::ModelSlot::Masking, "none")), 0.5, shape);
+            const facet::NdfFormulas<double>& f = *ndf.formulas.d;
+            double worst = 0, worstMasking = 0, lambdaGap = 0;
+            for (double theta : {30.0, 60.0, 80.0, 89.0}) {
+                V3 wo = viewAt(theta);
+                auto integral = [&](double g) {  // g = (n.wo) / G1(wo)
+                    auto density = [&](const V3& m) {
+                        double om = m.x * wo.x + m.y * wo.y + m.z * wo.z;
+                        return m.z > 0 && om > 0 ? r.D(m) * om / g : 0.0;
+                    };
+                    std::vector<double> cells = integrateCells(SphereGrid::forLobe(kPi / 2, 0, 0, 0.05, 0.2), density);
+                    double total = 0;
+                    for (double c : cells) total += c;
+                    return total;
                 };
-                std::vector<double> cells = integrateCells(SphereGrid::forLobe(kPi / 2, 0, 0, 0.05, 0.2), density);
-                double total = 0;
-                for (double c : cells) total += c;
-                return total;
-            };
-            double visible = f.visibleCosLambda(r.ndfArgs, wo), masking = r.cosLambda(wo);
-            worst = std::max(worst, std::abs(integral(wo.z + visible) - 1));
-            worstMasking = std::max(worstMasking, std::abs(integral(wo.z + masking) - 1));
-            lambdaGap = std::max(lambdaGap, relDiff(visible, masking));
+                double visible = f.visibleCosLambda(r.ndfArgs, wo), masking = r.cosLambda(wo);
+                worst = std::max(worst, std::abs(integral(wo.z + visible) - 1));
+                worstMasking = std::max(worstMasking, std::abs(integral(wo.z + masking) - 1));
+                lambdaGap = std::max(lambdaGap, relDiff(visible, masking));
+            }
+            MESSAGE(fmt::format("{}{}: the visible-normal density integrates to 1 within {:.3g} ({:.3g} with the "
+                                "masking's Lambda){}",
+                                ndf.name, shape.empty() ? "" : fmt::format(" shape {}", fmt::join(shape, ",")), worst,
+                                worstMasking, ndf.visibleNormals ? "" : " (sampled through its NDF)"));
+            if (ndf.visibleNormals) CHECK(worst < 1e-4);
+            // A Lambda other than the masking's exists because the masking's is
+            // an approximation (not a table of the same Lambda).
+            if (lambdaGap > 1e-5) CHECK(worstMasking > 0.05);
         }
-        MESSAGE(fmt::format("{}: the visible-normal density integrates to 1 within {:.3g} ({:.3g} with the "
-                            "masking's Lambda){}",
-                            ndf.name, worst, worstMasking, ndf.visibleNormals ? "" : " (sampled through its NDF)"));
-        if (ndf.visibleNormals) CHECK(worst < 1e-4);
-        if (lambdaGap > 0) CHECK(worstMasking > 0.05);
     }
 }

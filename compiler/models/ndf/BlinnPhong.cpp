@@ -4,14 +4,12 @@
 //
 // Visible normals come from its own slope distribution (Heitz & d'Eon
 // 2014): P22(x, y) = (e + 2)/(2 pi) (1 + x^2 + y^2)^(-(e + 4)/2), whose
-// marginal is the slope-form Student-t p_nu, nu = e + 2 (numeric/StudentT.h).
-// The exact Smith Lambda of this D, (1/mu) Int_mu^inf (q - mu) p_nu(q) dq at
-// mu = cot theta, normalizes them; the BRDF's masking keeps the Beckmann one.
+// marginal is the slope-form Student-t p_nu, nu = e + 2 (numeric/StudentT.h,
+// models/NdfSampling.h). The exact Smith Lambda of this D normalizes them;
+// the BRDF's masking keeps the Beckmann one.
 #include "QuadMath.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
-
-#include "StudentT.h"
 
 #include <fmt/format.h>
 
@@ -52,75 +50,13 @@ struct BlinnPhongFormulas final : NdfFormulas<Real> {
         using std::expm1; using std::log1p;
         return normalFromPolar(-expm1(2 * log1p(-u1) / (a[kExponent] + 2)), u2);
     }
-    // The exact Lambda: with (1 + mu^2)^(-1/2) = sin theta and Int_mu^inf q
-    // p_nu(q) dq = c_nu (1 + mu^2)^(-(nu-1)/2) / (nu - 1),
-    // (n.v) Lambda = c_nu sin^nu theta / (nu - 1) - cos theta T_nu(mu), T_nu
-    // the tail of p_nu at mu = cot theta. (e = 0 gives GGX's at alpha = 1.)
+    // The exact Lambda of D and its visible normals: those of its slope
+    // distribution (NdfSampling.h), nu = e + 2.
     Real visibleCosLambda(const ModelArgs<Real>& a, const Vec3<Real>& v) const override {
-        Real nu = a[kExponent] + 2;
-        Real s2 = v.x * v.x + v.y * v.y, c2 = v.z * v.z;
-        if (s2 == 0) return 0;  // v = n: nothing is masked
-        Real cl = studentSlopeNorm(nu) * powSin(s2, c2, nu) / (nu - 1) - v.z * studentSlopeTail(nu, c2, s2);
-        return cl > 0 ? cl : Real(0);
+        return studentSlopeCosLambda(a[kExponent] + 2, v);
     }
-    // In the frame turned about n so that wo' = (sin t, 0, cos t), the
-    // visible slopes (x, y) have the density (1 - x tan t)+ P22(x, y) up to
-    // a constant. With x = tan psi, cos t times the CDF of psi is
-    //   G(psi) = cos t F(tan psi) + sin t c_nu cos^(nu-1) psi / (nu - 1),
-    // F = 1 - T_nu, with G' = c_nu cos^e psi sin(psi_max - psi) on (-pi/2,
-    // psi_max], psi_max = pi/2 - t, and G(psi_max) = cos t + (n.wo)
-    // Lambda(wo). Given x, y = sqrt(1 + x^2) tan chi, where tan chi has the
-    // density p_(e+3) (from (1 + x^2 + y^2) = (1 + x^2)(1 + tan^2 chi)).
-    // Both angles by Newton's method; the normal of the slopes (x, y) is
-    // (-sin psi cos chi, -sin chi, cos psi cos chi), turned back.
     Vec3<Real> sampleVisibleNormal(const ModelArgs<Real>& a, const Vec3<Real>& wo, Real u1, Real u2) const override {
-        using std::atan2; using std::cos; using std::sin; using std::sqrt;
-        const Real e = a[kExponent], nu = e + 2, halfPi = kPi<Real> / 2;
-        Real sxy = sqrt(wo.x * wo.x + wo.y * wo.y);
-        Real cosPhi = sxy > 0 ? wo.x / sxy : Real(1), sinPhi = sxy > 0 ? wo.y / sxy : Real(0);
-        Real norm = studentSlopeNorm(nu);
-        auto cdfPsi = [&](Real psi) {
-            Real s = sin(psi), c = cos(psi), s2 = s * s, c2 = c * c;
-            Real tail = studentSlopeTail(nu, s2, c2);
-            Real F = psi >= 0 ? 1 - tail : tail;
-            return wo.z * F + sxy * norm * powSin(c2, s2, nu - 1) / (nu - 1);
-        };
-        auto pdfPsi = [&](Real psi) {
-            Real s = sin(psi), c = cos(psi);
-            Real d = wo.z * c - sxy * s;
-            return d > 0 ? norm * powSin(c * c, s * s, e) * d : Real(0);
-        };
-        Real psiMax = atan2(wo.z, sxy);
-        // Quantiles below 2^-32 (u = 0 in float) are taken at 2^-32: the
-        // limit u = 0 is the horizon, where the CDF underflows for large e
-        // (the inversion could stop anywhere there) and where m.z = 0 would
-        // make the sample's pdf ill-conditioned.
-        const Real floorU = Real(0x1p-32);
-        Real psi = invertIncreasing(cdfPsi, pdfPsi, (u1 > floorU ? u1 : floorU) * cdfPsi(psiMax), -halfPi, psiMax);
-        // tan chi from its tail q = min(u2, 1 - u2), the sign from the side.
-        Real nuY = e + 3, normY = studentSlopeNorm(nuY), q = u2 < Real(0.5) ? u2 : 1 - u2;
-        auto minusTail = [&](Real chi) {
-            Real s = sin(chi), c = cos(chi);
-            return -studentSlopeTail(nuY, s * s, c * c);
-        };
-        auto pdfChi = [&](Real chi) {
-            Real s = sin(chi), c = cos(chi);
-            return normY * powSin(c * c, s * s, nuY - 1);
-        };
-        Real chi = invertIncreasing(minusTail, pdfChi, -(q > floorU ? q : floorU), Real(0), halfPi);
-        if (u2 < Real(0.5)) chi = -chi;
-        Real mx = -sin(psi) * cos(chi), my = -sin(chi), mz = cos(psi) * cos(chi);
-        return {cosPhi * mx - sinPhi * my, sinPhi * mx + cosPhi * my, mz};
-    }
-
-private:
-    // sqrt(s2)^p for s2 + c2 = 1 (sin^p from sin^2 and cos^2): through
-    // log1p(-c2) where c2 is small, so that a large p keeps its accuracy.
-    static Real powSin(Real s2, Real c2, Real p) {
-        using std::exp; using std::log; using std::log1p;
-        if (p == 0) return 1;
-        if (!(s2 > 0)) return 0;
-        return exp(p / 2 * (c2 < Real(0.5) ? log1p(-c2) : log(s2)));
+        return studentSlopeVisibleNormal(a[kExponent] + 2, wo, u1, u2);
     }
 };
 

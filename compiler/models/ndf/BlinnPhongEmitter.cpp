@@ -4,11 +4,13 @@
 // sampling through its own slope distribution, whose marginal is the
 // slope-form Student-t p_nu(x) = c_nu (1 + x^2)^(-(nu+1)/2), nu = e + 2
 // (numeric/StudentT.h describes it; the IR below is written from the
-// formulas, for a per-lane exponent): the exact Smith Lambda that
-// normalizes the visible normals, and their inversion by a fixed number of
-// Newton steps on closed-form CDFs. In double whatever the kernel's math:
-// in float the tails of the fraction lose up to 8% (and the normals 3e-5).
+// formulas, for a per-lane nu): the exact Smith Lambda that normalizes the
+// visible normals, and their inversion by a fixed number of Newton steps on
+// closed-form CDFs (StudentSlopeEmitter.h, which student_t shares). In
+// double whatever the kernel's math: in float the tails of the fraction
+// lose up to 8% (and the normals 3e-5).
 #include "BeckmannProfileEmitter.h"
+#include "StudentSlopeEmitter.h"
 
 #include <cmath>
 
@@ -22,8 +24,9 @@ constexpr int kOwnExponent = 0;  // NdfParams::own: the clamped exponent, precis
 
 // Steps of the continued fraction of the Student-t tail and of each Newton
 // inversion: with the switch at x^2 nu = 12.25 the fraction converges in at
-// most 20 steps for any nu >= 2, and 16 leave the sampled normals within
-// 2e-11 of the fully converged ones; 32 Newton steps (starting from the
+// most 20 steps for any nu >= 2 (34 for nu down to 1), and 16 leave the
+// sampled normals within 2e-11 of the fully converged ones (the fraction
+// within 7e-9 relative for any nu >= 1); 32 Newton steps (starting from the
 // bracket's midpoint, bisections while the lobe is narrower than the
 // bracket) converge for every exponent from 0 to 2e8 (within 2e-11 of the
 // reference's inversion at u from 2^-32 to 1 - 2^-24, theta_o up to 89.9;
@@ -139,15 +142,77 @@ Value* studentTail(MathEmitter& pm, const StudentT& t, Value* s2, Value* c2) {
     return pm.select(pm.gt(c2, pm.c(0.0)), tail, pm.c(0.0));
 }
 
-// (n.v) Lambda(v) of the Blinn-Phong D: c_nu sin^nu theta / (nu - 1) -
-// cos theta T_nu(cot theta), at least 0 (as the reference).
-Value* exactCosLambda(MathEmitter& pm, const StudentT& t, const std::array<Value*, 3>& v) {
-    Value* s2 = pm.fma(v[0], v[0], pm.mul(v[1], v[1]));
-    Value* c2 = pm.mul(v[2], v[2]);
-    Value* first = pm.div(pm.mul(t.norm, powRoot(pm, s2, c2, t.nu)), pm.sub(t.nu, pm.c(1.0)));
-    Value* cl = pm.sub(first, pm.mul(v[2], studentTail(pm, t, c2, s2)));
-    return pm.select(pm.eq(s2, pm.c(0.0)), pm.c(0.0), pm.maxnum(cl, pm.c(0.0)));
+}  // namespace
+
+// c_nu sin^nu theta / (nu - 1) - cos theta T_nu(cot theta), at least 0 (as
+// the reference).
+Value* studentSlopeCosLambda(MathEmitter& dm, Value* nu, const std::array<Value*, 3>& v) {
+    StudentT t = studentT(dm, nu);
+    Value* s2 = dm.fma(v[0], v[0], dm.mul(v[1], v[1]));
+    Value* c2 = dm.mul(v[2], v[2]);
+    Value* first = dm.div(dm.mul(t.norm, powRoot(dm, s2, c2, t.nu)), dm.sub(t.nu, dm.c(1.0)));
+    Value* cl = dm.sub(first, dm.mul(v[2], studentTail(dm, t, c2, s2)));
+    return dm.select(dm.eq(s2, dm.c(0.0)), dm.c(0.0), dm.maxnum(cl, dm.c(0.0)));
 }
+
+// Heitz & d'Eon 2014 on the slopes of P22: turned about n so that wo' =
+// (sin t, 0, cos t), the visible x = tan psi has cos t times the CDF
+//   G(psi) = cos t F(tan psi) + sin t c_nu cos^(nu-1) psi / (nu - 1),
+// F = 1 - T_nu, G' = c_nu cos^(nu-2) psi (cos t cos psi - sin t sin psi) on
+// (-pi/2, pi/2 - t]; then y = sqrt(1 + x^2) tan chi, tan chi with the
+// density p_(nu+1), drawn by its tail min(u2, 1 - u2) and the side.
+// Quantiles below 2^-32 are taken at 2^-32 (as the reference: not the
+// horizon, where the CDF underflows). m is the normal of the slopes (x, y),
+// (-sin psi cos chi, -sin chi, cos psi cos chi), turned back.
+std::array<Value*, 3> studentSlopeVisibleNormal(LaneEmitter& lane, Value* nu, const std::array<Value*, 3>& wo,
+                                                Value* u1, Value* u2) {
+    MathEmitter& pm = lane.doubleMath();
+    StudentT tx = studentT(pm, nu);
+    Value* sxy = pm.sqrt(pm.fma(wo[0], wo[0], pm.mul(wo[1], wo[1])));
+    Value* turned = pm.gt(sxy, pm.c(0.0));
+    Value* inv = pm.div(pm.c(1.0), sxy);
+    Value* cosPhi = pm.select(turned, pm.mul(wo[0], inv), pm.c(1.0));
+    Value* sinPhi = pm.select(turned, pm.mul(wo[1], inv), pm.c(0.0));
+    auto sinCos = [&](Value* angle) { return pm.sinCosTurns(pm.mul(angle, pm.c(1 / (2 * kPi)))); };
+    Value* nuM1 = pm.sub(nu, pm.c(1.0));
+    Value* nuM2 = pm.sub(nu, pm.c(2.0));
+    auto cdfPsi = [&](Value* psi) -> std::pair<Value*, Value*> {
+        auto [s, c] = sinCos(psi);
+        Value *s2 = pm.mul(s, s), *c2 = pm.mul(c, c);
+        Value* T = studentTail(pm, tx, s2, c2);
+        Value* F = pm.select(pm.ge(psi, pm.c(0.0)), pm.sub(pm.c(1.0), T), T);
+        Value* side = pm.div(pm.mul(pm.mul(sxy, tx.norm), powRoot(pm, c2, s2, nuM1)), nuM1);
+        Value* visible = pm.maxnum(pm.sub(pm.mul(wo[2], c), pm.mul(sxy, s)), pm.c(0.0));
+        return {pm.fma(wo[2], F, side), pm.mul(pm.mul(tx.norm, powRoot(pm, c2, s2, nuM2)), visible)};
+    };
+    const double halfPi = kPi / 2;
+    Value* psiMax = pm.atan2(wo[2], sxy);
+    const double floorU = 0x1p-32;
+    Value* target = pm.mul(pm.maxnum(u1, pm.c(floorU)), cdfPsi(psiMax).first);
+    Value* psi = lane.invertIncreasing(pm, cdfPsi, target, pm.c(-halfPi), psiMax, kNewtonSteps);
+
+    StudentT ty = studentT(pm, pm.add(nu, pm.c(1.0)));
+    Value* lower = pm.lt(u2, pm.c(0.5));
+    Value* q = pm.select(lower, u2, pm.sub(pm.c(1.0), u2));
+    Value* nuYM1 = pm.sub(ty.nu, pm.c(1.0));
+    auto cdfChi = [&](Value* chi) -> std::pair<Value*, Value*> {
+        auto [s, c] = sinCos(chi);
+        Value *s2 = pm.mul(s, s), *c2 = pm.mul(c, c);
+        return {pm.neg(studentTail(pm, ty, s2, c2)), pm.mul(ty.norm, powRoot(pm, c2, s2, nuYM1))};
+    };
+    Value* chi = lane.invertIncreasing(pm, cdfChi, pm.neg(pm.maxnum(q, pm.c(floorU))), pm.c(0.0), pm.c(halfPi),
+                                       kNewtonSteps);
+    chi = pm.select(lower, pm.neg(chi), chi);
+
+    auto [sPsi, cPsi] = sinCos(psi);
+    auto [sChi, cChi] = sinCos(chi);
+    Value* mx = pm.neg(pm.mul(sPsi, cChi));
+    Value* my = pm.neg(sChi);
+    Value* mz = pm.mul(cPsi, cChi);
+    return {pm.sub(pm.mul(cosPhi, mx), pm.mul(sinPhi, my)), pm.fma(sinPhi, mx, pm.mul(cosPhi, my)), mz};
+}
+
+namespace {
 
 // sqrt(2 / (e + 2)) in the precise type.
 Value* equivalentAlpha(LaneEmitter& lane, const NdfParams& n) {
@@ -208,71 +273,22 @@ public:
         std::array<Value*, 3> vD;
         for (int i = 0; i < 3; ++i) vD[i] = dm.convert(v[i], dm.type());
         Value* e = dm.convert(n.own[kOwnExponent], dm.type());
-        return pm.convert(exactCosLambda(dm, studentT(dm, dm.add(e, dm.c(2.0))), vD), pm.type());
+        return pm.convert(studentSlopeCosLambda(dm, dm.add(e, dm.c(2.0)), vD), pm.type());
     }
 
-    // Heitz & d'Eon 2014 on the slopes of D: turned about n so that wo' =
-    // (sin t, 0, cos t), the visible x = tan psi has cos t times the CDF
-    //   G(psi) = cos t F(tan psi) + sin t c_nu cos^(nu-1) psi / (nu - 1),
-    // F = 1 - T_nu, G' = c_nu cos^e psi (cos t cos psi - sin t sin psi) on
-    // (-pi/2, pi/2 - t]; then y = sqrt(1 + x^2) tan chi, tan chi with the
-    // density p_(e+3), drawn by its tail min(u2, 1 - u2) and the side.
-    // Quantiles below 2^-32 are taken at 2^-32 (as the reference: not the
-    // horizon, where the CDF underflows). m is the normal of the
-    // slopes (x, y), (-sin psi cos chi, -sin chi, cos psi cos chi), turned
-    // back.
-    std::array<Value*, 3> sampleVisibleNormal(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& woP,
-                                              Value* u1P, Value* u2P) const override {
-        MathEmitter& pm = lane.doubleMath();  // double whatever the kernel's math (see the header)
-        std::array<Value*, 3> wo;
-        for (int i = 0; i < 3; ++i) wo[i] = pm.convert(woP[i], pm.type());
-        Value* u1 = pm.convert(u1P, pm.type());
-        Value* u2 = pm.convert(u2P, pm.type());
-        Value* e = pm.convert(n.own[kOwnExponent], pm.type());
-        StudentT tx = studentT(pm, pm.add(e, pm.c(2.0)));
-        Value* sxy = pm.sqrt(pm.fma(wo[0], wo[0], pm.mul(wo[1], wo[1])));
-        Value* turned = pm.gt(sxy, pm.c(0.0));
-        Value* inv = pm.div(pm.c(1.0), sxy);
-        Value* cosPhi = pm.select(turned, pm.mul(wo[0], inv), pm.c(1.0));
-        Value* sinPhi = pm.select(turned, pm.mul(wo[1], inv), pm.c(0.0));
-        auto sinCos = [&](Value* angle) { return pm.sinCosTurns(pm.mul(angle, pm.c(1 / (2 * kPi)))); };
-        Value* nuM1 = pm.sub(tx.nu, pm.c(1.0));
-        auto cdfPsi = [&](Value* psi) -> std::pair<Value*, Value*> {
-            auto [s, c] = sinCos(psi);
-            Value *s2 = pm.mul(s, s), *c2 = pm.mul(c, c);
-            Value* T = studentTail(pm, tx, s2, c2);
-            Value* F = pm.select(pm.ge(psi, pm.c(0.0)), pm.sub(pm.c(1.0), T), T);
-            Value* side = pm.div(pm.mul(pm.mul(sxy, tx.norm), powRoot(pm, c2, s2, nuM1)), nuM1);
-            Value* visible = pm.maxnum(pm.sub(pm.mul(wo[2], c), pm.mul(sxy, s)), pm.c(0.0));
-            return {pm.fma(wo[2], F, side), pm.mul(pm.mul(tx.norm, powRoot(pm, c2, s2, e)), visible)};
-        };
-        const double halfPi = kPi / 2;
-        Value* psiMax = pm.atan2(wo[2], sxy);
-        const double floorU = 0x1p-32;
-        Value* target = pm.mul(pm.maxnum(u1, pm.c(floorU)), cdfPsi(psiMax).first);
-        Value* psi = lane.invertIncreasing(pm, cdfPsi, target, pm.c(-halfPi), psiMax, kNewtonSteps);
-
-        StudentT ty = studentT(pm, pm.add(e, pm.c(3.0)));
-        Value* lower = pm.lt(u2, pm.c(0.5));
-        Value* q = pm.select(lower, u2, pm.sub(pm.c(1.0), u2));
-        Value* nuYM1 = pm.sub(ty.nu, pm.c(1.0));
-        auto cdfChi = [&](Value* chi) -> std::pair<Value*, Value*> {
-            auto [s, c] = sinCos(chi);
-            Value *s2 = pm.mul(s, s), *c2 = pm.mul(c, c);
-            return {pm.neg(studentTail(pm, ty, s2, c2)), pm.mul(ty.norm, powRoot(pm, c2, s2, nuYM1))};
-        };
-        Value* chi = lane.invertIncreasing(pm, cdfChi, pm.neg(pm.maxnum(q, pm.c(floorU))), pm.c(0.0), pm.c(halfPi),
-                                           kNewtonSteps);
-        chi = pm.select(lower, pm.neg(chi), chi);
-
-        auto [sPsi, cPsi] = sinCos(psi);
-        auto [sChi, cChi] = sinCos(chi);
-        Value* mx = pm.neg(pm.mul(sPsi, cChi));
-        Value* my = pm.neg(sChi);
-        Value* mz = pm.mul(cPsi, cChi);
-        MathEmitter& out = lane.preciseMath();
-        return {out.convert(pm.sub(pm.mul(cosPhi, mx), pm.mul(sinPhi, my)), out.type()),
-                out.convert(pm.fma(sinPhi, mx, pm.mul(cosPhi, my)), out.type()), out.convert(mz, out.type())};
+    // Those of its slope distribution, nu = e + 2 (StudentSlopeEmitter.h),
+    // in double whatever the kernel's math (see the header).
+    std::array<Value*, 3> sampleVisibleNormal(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& wo,
+                                              Value* u1, Value* u2) const override {
+        MathEmitter& dm = lane.doubleMath();
+        MathEmitter& pm = lane.preciseMath();
+        std::array<Value*, 3> woD;
+        for (int i = 0; i < 3; ++i) woD[i] = dm.convert(wo[i], dm.type());
+        Value* nu = dm.add(dm.convert(n.own[kOwnExponent], dm.type()), dm.c(2.0));
+        std::array<Value*, 3> m =
+            studentSlopeVisibleNormal(lane, nu, woD, dm.convert(u1, dm.type()), dm.convert(u2, dm.type()));
+        for (Value*& c : m) c = pm.convert(c, pm.type());
+        return m;
     }
 };
 

@@ -10,6 +10,8 @@
 // through the incomplete beta function (numeric/StudentT.h), but the kernel
 // would need that continued fraction in IR; the table serves both
 // evaluators. Lambda is finite only for gamma > 1.5 (a finite mean slope).
+// Its visible normals are those of the Student-t slope distribution of
+// NdfSampling.h (blinn_phong's), stretched.
 #include "QuadMath.h"
 #include "LambdaTable.h"
 #include "models/ModelMath.h"
@@ -40,11 +42,18 @@ struct StudentTFormulas final : NdfFormulas<Real> {
         return exp(logD) / (kPi<Real> * ax * ay);
     }
     // The tabulated (n.v) Lambda(v) of the material's gamma (stretched: a
-    // depends on alpha(v) only through proj).
+    // depends on alpha(v) only through proj). The last table per thread is
+    // kept: lambdaTable() locks a shared map, and an evaluation asks for
+    // the same gamma lane after lane.
     Real cosLambda(const ModelArgs<Real>& a, const Vec3<Real>& v) const override {
         static const NdfEntry& self = ndfEntry(modelNamed(ModelSlot::Ndf, "student_t"));
-        const LambdaTable& table = *lambdaTable(self, {double(a[kGamma])});
-        return Real(table.cosLambda(double(smithProjection(a[kAlphaX], a[kAlphaY], v)), double(v.z)));
+        thread_local double memoGamma = 0;
+        thread_local std::shared_ptr<const LambdaTable> memo;
+        if (!memo || memoGamma != double(a[kGamma])) {
+            memo = lambdaTable(self, {double(a[kGamma])});
+            memoGamma = double(a[kGamma]);
+        }
+        return Real(memo->cosLambda(double(smithProjection(a[kAlphaX], a[kAlphaY], v)), double(v.z)));
     }
     // The standard slopes have the radial CDF 1 - (1 + r^2/(gamma - 1))^(1 - gamma):
     // r^2 = (gamma - 1) expm1(log1p(-u) / (1 - gamma)) (Beckmann's -log1p(-u)
@@ -53,6 +62,38 @@ struct StudentTFormulas final : NdfFormulas<Real> {
         using std::expm1; using std::log1p;
         Real g = a[kGamma];
         return stretchedSlopeNormal(a[kAlphaX], a[kAlphaY], (g - 1) * expm1(log1p(-u1) / (1 - g)), u2);
+    }
+    // Visible normals, and the Lambda that normalizes them, from the slope
+    // distribution P22 of NdfSampling.h: the slopes of D are those of P22
+    // with nu = 2 gamma - 2 stretched by k = sqrt(gamma - 1) (alpha_x,
+    // alpha_y). A direction v maps to (kx vx, ky vy, vz) in P22's frame,
+    // and (n.v) Lambda(v) = |that| times P22's at its unit direction. This
+    // Lambda is exact, where cosLambda is the table's (within 1e-6): the
+    // visible density must integrate to 1.
+    Real visibleCosLambda(const ModelArgs<Real>& a, const Vec3<Real>& v) const override {
+        Real length;
+        Vec3<Real> s = toSlopeFrame(a, v, length);
+        return length * studentSlopeCosLambda(2 * a[kGamma] - 2, s);
+    }
+    // The normal of P22's visible normal m' is (kx m'x, ky m'y, m'z) up to
+    // scale (the slopes scale by k).
+    Vec3<Real> sampleVisibleNormal(const ModelArgs<Real>& a, const Vec3<Real>& wo, Real u1, Real u2) const override {
+        using std::sqrt;
+        Real length, k = sqrt(a[kGamma] - 1);
+        Vec3<Real> m = studentSlopeVisibleNormal(2 * a[kGamma] - 2, toSlopeFrame(a, wo, length), u1, u2);
+        Real mx = k * a[kAlphaX] * m.x, my = k * a[kAlphaY] * m.y;
+        Real inv = 1 / sqrt(mx * mx + my * my + m.z * m.z);
+        return {mx * inv, my * inv, m.z * inv};
+    }
+
+private:
+    // v in P22's frame, unit, and the length it had.
+    static Vec3<Real> toSlopeFrame(const ModelArgs<Real>& a, const Vec3<Real>& v, Real& length) {
+        using std::sqrt;
+        Real k = sqrt(a[kGamma] - 1);
+        Real x = k * a[kAlphaX] * v.x, y = k * a[kAlphaY] * v.y;
+        length = sqrt(x * x + y * y + v.z * v.z);
+        return {x / length, y / length, v.z / length};
     }
 };
 
@@ -73,6 +114,14 @@ std::vector<const ModelInfo*> facetModels_ndf_StudentT() {
                               {"gamma", ValueType::Float, {kGamma}}}}};
         e.shapeInvariant = true;
         e.tabulatedLambda = true;
+        e.visibleNormals = true;
+        // Below gamma = 2 (nu < 2) D grows toward the horizon like
+        // mz^(2 gamma - 4), and the visible-slope quantiles near u = 0 put m
+        // within 1e-16 of the horizon (the CDF goes as cos^(nu - 1) of the
+        // slope angle there): m, and D at it, are then not determined by
+        // double arithmetic on that angle, so the density of a sample would
+        // depend on rounding. Those materials sample through the NDF.
+        e.visibleNormalsAtShape = [](const std::vector<double>& shape) { return shape.at(0) >= 2; };
         e.lambdaShapeError = [](const std::vector<double>& shape) -> std::string {
             if (shape.at(0) > 1.5) return "";
             return "its Smith Lambda needs gamma > 1.5 (at 1.5 the mean slope and Lambda are infinite)";

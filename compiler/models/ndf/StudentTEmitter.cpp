@@ -1,8 +1,10 @@
 // student_t: the Student's t-distribution of slopes as IR (the reference is
 // StudentT.cpp), in log form in the precise type, from u = wi + wo (h up to
 // scale): e is a ratio of u's components and mz^4 = uz^4 / |u|^4; its Smith
-// Lambda from the tabulated one the plan carries.
-#include "lowering/LaneEmitter.h"
+// Lambda from the tabulated one the plan carries; its visible normals, and
+// the exact Lambda that normalizes them, from the Student-t slope
+// distribution of StudentSlopeEmitter.h, stretched.
+#include "StudentSlopeEmitter.h"
 
 #include "LambdaTable.h"
 
@@ -21,6 +23,7 @@ public:
     StudentTEmitter() {
         traits.dFromUnnormalizedHalf = true;
         traits.samplesNormals = true;
+        traits.samplesVisibleNormals = true;
     }
 
     NdfParams params(LaneEmitter& lane) const override {
@@ -86,6 +89,58 @@ public:
         Value* gm1 = pm.sub(n.own[kOwnGamma], pm.c(1.0));
         Value* r2 = pm.mul(gm1, lane.expm1(pm.div(pm.log1p(pm.neg(u1)), pm.neg(gm1))));
         return lane.stretchedSlopeNormal(n, r2, u2);
+    }
+
+    // The slopes of D are those of P22 (StudentSlopeEmitter.h) with nu = 2
+    // gamma - 2 stretched by k = sqrt(gamma - 1) (alpha_x, alpha_y): v maps
+    // to (kx vx, ky vy, vz) in P22's frame, and (n.v) Lambda(v) is that
+    // vector's length times P22's at its unit direction. Exact (the
+    // masking's is the table's): the visible density integrates to 1.
+    Value* visibleCosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
+        MathEmitter& dm = lane.doubleMath();
+        MathEmitter& pm = lane.preciseMath();
+        SlopeFrame f = slopeFrame(lane, n, v);
+        return pm.convert(dm.mul(f.length, studentSlopeCosLambda(dm, f.nu, f.v)), pm.type());
+    }
+
+    // P22's visible normal m' for the view in its frame; m is (kx m'x, ky
+    // m'y, m'z) normalized (the slopes scale by k).
+    std::array<Value*, 3> sampleVisibleNormal(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& wo,
+                                              Value* u1, Value* u2) const override {
+        MathEmitter& dm = lane.doubleMath();
+        MathEmitter& pm = lane.preciseMath();
+        SlopeFrame f = slopeFrame(lane, n, wo);
+        std::array<Value*, 3> m =
+            studentSlopeVisibleNormal(lane, f.nu, f.v, dm.convert(u1, dm.type()), dm.convert(u2, dm.type()));
+        Value* mx = dm.mul(f.kx, m[0]);
+        Value* my = dm.mul(f.ky, m[1]);
+        Value* inv = dm.div(dm.c(1.0), dm.sqrt(dm.fma(mx, mx, dm.fma(my, my, dm.mul(m[2], m[2])))));
+        return {pm.convert(dm.mul(mx, inv), pm.type()), pm.convert(dm.mul(my, inv), pm.type()),
+                pm.convert(dm.mul(m[2], inv), pm.type())};
+    }
+
+private:
+    // A direction in P22's frame, in double: the stretch k (alpha_x, alpha_y),
+    // nu, the unit direction and the length it had.
+    struct SlopeFrame {
+        Value *kx, *ky, *nu, *length;
+        std::array<Value*, 3> v;
+    };
+    static SlopeFrame slopeFrame(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) {
+        MathEmitter& dm = lane.doubleMath();
+        SlopeFrame f;
+        Value* g = dm.convert(n.own[kOwnGamma], dm.type());
+        Value* k = dm.sqrt(dm.sub(g, dm.c(1.0)));
+        f.kx = dm.mul(k, dm.convert(n.axD, dm.type()));
+        f.ky = dm.mul(k, dm.convert(n.ayD, dm.type()));
+        f.nu = dm.fma(g, dm.c(2.0), dm.c(-2.0));
+        Value* x = dm.mul(f.kx, dm.convert(v[0], dm.type()));
+        Value* y = dm.mul(f.ky, dm.convert(v[1], dm.type()));
+        Value* z = dm.convert(v[2], dm.type());
+        f.length = dm.sqrt(dm.fma(x, x, dm.fma(y, y, dm.mul(z, z))));
+        Value* inv = dm.div(dm.c(1.0), f.length);
+        f.v = {dm.mul(x, inv), dm.mul(y, inv), dm.mul(z, inv)};
+        return f;
     }
 };
 
