@@ -37,12 +37,13 @@ std::vector<std::string> cells(const BenchRow& r) {
             opt(r.memoryHitMs, "{:.3f}"),
             opt(r.diskHitMs, "{:.3f}"),
             opt(r.aotRatio, "{:.2f}"),
+            opt(r.bareRatio, "{:.2f}"),
             rel(r.regular.maxRel),
             rel(r.regular.p999Rel),
             ulp(r.regular.maxUlp),
-            rel(r.hard.maxRel),
-            rel(r.hard.p999Rel),
-            ulp(r.hard.maxUlp)};
+            r.hard.values ? rel(r.hard.maxRel) : "-",
+            r.hard.values ? rel(r.hard.p999Rel) : "-",
+            r.hard.values ? ulp(r.hard.maxUlp) : "-"};
 }
 
 const std::vector<Column>& columns() {
@@ -50,7 +51,8 @@ const std::vector<Column>& columns() {
         {"backend", 7, true},       {"mode", 12, true},         {"variant", 12, true},      {"ns/eval", 9, false},
         {"Meval/s", 8, false},      {"cold ms", 8, false},      {"tier-up ms", 10, false},  {"cold-opt ms", 11, false},
         {"mem-hit ms", 10, false},  {"disk-hit ms", 11, false},
-        {"JIT/AOT", 7, false},      {"max rel", 9, false},      {"p99.9 rel", 9, false},    {"max ulp", 9, false},
+        {"JIT/AOT", 7, false},      {"JIT/bare", 8, false},
+        {"max rel", 9, false},      {"p99.9 rel", 9, false},    {"max ulp", 9, false},
         {"hard max", 9, false},     {"hard p99.9", 10, false},  {"hard ulp", 9, false},
     };
     return c;
@@ -108,6 +110,23 @@ std::string markdownTable(const std::vector<Column>& columns, const std::vector<
     return md;
 }
 
+std::vector<std::string> batchSizeCells(const BatchSizeRow& r) {
+    std::vector<std::string> c{r.label};
+    for (double ns : r.nsPerEval) c.push_back(std::isnan(ns) ? "-" : num(ns, "{:.2f}"));
+    return c;
+}
+
+const std::vector<Column>& batchSizeColumns() {
+    static const std::vector<Column> c = [] {
+        static std::vector<std::string> titles;
+        for (size_t n : kBatchSizes) titles.push_back(fmt::format("n={}", n));
+        std::vector<Column> cols{{"ns/eval by batch size", 32, true}};
+        for (const std::string& t : titles) cols.push_back({t.c_str(), 8, false});
+        return cols;
+    }();
+    return c;
+}
+
 std::string header(const BenchReport& report, const MaterialBench& m) {
     const BenchSettings& s = report.settings;
     std::string aot = m.aotModel.empty() ? (m.aotNote.empty() ? "none" : m.aotNote) : m.aotModel;
@@ -139,6 +158,8 @@ std::string summaryLine(const MaterialBench& m) {
     std::string s = fmt::format("simd exact {:.2f} ns/eval ({:.0f} M/s)", simd->nsPerEval, simd->evalsPerSecond / 1e6);
     if (scalar) s += fmt::format("; simd/scalar speed-up {:.1f}x", scalar->nsPerEval / simd->nsPerEval);
     if (aot) s += fmt::format("; aot {:.2f} ns/eval, JIT/AOT {:.2f}", aot->nsPerEval, simd->nsPerEval / aot->nsPerEval);
+    if (const BenchRow* bare = m.find("aot", "bare"))
+        s += fmt::format("; bare {:.2f} ns/eval, JIT/bare {:.2f}", bare->nsPerEval, simd->nsPerEval / bare->nsPerEval);
     s += fmt::format("; compile cold {} ms (+ tier-up {} ms; optimized alone {} ms), memory hit {} ms, disk hit {} ms",
                      opt(simd->coldMs, "{:.2f}"), opt(simd->tierUpMs, "{:.2f}"), opt(simd->coldOptimizedMs, "{:.2f}"),
                      opt(simd->memoryHitMs, "{:.3f}"), opt(simd->diskHitMs, "{:.3f}"));
@@ -174,6 +195,8 @@ void printTable(const BenchReport& report, std::FILE* out) {
             std::fprintf(out, "  %-19s %s\n", "", r.hard.worst.str().c_str());
         }
         std::fprintf(out, "summary: %s\n", summaryLine(m).c_str());
+        if (!m.batchSizes.empty())
+            std::fprintf(out, "%s", textTable(batchSizeColumns(), m.batchSizes, batchSizeCells).c_str());
         if (!m.samplerRows.empty()) {
             std::fprintf(out, "sampling (sample and pdf batches):\n%s",
                          textTable(samplerColumns(), m.samplerRows, samplerCells).c_str());
@@ -207,6 +230,12 @@ std::string markdown(const BenchReport& report) {
         md += fmt::format("\n**Summary:** {}\n\nWorst inputs:\n\n", summaryLine(m));
         for (const BenchRow& r : m.rows)
             md += fmt::format("- {}: regular `{}`; hard `{}`\n", r.label(), r.regular.worst.str(), r.hard.worst.str());
+        if (!m.batchSizes.empty()) {
+            md += "\nBatch sizes: the regular sample evaluated in consecutive batches of n lanes, one call each "
+                  "(`Kernel::evalBatch` for the SIMD rows, the AOT functions through a function pointer); the "
+                  "scalar entry once per lane. ns/eval, median of the runs.\n\n";
+            md += markdownTable(batchSizeColumns(), m.batchSizes, batchSizeCells);
+        }
         if (!m.samplerRows.empty()) {
             md += "\nSampling: `Kernel::sampleBatch` and `Kernel::pdfBatch` (the AOT row: the hand-written sampler) on "
                   "the regular sample's directions with uniform u; `sampler` says which code sampled (the kernel's "
@@ -322,6 +351,24 @@ void writeError(Json& j, const ErrorStats& e) {
     j.close('}');
 }
 
+// [{"evaluator": label, "ns_per_eval": {"1": ns or null, ...}}, ...]
+void writeBatchSizes(Json& j, const std::vector<BatchSizeRow>& rows) {
+    j.open('[');
+    for (const BatchSizeRow& r : rows) {
+        j.open('{');
+        j.field("evaluator", r.label);
+        j.key("ns_per_eval");
+        j.open('{');
+        for (size_t i = 0; i < r.nsPerEval.size(); ++i) {
+            double ns = r.nsPerEval[i];
+            j.field(std::to_string(kBatchSizes[i]), std::isnan(ns) ? std::nullopt : std::optional<double>(ns));
+        }
+        j.close('}');
+        j.close('}');
+    }
+    j.close(']');
+}
+
 void writeEnergyTable(Json& j, const std::optional<EnergyTableBench>& table) {
     if (!table) {
         j.raw("null");
@@ -409,13 +456,17 @@ std::string json(const BenchReport& report) {
             j.field("compile_memory_hit_ms", r.memoryHitMs);
             j.field("compile_disk_hit_ms", r.diskHitMs);
             j.field("jit_over_aot", r.aotRatio);
+            j.field("jit_over_bare", r.bareRatio);
             j.key("error_regular");
             writeError(j, r.regular);
             j.key("error_hard");
-            writeError(j, r.hard);
+            if (r.hard.values) writeError(j, r.hard);
+            else j.raw("null");
             j.close('}');
         }
         j.close(']');
+        j.key("batch_sizes");
+        writeBatchSizes(j, m.batchSizes);
         j.field("sampling_summary", samplerSummaryLine(m));
         j.key("sampler_rows");
         j.open('[');

@@ -231,15 +231,25 @@ public:
                 report(row);
                 mb.rows.push_back(std::move(row));
             }
-        if (const aot::ReferenceModel* model = aot::findReferenceModel(mb.aotModel)) {
-            BenchRow row = aotRow(*model);
+        const aot::ReferenceModel* model = aot::findReferenceModel(mb.aotModel);
+        if (model) {
+            BenchRow row = aotRow(*model, model->batch, "hand-written");
             report(row);
             mb.rows.push_back(std::move(row));
+            double aotNs = mb.rows.back().nsPerEval;
             for (BenchRow& r : mb.rows)
-                if (r.backend != "aot" && r.backend != "interp" && row.nsPerEval > 0)
-                    r.aotRatio = r.nsPerEval / row.nsPerEval;
+                if (r.backend != "aot" && r.backend != "interp" && aotNs > 0) r.aotRatio = r.nsPerEval / aotNs;
         }
-        if (settings_.sampling) samplerRows(mb, aot::findReferenceModel(mb.aotModel));
+        if (model && model->bare) {
+            BenchRow row = aotRow(*model, model->bare, "bare");
+            report(row);
+            double bareNs = row.nsPerEval;
+            mb.rows.push_back(std::move(row));
+            for (BenchRow& r : mb.rows)
+                if (r.backend != "interp" && r.mode != "bare" && bareNs > 0) r.bareRatio = r.nsPerEval / bareNs;
+        }
+        batchSizeRows(mb, model);
+        if (settings_.sampling) samplerRows(mb, model);
     }
 
 private:
@@ -469,28 +479,84 @@ private:
         return compare(m_, s, ref, out);
     }
 
-    BenchRow aotRow(const aot::ReferenceModel& model) {
+    // The row of one AOT function (`batch`: the model's hand-written or bare
+    // one). The bare function's host promises valid input, which the
+    // hard-case sample is not: its error is measured on the regular sample only.
+    BenchRow aotRow(const aot::ReferenceModel& model, aot::BatchFn batch, const char* mode) {
         BenchRow row;
         row.backend = "aot";
-        row.mode = "hand-written";
+        row.mode = mode;
         row.variant = "-";
         row.width = 1;
         size_t n = regular_.size();
         Output out(n);
-        auto t = timeBatches(settings_.warmup, settings_.runs, n, [&] {
-            model.batch(int64_t(n), regular_.wi(), regular_.wo(), regular_.inputs(), out.ptr);
-        });
+        auto t = timeBatches(settings_.warmup, settings_.runs, n,
+                             [&] { batch(int64_t(n), regular_.wi(), regular_.wo(), regular_.inputs(), out.ptr); });
         row.lanes = n;
         row.runs = settings_.runs;
         row.nsPerEval = t.first;
         row.nsPerEvalMin = t.second;
         row.evalsPerSecond = 1e9 / row.nsPerEval;
+        bool bare = batch == model.bare;
         for (const auto* s : {&regular_, &hard_}) {
+            if (bare && s == &hard_) continue;
             Output o(s->size());
-            o.invalid = model.batch(int64_t(s->size()), s->wi(), s->wo(), s->inputs(), o.ptr);
+            o.invalid = batch(int64_t(s->size()), s->wi(), s->wo(), s->inputs(), o.ptr);
             (s == &regular_ ? row.regular : row.hard) = compare(m_, *s, s == &regular_ ? refRegular_ : refHard_, o);
         }
         return row;
+    }
+
+    // ns/eval of `evalRange(begin, end)` over the regular sample in
+    // consecutive batches of n lanes (the last one shorter), median of runs.
+    template <typename F>
+    double batchedNs(size_t n, F&& evalRange) {
+        const size_t lanes = regular_.size();
+        return timeBatches(settings_.warmup, settings_.runs, lanes, [&] {
+                   for (size_t b = 0; b < lanes; b += n) evalRange(b, std::min(lanes, b + n));
+               }).first;
+    }
+
+    // The BatchSizeRow table (BenchRunner.h).
+    void batchSizeRows(MaterialBench& mb, const aot::ReferenceModel* model) {
+        Output out(regular_.size());
+        auto row = [&](std::string label, auto&& evalRange) {
+            BatchSizeRow r{std::move(label), {}};
+            for (size_t n : kBatchSizes) r.nsPerEval.push_back(batchedNs(n, evalRange));
+            mb.batchSizes.push_back(std::move(r));
+        };
+        auto oneLane = [&](std::string label, auto&& evalRange) {
+            BatchSizeRow r{std::move(label), std::vector<double>(std::size(kBatchSizes), NAN)};
+            r.nsPerEval[0] = batchedNs(1, evalRange);
+            mb.batchSizes.push_back(std::move(r));
+        };
+        for (const char* math : {"exact", "fast"}) {
+            CompileOptions options;
+            std::string error = CompileOptions::parse(fmt::format("backend=simd;math={}", math), options);
+            if (!error.empty()) throw std::runtime_error("bench: " + error);
+            std::unique_ptr<Kernel> kernel = compile(compiler_, options);
+            row(fmt::format("simd {}", math),
+                [&](size_t b, size_t e) { evalBatchRange(*kernel, regular_, b, e, out); });
+        }
+        auto aotRange = [&](aot::BatchFn fn) {
+            return [this, fn, &out](size_t b, size_t e) {
+                const float* wi[3] = {regular_.wi()[0] + b, regular_.wi()[1] + b, regular_.wi()[2] + b};
+                const float* wo[3] = {regular_.wo()[0] + b, regular_.wo()[1] + b, regular_.wo()[2] + b};
+                const float* in[8] = {};
+                size_t slots = std::min<size_t>(regular_.slots.size(), 8);
+                for (size_t j = 0; j < slots; ++j) in[j] = regular_.inputs()[j] + b;
+                float* rgb[3] = {out.ptr[0] + b, out.ptr[1] + b, out.ptr[2] + b};
+                fn(int64_t(e - b), wi, wo, slots ? in : nullptr, rgb);
+            };
+        };
+        if (model) row("aot hand-written", aotRange(model->batch));
+        if (model && model->bare) row("aot bare", aotRange(model->bare));
+        CompileOptions scalarOptions;
+        std::string error = CompileOptions::parse("backend=scalar;math=exact", scalarOptions);
+        if (!error.empty()) throw std::runtime_error("bench: " + error);
+        std::unique_ptr<Kernel> scalar = compile(compiler_, scalarOptions);
+        oneLane("scalar exact, one call per lane",
+                [&](size_t b, size_t e) { evalScalarLanes(*scalar, regular_, b, e, out); });
     }
 
     const CheckedMaterial& m_;

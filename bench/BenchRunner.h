@@ -83,8 +83,9 @@ struct BenchRow {
     // that compile (0 if not tiered). coldOptimizedMs: a cold compile with
     // codegen=optimized, which returns only once the optimized code is linked.
     std::optional<double> coldMs, tierUpMs, coldOptimizedMs, memoryHitMs, diskHitMs;
-    std::optional<double> aotRatio;  // this row's ns/eval over the AOT row's
-    ErrorStats regular, hard;
+    std::optional<double> aotRatio;   // this row's ns/eval over the AOT row's
+    std::optional<double> bareRatio;  // and over the bare AOT row's
+    ErrorStats regular, hard;  // hard: none (values = 0) for the bare row, whose host promises valid input
     std::string label() const { return backend + " " + mode; }
 };
 
@@ -127,6 +128,21 @@ struct EnergyTableBench {
     std::string pair() const { return ndf + " x " + masking; }
 };
 
+// ns/eval by batch size (kBatchSizes): the regular sample evaluated in
+// consecutive batches of n lanes, one call each, as a wavefront renderer
+// evaluates its per-material queues; per call the caller's pointer
+// arithmetic included. One row per evaluator: simd exact and fast
+// (Kernel::evalBatch, what facet_eval_batch calls after its argument
+// checks), the AOT hand-written and bare functions (through a function
+// pointer: at n = 1, one call of the bare function per lane); plus the
+// scalar entry called once per lane (Kernel::eval, what facet_eval calls),
+// in the n = 1 column only.
+inline constexpr size_t kBatchSizes[] = {1, 4, 16, 64, 256, 65536};
+struct BatchSizeRow {
+    std::string label;                // "simd exact", "aot bare", "scalar entry" ...
+    std::vector<double> nsPerEval;    // per kBatchSizes entry; NaN where not measured
+};
+
 struct MaterialBench {
     std::string file, material;
     std::string aotModel;  // "" when the file has no AOT twin
@@ -136,6 +152,7 @@ struct MaterialBench {
     size_t regularLanes = 0, hardLanes = 0;
     std::vector<BenchRow> rows;
     std::vector<SamplerRow> samplerRows;  // empty with BenchSettings::sampling off
+    std::vector<BatchSizeRow> batchSizes;
     const BenchRow* find(const std::string& backend, const std::string& mode) const;
 };
 

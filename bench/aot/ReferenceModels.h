@@ -44,6 +44,7 @@ struct ReferenceModel {
     BatchFn batch;
     SampleBatchFn sample = nullptr;  // a hand-written sampler, where there is one
     PdfBatchFn pdf = nullptr;
+    BatchFn bare = nullptr;  // the bare loop of the same BRDF (below)
 };
 
 // (a) isotropic GGX + Smith height-correlated + Schlick with an rgb f0.
@@ -75,6 +76,18 @@ int64_t beckmannConductor(int64_t n, const float* const wi[3], const float* cons
 // Inputs: roughness_x, roughness_y (alpha_x,y = roughness_x,y^2).
 int64_t anisoGgxDielectric(int64_t n, const float* const wi[3], const float* const wo[3],
                            const float* const* inputs, float* const rgb[3]);
+
+// The bare twins of (a), (b), (c) (BareModels.cpp): the same BRDFs in
+// float as a renderer's own loop, for hosts that promise finite unit
+// directions and in-range inputs: no validation, renormalization, input
+// range clamp or output check; alpha >= 1e-4 and f = 0 below the horizon
+// as the SPEC's formulas. They return 0.
+int64_t bareGgxSchlick(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                       float* const rgb[3]);
+int64_t bareBeckmannConductor(int64_t n, const float* const wi[3], const float* const wo[3],
+                              const float* const* inputs, float* const rgb[3]);
+int64_t bareAnisoGgxDielectric(int64_t n, const float* const wi[3], const float* const wo[3],
+                               const float* const* inputs, float* const rgb[3]);
 
 // All three, in the order above.
 const std::vector<ReferenceModel>& referenceModels();

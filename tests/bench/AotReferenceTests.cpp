@@ -84,7 +84,7 @@ TEST_CASE("every reference model has a material file with its tag and the same i
     CHECK(bench::aotTagFor(readText(gold), gold, p.materials.front(), p.materials).empty());
 }
 
-TEST_CASE("AOT reference models match the interpreter within 1e-4 relative on random directions") {
+TEST_CASE("AOT reference models and their bare twins match the interpreter within 1e-4 relative on random directions") {
     for (const aot::ReferenceModel& model : aot::referenceModels()) {
         std::string name = model.name;
         CAPTURE(name);
@@ -100,12 +100,17 @@ TEST_CASE("AOT reference models match the interpreter within 1e-4 relative on ra
             LaneBatch s = bench::regularSample(m, 20000, seed);
             for (auto& column : s.slots)
                 for (float& r : column) r = 0.1f + 0.9f * r;  // [0, 1] -> [0.1, 1]
-            Outputs out(s.size());
-            int64_t invalid = model.batch(int64_t(s.size()), s.wi(), s.wo(), s.inputs(), out.p);
-            CHECK(invalid == 0);
-            std::string worst;
-            double err = maxRelError(m, s, out, worst);
-            CHECK_MESSAGE(err <= 1e-4, fmt::format("max rel {:.3g} at {}", err, worst));
+            // The contract function, and the bare one on the same valid input.
+            for (aot::BatchFn fn : {model.batch, model.bare}) {
+                REQUIRE(static_cast<bool>(fn));
+                Outputs out(s.size());
+                int64_t invalid = fn(int64_t(s.size()), s.wi(), s.wo(), s.inputs(), out.p);
+                CHECK(invalid == 0);
+                std::string worst;
+                double err = maxRelError(m, s, out, worst);
+                CHECK_MESSAGE(err <= 1e-4, fmt::format("{}: max rel {:.3g} at {}", fn == model.bare ? "bare" : "aot",
+                                                       err, worst));
+            }
         }
     }
 }

@@ -284,13 +284,15 @@ TEST_CASE("bench --json output parses and has every field") {
         for (const char* k : {"width", "lanes", "runs", "ns_per_eval", "ns_per_eval_min", "evals_per_second"})
             checkField(r, k, Kind::Number);
         for (const char* k : {"measured_error", "compile_cold_ms", "compile_tier_up_ms", "compile_cold_optimized_ms",
-                              "compile_memory_hit_ms", "compile_disk_hit_ms", "jit_over_aot"})
+                              "compile_memory_hit_ms", "compile_disk_hit_ms", "jit_over_aot", "jit_over_bare"})
             checkField(r, k, Kind::NumberOrNull);
-        checkField(r, "error_regular", Kind::Object);
-        checkField(r, "error_hard", Kind::Object);
-        checkErrorBlock(r.at("error_regular").obj());
-        checkErrorBlock(r.at("error_hard").obj());
         std::string backend = r.at("backend").str(), mode = r.at("mode").str();
+        checkField(r, "error_regular", Kind::Object);
+        checkErrorBlock(r.at("error_regular").obj());
+        // The bare row's host promises valid input: no hard-case error.
+        checkField(r, "error_hard", mode == "bare" ? Kind::ObjectOrNull : Kind::Object);
+        if (mode == "bare") CHECK(r.at("error_hard").isNull());
+        else checkErrorBlock(r.at("error_hard").obj());
         CAPTURE(backend);
         CAPTURE(mode);
         seen.insert({backend, mode});
@@ -304,14 +306,41 @@ TEST_CASE("bench --json output parses and has every field") {
             CHECK(r.at("compile_memory_hit_ms").isNumber());
             CHECK(r.at("compile_disk_hit_ms").isNumber());
             CHECK(r.at("jit_over_aot").isNumber());
+            CHECK(r.at("jit_over_bare").isNumber());
         }
+        // The bare loop computes the same BRDF in float.
+        if (mode == "bare") CHECK(r.at("error_regular").obj().at("max_rel").num() < 1e-4);
         // The reference is compared with itself to float rounding.
         if (backend == "interp") CHECK(r.at("error_regular").obj().at("max_rel").num() < 1e-6);
     }
     for (const char* b : {"interp", "scalar", "simd"})
         for (const char* mode : {"exact", "fast", "tol 1e-3", "tol 1e-5"}) CHECK(seen.count({b, mode}));
     CHECK(seen.count({"aot", "hand-written"}));
-    CHECK(seen.size() == 13);
+    CHECK(seen.count({"aot", "bare"}));
+    CHECK(seen.size() == 14);
+
+    // ns/eval by batch size: simd exact and fast, the two AOT functions,
+    // and the scalar entry at n = 1 only.
+    checkField(m, "batch_sizes", Kind::Array);
+    std::set<std::string> evaluators;
+    for (const JsonValue& rv : m.at("batch_sizes").arr()) {
+        const JsonObject& r = rv.obj();
+        checkField(r, "evaluator", Kind::String);
+        checkField(r, "ns_per_eval", Kind::Object);
+        std::string evaluator = r.at("evaluator").str();
+        CAPTURE(evaluator);
+        evaluators.insert(evaluator);
+        const JsonObject& ns = r.at("ns_per_eval").obj();
+        bool oneLaneOnly = evaluator.rfind("scalar", 0) == 0;
+        for (size_t n : bench::kBatchSizes) {
+            std::string key = std::to_string(n);
+            checkField(ns, key.c_str(), Kind::NumberOrNull);
+            if (oneLaneOnly && n > 1) CHECK(ns.at(key).isNull());
+            else CHECK(ns.at(key).num() > 0);
+        }
+    }
+    CHECK(evaluators == std::set<std::string>{"simd exact", "simd fast", "aot hand-written", "aot bare",
+                                              "scalar exact, one call per lane"});
 
     // The sampler rows: interp, scalar and simd (exact, fast), and the
     // hand-written GGX visible-normal sampler of the AOT twin.

@@ -33,28 +33,35 @@ for path in (out + "/stdout.json", out + "/report/bench.json"):
     row_keys = ("backend", "mode", "options", "variant", "measured_error", "width", "lanes", "runs", "ns_per_eval",
                 "ns_per_eval_min", "evals_per_second", "compile_cold_ms", "compile_tier_up_ms",
                 "compile_cold_optimized_ms", "compile_memory_hit_ms",
-                "compile_disk_hit_ms", "jit_over_aot", "error_regular", "error_hard")
+                "compile_disk_hit_ms", "jit_over_aot", "jit_over_bare", "error_regular", "error_hard")
     err_keys = ("values", "skipped", "nonfinite", "negative", "invalid_lanes", "reference_invalid_lanes", "max_rel",
                 "p999_rel", "max_ulp", "worst")
     rows = {(r["backend"], r["mode"]) for r in m["rows"]}
-    assert len(m["rows"]) == 13, len(m["rows"])
+    assert len(m["rows"]) == 14, len(m["rows"])
     for r in m["rows"]:
         for k in row_keys:
             assert k in r, (path, k)
-        for e in ("error_regular", "error_hard"):
+        # The bare row's host promises valid input: no hard-case error.
+        for e in ("error_regular",) if r["mode"] == "bare" else ("error_regular", "error_hard"):
             for k in err_keys:
                 assert k in r[e], (path, e, k)
     for b in ("interp", "scalar", "simd"):
         for mode in ("exact", "fast", "tol 1e-3", "tol 1e-5"):
             assert (b, mode) in rows, (b, mode)
-    assert ("aot", "hand-written") in rows
+    assert ("aot", "hand-written") in rows and ("aot", "bare") in rows
+    sizes = {r["evaluator"]: r["ns_per_eval"] for r in m["batch_sizes"]}
+    assert set(sizes) == {"simd exact", "simd fast", "aot hand-written", "aot bare",
+                          "scalar exact, one call per lane"}, sizes
+    for ns in sizes.values():
+        assert set(ns) == {"1", "4", "16", "64", "256", "65536"}, ns
+        assert ns["1"] > 0, ns
 with open(out + "/report/bench.png", "rb") as f:
     head = f.read(24)
 assert head[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
 width, height = struct.unpack(">II", head[16:24])
 assert (width, height) == (1600, 1000), (width, height)
 md = open(out + "/report/bench.md").read()
-assert "## ggx_schlick" in md and "JIT/AOT" in md
+assert "## ggx_schlick" in md and "JIT/AOT" in md and "JIT/bare" in md and "Batch sizes" in md
 print("ok: JSON parses with every field; bench.md; bench.png 1600x1000")
 PY
 
