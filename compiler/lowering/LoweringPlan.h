@@ -94,6 +94,15 @@ struct BodyPlan {
     bool estimates = false;         // reciprocal/rsqrt estimates allowed
     bool shortPolynomials = false;  // the fast elementary functions
     HalfVectorForm halfVector = HalfVectorForm::Precise;
+    // wi + wo and wi - wo from the float inputs as they are, plus the
+    // normalization as a small correction w (1/|w| - 1) with |w|^2 - 1 in
+    // double: each sum is then accurate relative to itself. Float bodies
+    // need it (the float-first body, every fast body): summing the unit
+    // directions rounded to float instead decides h by those roundings
+    // where wi + wo cancels (near-opposite directions), which amplifies
+    // them by 1/|wi + wo| and D by another ~2/alpha. Double bodies
+    // normalize in double.
+    bool correctedSums = false;
     // The masking forms in float are scaled by max(ci, co) and divide in
     // steps, so that no sum of products falls into the subnormal range and
     // an intermediate overflows only if the result does. Unneeded in double,
