@@ -3,6 +3,7 @@
 
 #include "ExprEval.h"
 #include "KullaConty.h"
+#include "LambdaTable.h"
 #include "Parser.h"
 
 #include <algorithm>
@@ -140,6 +141,12 @@ public:
         if (out_.compensatesEnergy() && seen[int(ModelSlot::Ndf)] && out_.ndf.model &&
             diags_.diagnostics().size() == errorsBefore && !diags_.full())
             if (auto why = kullaContyUnsupported(out_)) diags_.error(why->loc, why->message);  // KullaConty.h
+        if (seen[int(ModelSlot::Ndf)] && out_.ndf.model && out_.masking.model && out_.masking.model->smith &&
+            ndfEntry(*out_.ndf.model).tabulatedLambda && diags_.diagnostics().size() == errorsBefore && !diags_.full()) {
+            SourceLoc loc = out_.masking.loc;
+            std::string why = tabulatedLambdaUnsupported(out_, loc);  // LambdaTable.h
+            if (!why.empty()) diags_.error(loc, why);
+        }
         return std::move(out_);
     }
 
@@ -421,13 +428,14 @@ private:
                 diags_.error(maskingLoc, fmt::format("ndf '{}' is a whole BRDF lobe with its own normalization; it "
                                                      "requires 'masking = none', not '{}'",
                                                      ndf.name, masking.name));
-        } else if (masking.smith && !ndf.smith) {
+        } else if (masking.smith && !hasSmithLambda(ndf)) {
             std::vector<std::string> smithNdfs;
             for (const ModelInfo* m : catalogSlot(ModelSlot::Ndf))
-                if (m->smith) smithNdfs.push_back(m->name);
+                if (hasSmithLambda(ndfEntry(*m))) smithNdfs.push_back(m->name);
             diags_.error(maskingLoc,
-                         fmt::format("masking '{}' needs the Smith Lambda of the NDF, and ndf '{}' has no closed-form "
-                                     "Lambda; use {}, or a non-Smith masking such as cook_torrance or schlick_smith",
+                         fmt::format("masking '{}' needs the Smith Lambda of the NDF, and ndf '{}' has neither a "
+                                     "closed-form nor a tabulated Lambda; use {}, or a non-Smith masking such as "
+                                     "cook_torrance or schlick_smith",
                                      masking.name, ndf.name, joinNames(smithNdfs)));
         }
     }

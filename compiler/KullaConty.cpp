@@ -165,9 +165,13 @@ double albedoOf(const ResolvedMaterial<double>& m, double alpha, double mu, cons
     return integratePanels(inner, br, gt);
 }
 
+std::string shortNumber(double x) { return fmt::format("{}", x); }
+
+}  // namespace
+
 // Does the expression depend on an input (directly or through lets)? Returns
 // the first input found.
-const CheckedInput* inputUsed(const Expr& e, const CheckedMaterial& m, int depth = 0) {
+const CheckedInput* inputUsed(const Expr& e, const CheckedMaterial& m, int depth) {
     struct Finder : ExprVisitor {
         const CheckedMaterial& m;
         int depth;
@@ -193,10 +197,6 @@ double constantOf(const Expr& e, const CheckedMaterial& m) {
     };
     return evaluateExpr<double>(e, lookup).c[0];
 }
-
-std::string shortNumber(double x) { return fmt::format("{}", x); }
-
-}  // namespace
 
 // ---- key ------------------------------------------------------------------
 

@@ -102,6 +102,12 @@ struct EnergyUnsupported {
 };
 std::optional<EnergyUnsupported> kullaContyUnsupported(const CheckedMaterial& material);
 
+// Does the expression depend on an input (directly or through lets)? The
+// first input found, or null.
+const CheckedInput* inputUsed(const Expr& e, const CheckedMaterial& m, int depth = 0);
+// The value of an input-free expression (channel 0).
+double constantOf(const Expr& e, const CheckedMaterial& m);
+
 // The table key of a checked material with energy = kulla_conty (gamma / k
 // evaluated as constants). The material must pass kullaContyUnsupported.
 EnergyTableKey energyTableKey(const CheckedMaterial& material);

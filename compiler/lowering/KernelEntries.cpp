@@ -3,8 +3,9 @@
 // both as its plan says.
 //
 // The batch entry loops over vectors of `width` lanes; the lane bodies are
-// the plan's (LoweringPlan::batchBodies): one plain body, or a guarded first
-// body and a cold fallback function for the lanes it distrusts.
+// the plan's (LoweringPlan::batchBodies for eval, SamplingPlan::batchBodies
+// for sample): one plain body, or a guarded first body and a cold fallback
+// function for the lanes it distrusts.
 #include "Lowering.h"
 
 #include "Diagnostics.h"
@@ -79,22 +80,38 @@ private:
     llvm::Value* saved_ = nullptr;
 };
 
-// The lane body of the batch entry, for lanes of type `laneTy`
-// (<W x float>). A two-body kernel (BatchBodies::FloatFirst: exact, guarded
-// float body and precise body; BatchBodies::GuardedFast: fast, guarded body
-// with the unscaled Smith forms and the plain fast body) runs the guarded body and,
-// only if some lane of the vector is untrusted, calls the other body (named
-// .precise in both cases) and keeps its values for those lanes. Each lane's
-// value is decided by the lane alone, never by its neighbours in the vector,
-// so a direction pair gives the same result in any batch.
-LaneEmitter::Result emitLanes(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type* laneTy, llvm::Module& module,
-                              const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
-                              const std::vector<llvm::Value*>& slots) {
+// The lane body of an entry point: the values of its output streams and
+// the invalid mask, from its input streams (float or <W x float> lanes) and
+// the material's slots.
+struct LaneOutputs {
+    std::vector<llvm::Value*> values;
+    llvm::Value* invalid;
+};
+// What one body computes for a vector of lanes: its output values, the
+// invalid mask and (guarded body) the lanes to recompute in the other body.
+struct BodyLanes {
+    std::vector<llvm::Value*> values;
+    llvm::Value* invalid;
+    llvm::Value* untrusted;
+};
+using BodyEmit = std::function<BodyLanes(LaneEmitter& lanes, const std::vector<llvm::Value*>& in,
+                                         const std::vector<llvm::Value*>& slots)>;
+
+// The lanes of a batch entry, for lanes of type `laneTy` (<W x float>):
+// `emitBody` in the body `first`, and, for a two-body entry (`fallback`
+// set: a guarded float body of an exact kernel, or a guarded fast body),
+// only if some lane of the vector is untrusted, `emitBody` again in the
+// fallback body (a function named .precise in both cases), whose values
+// the untrusted lanes keep. Each lane's value is decided by the lane alone,
+// never by its neighbours in the vector, so a lane gives the same result in
+// any batch.
+LaneOutputs emitBodies(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type* laneTy, llvm::Module& module,
+                       const std::vector<llvm::Value*>& in, const std::vector<llvm::Value*>& slots,
+                       const BodyPlan& first, const BodyPlan* fallback, const BodyEmit& emitBody) {
     const LoweringPlan& plan = k.plan;
-    LaneEmitter firstLanes(k.material, plan, plan.batchBody, k.options.energyTable, b, laneTy, module);
-    if (plan.batchBodies == BatchBodies::Plain) return firstLanes.emit(wi, wo, slots);
-    internal_assert(plan.fallbackBody) << "a guarded batch body without a fallback body";
-    LaneEmitter::Result fl = firstLanes.emit(wi, wo, slots);
+    LaneEmitter firstLanes(k.material, plan, first, k.options.energyTable, b, laneTy, module);
+    BodyLanes fl = emitBody(firstLanes, in, slots);
+    if (!fallback) return {fl.values, fl.invalid};
 
     llvm::LLVMContext& ctx = module.getContext();
     llvm::Function* fn = b.GetInsertBlock()->getParent();
@@ -110,72 +127,66 @@ LaneEmitter::Result emitLanes(const KernelContext& k, llvm::IRBuilder<>& b, llvm
     // optimizations, which shortens a cold compile by a few milliseconds
     // and leaves the outputs bit-identical and batches of untrusted lanes
     // as fast as before (docs/perf-log.md).
-    std::vector<llvm::Type*> argTypes(6 + slots.size(), laneTy);
+    const size_t outputs = fl.values.size();
+    std::vector<llvm::Type*> argTypes(in.size() + slots.size(), laneTy);
     llvm::Type* maskTy = fl.invalid->getType();
-    auto* resultTy = llvm::StructType::get(ctx, {laneTy, laneTy, laneTy, maskTy});
+    std::vector<llvm::Type*> resultTypes(outputs, laneTy);
+    resultTypes.push_back(maskTy);
+    auto* resultTy = llvm::StructType::get(ctx, resultTypes);
     auto* preciseFn = llvm::Function::Create(llvm::FunctionType::get(resultTy, argTypes, false),
                                              llvm::Function::InternalLinkage, fn->getName() + ".precise", module);
     preciseFn->setCallingConv(llvm::CallingConv::Fast);
     addKernelAttributes(preciseFn, laneTy->isVectorTy() ? int(llvm::cast<llvm::FixedVectorType>(laneTy)->getNumElements()) : 1,
-                        *plan.fallbackBody);
+                        *fallback);
     preciseFn->addFnAttr(llvm::Attribute::NoInline);
     preciseFn->addFnAttr(llvm::Attribute::Cold);
     preciseFn->addFnAttr(llvm::Attribute::OptimizeNone);
     if (plan.flushDenormals) preciseFn->addFnAttr("denormal-fp-math", "preserve-sign,preserve-sign");
     {
         llvm::IRBuilder<> pb(llvm::BasicBlock::Create(ctx, "entry", preciseFn));
-        std::array<llvm::Value*, 3> pwi, pwo;
-        std::vector<llvm::Value*> pslots;
-        for (int i = 0; i < 3; ++i) pwi[i] = preciseFn->getArg(i), pwo[i] = preciseFn->getArg(3 + i);
-        for (size_t k = 0; k < slots.size(); ++k) pslots.push_back(preciseFn->getArg(unsigned(6 + k)));
-        LaneEmitter preciseLanes(k.material, plan, *plan.fallbackBody, k.options.energyTable, pb, laneTy, module);
-        LaneEmitter::Result pr = preciseLanes.emit(pwi, pwo, pslots);
+        std::vector<llvm::Value*> pin, pslots;
+        for (size_t a = 0; a < in.size(); ++a) pin.push_back(preciseFn->getArg(unsigned(a)));
+        for (size_t s = 0; s < slots.size(); ++s) pslots.push_back(preciseFn->getArg(unsigned(in.size() + s)));
+        LaneEmitter preciseLanes(k.material, plan, *fallback, k.options.energyTable, pb, laneTy, module);
+        BodyLanes pr = emitBody(preciseLanes, pin, pslots);
         llvm::Value* agg = llvm::UndefValue::get(resultTy);
-        for (unsigned c = 0; c < 3; ++c) agg = pb.CreateInsertValue(agg, pr.rgb[c], c);
-        agg = pb.CreateInsertValue(agg, pr.invalid, 3);
+        for (unsigned c = 0; c < outputs; ++c) agg = pb.CreateInsertValue(agg, pr.values[c], c);
+        agg = pb.CreateInsertValue(agg, pr.invalid, unsigned(outputs));
         pb.CreateRet(agg);
     }
     auto* precise = llvm::BasicBlock::Create(ctx, "precise.lanes", fn);
     auto* done = llvm::BasicBlock::Create(ctx, "lanes.done", fn);
-    llvm::BasicBlock* floatEnd = b.GetInsertBlock();
+    llvm::BasicBlock* firstEnd = b.GetInsertBlock();
     // Untrusted lanes are rare in renderer batches.
     b.CreateCondBr(anyUntrusted, precise, done, llvm::MDBuilder(ctx).createBranchWeights(1, 1000));
 
     b.SetInsertPoint(precise);
-    std::vector<llvm::Value*> args(wi.begin(), wi.end());
-    args.insert(args.end(), wo.begin(), wo.end());
+    std::vector<llvm::Value*> args(in.begin(), in.end());
     args.insert(args.end(), slots.begin(), slots.end());
     llvm::CallInst* call = b.CreateCall(preciseFn, args);
     call->setCallingConv(llvm::CallingConv::Fast);
-    LaneEmitter::Result mixed;
-    for (unsigned c = 0; c < 3; ++c) mixed.rgb[c] = b.CreateSelect(fl.untrusted, b.CreateExtractValue(call, c), fl.rgb[c]);
+    std::vector<llvm::Value*> mixed;
+    for (unsigned c = 0; c < outputs; ++c)
+        mixed.push_back(b.CreateSelect(fl.untrusted, b.CreateExtractValue(call, c), fl.values[c]));
     // Invalid lanes are untrusted, so the precise body's mask is the whole answer.
-    mixed.invalid = b.CreateExtractValue(call, 3);
+    llvm::Value* mixedInvalid = b.CreateExtractValue(call, unsigned(outputs));
     b.CreateBr(done);
 
     b.SetInsertPoint(done);
-    LaneEmitter::Result out;
-    for (int c = 0; c < 3; ++c) {
-        llvm::PHINode* phi = b.CreatePHI(laneTy, 2, "rgb");
-        phi->addIncoming(fl.rgb[c], floatEnd);
-        phi->addIncoming(mixed.rgb[c], precise);
-        out.rgb[c] = phi;
+    LaneOutputs out;
+    for (unsigned c = 0; c < outputs; ++c) {
+        llvm::PHINode* phi = b.CreatePHI(laneTy, 2, "lane.out");
+        phi->addIncoming(fl.values[c], firstEnd);
+        phi->addIncoming(mixed[c], precise);
+        out.values.push_back(phi);
     }
     llvm::PHINode* inv = b.CreatePHI(maskTy, 2, "invalid");
-    inv->addIncoming(fl.invalid, floatEnd);
-    inv->addIncoming(mixed.invalid, precise);
+    inv->addIncoming(fl.invalid, firstEnd);
+    inv->addIncoming(mixedInvalid, precise);
     out.invalid = inv;
-    out.untrusted = llvm::Constant::getNullValue(inv->getType());
     return out;
 }
 
-// The lane body of an entry point: the values of its output streams and
-// the invalid mask, from its input streams (float or <W x float> lanes) and
-// the material's slots.
-struct LaneOutputs {
-    std::vector<llvm::Value*> values;
-    llvm::Value* invalid;
-};
 using LaneBody = std::function<LaneOutputs(llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
                                            const std::vector<llvm::Value*>& slots)>;
 
@@ -233,23 +244,33 @@ llvm::Function* emitScalarFunction(const KernelContext& k, llvm::Module& module,
     return fn;
 }
 
+// The lane body of an entry point computing `emit` in the body `first`
+// and, where `fallback` is set, in that body for the lanes `first`
+// distrusts (emitBodies).
+LaneBody bodies(const KernelContext& k, llvm::Module& module, const BodyPlan& first, const BodyPlan* fallback,
+                BodyEmit emit) {
+    return [&k, &module, &first, fallback, emit](llvm::IRBuilder<>& b, llvm::Type* laneTy,
+                                                  const std::vector<llvm::Value*>& in,
+                                                  const std::vector<llvm::Value*>& slots) {
+        return emitBodies(k, b, laneTy, module, in, slots, first, fallback, emit);
+    };
+}
+
+BodyLanes evalBody(LaneEmitter& lanes, const std::vector<llvm::Value*>& in, const std::vector<llvm::Value*>& slots) {
+    LaneEmitter::Result r = lanes.emit({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
+    return {{r.rgb.begin(), r.rgb.end()}, r.invalid, r.untrusted};
+}
+
 // The scalar kernel: `<name>_status` computes one lane and returns 1 if it
 // was invalid; `<name>` is the SPEC's void entry point, a thin wrapper.
 void emitScalarEntry(const KernelContext& k, llvm::Module& module, const std::string& name) {
-    const CheckedMaterial& mat = k.material;
     // The scalar kernel computes the precise body directly: per lane, float
     // arithmetic is no faster than double except for division and square
     // root, and the guards would cost more than they save (measured: GGX
     // 47 ns/eval precise, 56 ns float-first).
     EntryShape shape{{{0, 0, 1}, {0, 0, 1}}, {3}};
-    llvm::Function* fn = emitScalarFunction(
-        k, module, name + "_status", shape, k.plan.scalarBody,
-        [&](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
-            const std::vector<llvm::Value*>& slots) {
-            LaneEmitter lanes(mat, k.plan, k.plan.scalarBody, k.options.energyTable, b, laneTy, module);
-            LaneEmitter::Result r = lanes.emit({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
-            return LaneOutputs{{r.rgb.begin(), r.rgb.end()}, r.invalid};
-        });
+    llvm::Function* fn = emitScalarFunction(k, module, name + "_status", shape, k.plan.scalarBody,
+                                            bodies(k, module, k.plan.scalarBody, nullptr, evalBody));
 
     llvm::LLVMContext& ctx = module.getContext();
     llvm::IRBuilder<> b(ctx);
@@ -435,38 +456,26 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
 // array (one byte per lane, 1 = invalid; null: not wanted).
 void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::string& name) {
     EntryShape shape{{{0, 0, 1}, {0, 0, 1}}, {3}};
+    const BodyPlan* fallback = k.plan.fallbackBody ? &*k.plan.fallbackBody : nullptr;
     emitBatchFunction(k, module, name, shape, true, k.plan.batchBody,
-                      [&](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
-                          const std::vector<llvm::Value*>& slots) {
-                          LaneEmitter::Result r =
-                              emitLanes(k, b, laneTy, module, {in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
-                          return LaneOutputs{{r.rgb.begin(), r.rgb.end()}, r.invalid};
-                      });
+                      bodies(k, module, k.plan.batchBody, fallback, evalBody));
 }
 
-// The sampler's entry points (SPEC 8), in the plan's sampling body:
+// The sampler's entry points (SPEC 8), in the plan's sampling bodies:
 //   sample: (wo[3], u[3], inputs) -> (wi[3], pdf, weight[3])
 //   pdf:    (wi[3], wo[3], inputs) -> (pdf)
 // Masked-off lanes of a partial chunk read wo = (0,0,1) and u = 0.
 const EntryShape kSampleShape{{{0, 0, 1}, {0, 0, 0}}, {3, 1, 3}};
 const EntryShape kPdfShape{{{0, 0, 1}, {0, 0, 1}}, {1}};
 
-LaneBody sampleLanes(const KernelContext& k, llvm::Module& module) {
-    return [&k, &module](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
-                         const std::vector<llvm::Value*>& slots) {
-        LaneEmitter lanes(k.material, k.plan, k.plan.sampling.body, k.options.energyTable, b, laneTy, module);
-        LaneEmitter::SampleResult r = lanes.emitSample({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
-        return LaneOutputs{{r.wi[0], r.wi[1], r.wi[2], r.pdf, r.weight[0], r.weight[1], r.weight[2]}, r.invalid};
-    };
+BodyLanes sampleBody(LaneEmitter& lanes, const std::vector<llvm::Value*>& in, const std::vector<llvm::Value*>& slots) {
+    LaneEmitter::SampleResult r = lanes.emitSample({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
+    return {{r.wi[0], r.wi[1], r.wi[2], r.pdf, r.weight[0], r.weight[1], r.weight[2]}, r.invalid, r.untrusted};
 }
 
-LaneBody pdfLanes(const KernelContext& k, llvm::Module& module) {
-    return [&k, &module](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
-                         const std::vector<llvm::Value*>& slots) {
-        LaneEmitter lanes(k.material, k.plan, k.plan.sampling.body, k.options.energyTable, b, laneTy, module);
-        LaneEmitter::PdfResult r = lanes.emitPdf({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
-        return LaneOutputs{{r.pdf}, r.invalid};
-    };
+BodyLanes pdfBody(LaneEmitter& lanes, const std::vector<llvm::Value*>& in, const std::vector<llvm::Value*>& slots) {
+    LaneEmitter::PdfResult r = lanes.emitPdf({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
+    return {{r.pdf}, r.invalid, r.invalid};
 }
 
 }  // namespace
@@ -488,10 +497,11 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
         if (sampling) {
             out.sampleScalarSymbol = symbolPrefix + "_sample_scalar";
             out.pdfScalarSymbol = symbolPrefix + "_pdf_scalar";
-            emitScalarFunction(k, *out.module, out.sampleScalarSymbol, kSampleShape, plan.sampling.body,
-                               sampleLanes(k, *out.module));
-            emitScalarFunction(k, *out.module, out.pdfScalarSymbol, kPdfShape, plan.sampling.body,
-                               pdfLanes(k, *out.module));
+            const BodyPlan& body = out.plan.sampling.body;
+            emitScalarFunction(k, *out.module, out.sampleScalarSymbol, kSampleShape, body,
+                               bodies(k, *out.module, body, nullptr, sampleBody));
+            emitScalarFunction(k, *out.module, out.pdfScalarSymbol, kPdfShape, body,
+                               bodies(k, *out.module, body, nullptr, pdfBody));
         }
     }
     if (options.emitBatch) {
@@ -502,10 +512,12 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
         if (sampling) {
             out.sampleBatchSymbol = symbolPrefix + "_sample_batch";
             out.pdfBatchSymbol = symbolPrefix + "_pdf_batch";
-            emitBatchFunction(k, *out.module, out.sampleBatchSymbol, kSampleShape, false, plan.sampling.body,
-                              sampleLanes(k, *out.module));
-            emitBatchFunction(k, *out.module, out.pdfBatchSymbol, kPdfShape, false, plan.sampling.body,
-                              pdfLanes(k, *out.module));
+            const SamplingPlan& sp = out.plan.sampling;
+            const bool floatFirst = sp.batchBodies == BatchBodies::FloatFirst;
+            emitBatchFunction(k, *out.module, out.sampleBatchSymbol, kSampleShape, false, sp.batchBody,
+                              bodies(k, *out.module, sp.batchBody, floatFirst ? &sp.body : nullptr, sampleBody));
+            emitBatchFunction(k, *out.module, out.pdfBatchSymbol, kPdfShape, false, sp.body,
+                              bodies(k, *out.module, sp.body, nullptr, pdfBody));
         }
     }
     // Every constant table in the module is part of the cache key: the

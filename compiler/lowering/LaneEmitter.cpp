@@ -122,13 +122,28 @@ std::array<Value*, 3> LaneEmitter::unitDirection(const std::array<Value*, 3>& w,
     return out;
 }
 
+// 1/|w| - 1 in float for a float body, from |w|^2 - 1 taken in double
+// (where the squares of floats are exact, and where the precise body
+// decides the lane's validity too).
+Value* LaneEmitter::unitCorrection(const std::array<Value*, 3>& w) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& dm = doubleMath_;
+    std::array<Value*, 3> widened;
+    Value* len2 = checkedLength2(dm, w, widened);
+    Value* delta = fm.convert(dm.sub(len2, dm.c(1.0)), fm.type());
+    // (1 + delta)^(-1/2) - 1, the series of unitDirection() to delta^3:
+    // the rest, 0.28 delta^4 <= 5e-12 for |delta| <= 2e-3, is far below
+    // the float rounding of the corrected values.
+    return fm.mul(delta, fm.poly(delta, {-1.0 / 2, 3.0 / 8, -5.0 / 16}));
+}
+
 // SPEC 2: non-finite or non-unit directions are invalid lanes; valid ones
 // are renormalized. Normalization and the half vector are computed in the
 // precise type (double in exact mode): wi + wo cancels when the directions
 // are nearly opposite, and the float rounding of the renormalization would
 // then decide h (and so D, G and F) by itself. Float bodies (the plan's
 // correctedSums) sum the float inputs and correct for the normalization.
-LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo) {
+LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo, bool wiSampled) {
     MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
     std::array<Value*, 3> wiD, woD;
@@ -142,22 +157,15 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
         // normalization enters as a small correction w (1/|w| - 1), whose
         // own rounding is ~eps times 1e-7. |w|^2 - 1 is taken in double,
         // where the squares of floats are exact.
-        auto correction = [&](const std::array<Value*, 3>& w) {
-            MathEmitter& dm = doubleMath_;
-            std::array<Value*, 3> widened;
-            Value* len2 = checkedLength2(dm, w, widened);
-            Value* delta = fm.convert(dm.sub(len2, dm.c(1.0)), fm.type());
-            // (1 + delta)^(-1/2) - 1, the series of unitDirection() to delta^3:
-            // the rest, 0.28 delta^4 <= 5e-12 for |delta| <= 2e-3, is far
-            // below the float rounding of the corrected sums.
-            return fm.mul(delta, fm.poly(delta, {-1.0 / 2, 3.0 / 8, -5.0 / 16}));
-        };
-        Value *ci = correction(wi), *co = correction(wo);
+        // A sampled wi is the body's own unit vector (to float rounding):
+        // no check and no correction.
+        Value *ci = wiSampled ? nullptr : unitCorrection(wi), *co = unitCorrection(wo);
         for (int i = 0; i < 3; ++i) {
-            wiD[i] = fm.fma(wi[i], ci, wi[i]);
+            Value* woCorr = fm.mul(wo[i], co);
             woD[i] = fm.fma(wo[i], co, wo[i]);
-            hD[i] = fm.add(fm.add(wi[i], wo[i]), fm.fma(wi[i], ci, fm.mul(wo[i], co)));
-            diff[i] = fm.add(fm.sub(wi[i], wo[i]), fm.fma(wi[i], ci, fm.neg(fm.mul(wo[i], co))));
+            wiD[i] = ci ? fm.fma(wi[i], ci, wi[i]) : wi[i];
+            hD[i] = fm.add(fm.add(wi[i], wo[i]), ci ? fm.fma(wi[i], ci, woCorr) : woCorr);
+            diff[i] = fm.add(fm.sub(wi[i], wo[i]), ci ? fm.fma(wi[i], ci, fm.neg(woCorr)) : fm.neg(woCorr));
         }
     } else {
         wiD = unitDirection(wi, wiF);
@@ -213,9 +221,9 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
     }
     // Guard: |wi + wo| >= 1e-4. h is accurate below that too, but
     // |wi + wo|^2 could underflow in float where it does not in double.
-    // (On |wi + wo|^2 where hlen = 0 * Inf = NaN is possible.)
-    distrust(body.halfVector == HalfVectorForm::Estimated ? pm.lt(hlen2, pm.c(1e-8))
-                                                          : halfMath.lt(hlen, halfMath.c(1e-4)));
+    // (On |wi + wo|^2, not on hlen: hlen = 0 * Inf = NaN is possible, and a
+    // sampler whose h is the drawn normal needs no square root of it.)
+    distrust(pm.lt(hlen2, pm.c(1e-8)));
     Value* sin2 = halfMath.mul(oneMinusCos, halfMath.add(halfMath.c(1.0), cosD));
     LaneGeometry g;
     g.hNonZero = pm.gt(hlen2, pm.c(0.0));

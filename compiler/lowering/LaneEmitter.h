@@ -82,6 +82,7 @@ public:
         llvm::Value* pdf;                    // float, the mixture's density at wi
         std::array<llvm::Value*, 3> weight;  // float, f (n.wi) / pdf; 0 below the horizon
         llvm::Value* invalid;
+        llvm::Value* untrusted;  // guarded body: lanes to recompute in the other body (includes invalid ones)
     };
     // One sample for the direction wo and the uniform numbers u (float lanes).
     SampleResult emitSample(const std::array<llvm::Value*, 3>& wo, const std::array<llvm::Value*, 3>& u,
@@ -213,6 +214,9 @@ public:
     llvm::GlobalVariable* doubleTable(const std::vector<double>& data, const std::string& name);
     // table[index] for an integer-valued index in the precise type (a gather across lanes).
     llvm::Value* fetch(llvm::GlobalVariable* table, llvm::Value* index);
+    // 4-point Lagrange interpolation in a double table of `size` nodes at the
+    // node coordinate u in [0, size - 1], all in double.
+    llvm::Value* lagrangeFetch(llvm::GlobalVariable* table, int size, llvm::Value* u);
     // table[index] + t (table[index + 1] - table[index]).
     llvm::Value* lerpFetch(llvm::GlobalVariable* table, llvm::Value* index, llvm::Value* t);
     // Bilinear interpolation in a row-major table with `stride` entries per row.
@@ -221,7 +225,9 @@ public:
 
 private:
     llvm::Type* boolType();
-    LaneGeometry geometry(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo);
+    // `wiSampled`: wi is a float body's own sample (unit to float rounding).
+    LaneGeometry geometry(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
+                          bool wiSampled = false);
     std::array<llvm::Value*, 3> brdf(const LaneGeometry& geo);
     // f per channel in the precise type and the lanes where it applies (both
     // directions above the horizon, wi + wo not 0; elsewhere f = 0).
@@ -232,6 +238,9 @@ private:
     llvm::Value* checkedLength2(MathEmitter& math, const std::array<llvm::Value*, 3>& w,
                                 std::array<llvm::Value*, 3>& widened);
     std::array<llvm::Value*, 3> unitDirection(const std::array<llvm::Value*, 3>& w, std::array<llvm::Value*, 3>& unitF);
+    // Float body: 1/|w| - 1 in float (the unit w is w + w times it), the
+    // length checked in double as the precise body checks it.
+    llvm::Value* unitCorrection(const std::array<llvm::Value*, 3>& w);
 
     // LaneSampling.cpp
     struct SamplingTerms;

@@ -208,7 +208,7 @@ namespace {
 // The unit half vector of wi and wo turned to the upper hemisphere, its
 // wo.m, and whether it exists (wi + wo not 0).
 struct HalfNormal {
-    Vec m;
+    Vec m, sum;  // sum: wi + wo
     Value *om, *exists;
 };
 
@@ -219,7 +219,7 @@ HalfNormal halfNormal(MathEmitter& pm, const Vec& wi, const Vec& wo) {
     Value* inv = pm.div(pm.c(1.0), pm.sqrt(len2));
     inv = pm.select(pm.lt(s[2], pm.c(0.0)), pm.neg(inv), inv);
     Vec m = {pm.mul(s[0], inv), pm.mul(s[1], inv), pm.mul(s[2], inv)};
-    return {m, dot(pm, wo, m), pm.gt(len2, pm.c(0.0))};
+    return {m, s, dot(pm, wo, m), pm.gt(len2, pm.c(0.0))};
 }
 
 }  // namespace
@@ -230,8 +230,14 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
     llvm::IRBuilder<>& b = builder;
     const SamplingPlan& sp = plan.sampling;
     internal_assert(sp.specular != SpecularSampling::None) << "a sampler without a specular technique";
-    Vec woF{};
-    Vec wo = unitDirection(woIn, woF);
+    Vec wo;
+    if (body.correctedSums) {
+        Value* corr = unitCorrection(woIn);
+        for (int i = 0; i < 3; ++i) wo[i] = fm.fma(woIn[i], corr, woIn[i]);
+    } else {
+        Vec woF{};
+        wo = unitDirection(woIn, woF);
+    }
     for (Value* x : u) markInvalid(b.CreateNot(b.CreateAnd(fm.ge(x, fm.c(0.0)), fm.lt(x, fm.c(1.0)))));
     lowerInputsAndLets(slots);
 
@@ -249,7 +255,7 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
     Vec sum = {pm.mul(twoOm, m[0]), pm.mul(twoOm, m[1]), pm.mul(twoOm, m[2])};  // wi + wo
     Vec wi = {pm.sub(sum[0], t.wo[0]), pm.sub(sum[1], t.wo[1]), pm.sub(sum[2], t.wo[2])};
     Value* specular = nullptr;
-    Vec mPdf = m;
+    Vec mPdf = m, cosineSum{};
     Value *omPdf = om, *pdfExists = pm.c(1.0);
     if (sp.cosineLobe) {
         // The cosine lobe: sqrt(u1) in the unit disk at azimuth 2 pi u2,
@@ -260,10 +266,23 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
         auto [sinPhi, cosPhi] = pm.sinCosTurns(u2);
         Vec wiCos = {pm.mul(r, cosPhi), pm.mul(r, sinPhi), pm.sqrt(pm.sub(pm.c(1.0), u1))};
         HalfNormal h = halfNormal(pm, wiCos, t.wo);
+        cosineSum = h.sum;
         wi = selectVec(pm, specular, wi, wiCos);
         mPdf = selectVec(pm, specular, m, h.m);
         omPdf = pm.select(specular, om, h.om);
         pdfExists = pm.select(b.CreateOr(specular, h.exists), pm.c(1.0), pm.c(0.0));
+    }
+    if (body.guarded()) {
+        // A float body keeps the lanes whose density and f it computes to
+        // float accuracy: wo.m, in float a few ulp off absolutely, enters F
+        // and the maskings that divide by wo.h relative to itself, so |wo.m|
+        // >= 1e-2 (with visible normals the density of m is proportional to
+        // wo.m: such lanes are rare); a cosine sample's half vector is the
+        // sum wi + wo, exact to a few ulp absolutely, so |wi + wo|^2 >= 1e-2
+        // keeps D of it within ~1e-6.
+        Value* badSpecular = pm.lt(pm.abs(om), pm.c(1e-2));
+        distrust(sp.cosineLobe ? pm.select(specular, badSpecular, pm.lt(dot(pm, cosineSum, cosineSum), pm.c(1e-2)))
+                               : badSpecular);
     }
     Value* spec = pm.mul(specularPdf(t, mPdf, omPdf), pdfExists);
     Value* pdf = mixturePdf(t, spec, wi);
@@ -275,7 +294,7 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
     Vec wiLane;
     for (int i = 0; i < 3; ++i) wiLane[i] = fm.convert(wi[i], fm.type());
     Vec wiEval = selectVec(fm, t.above, wiLane, constantVec(fm, 0, 0, 1));
-    LaneGeometry geo = geometry(wiEval, woIn);
+    LaneGeometry geo = geometry(wiEval, woIn, true);
     Value* fromDrawn = sp.cosineLobe ? specular : llvm::Constant::getAllOnesValue(boolType());
     if (geo.hD[0])  // null where the plan keeps the half angle in float (no consumer of the unit h)
         for (int i = 0; i < 3; ++i) {
@@ -326,6 +345,7 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
     r.pdf = fm.select(zero, fm.c(0.0), r.pdf);
     for (Value*& x : r.weight) x = fm.select(zero, fm.c(0.0), x);
     r.invalid = invalid_;
+    r.untrusted = b.CreateOr(untrusted_, invalid_);
     return r;
 }
 

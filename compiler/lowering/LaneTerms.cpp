@@ -130,6 +130,33 @@ Value* LaneEmitter::fetch(llvm::GlobalVariable* table, Value* index) {
     return pm.convert(v, pm.type());
 }
 
+Value* LaneEmitter::lagrangeFetch(llvm::GlobalVariable* table, int size, Value* u) {
+    MathEmitter& dm = doubleMath_;
+    // The 4-point stencil stays inside: i in [1, size - 3], and s = u - i in
+    // [-1, 2] then interpolates (or reaches the end nodes).
+    Value* fi = dm.minnum(dm.maxnum(intrinsic(llvm::Intrinsic::floor, u), dm.c(1.0)), dm.c(size - 3.0));
+    Value* s = dm.sub(u, fi);
+    llvm::Type* i32 = builder.getInt32Ty();
+    llvm::Type* idxTy = dm.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, dm.width()) : i32;
+    Value* idx = builder.CreateFPToSI(fi, idxTy);
+    auto node = [&](int offset) -> Value* {
+        Value* j = builder.CreateAdd(idx, llvm::ConstantInt::get(idxTy, offset, true));
+        Value* ptr = builder.CreateGEP(builder.getDoubleTy(), table, j);
+        if (dm.width() == 1) return builder.CreateLoad(builder.getDoubleTy(), ptr);
+        return builder.CreateMaskedGather(dm.type(), ptr, llvm::Align(8));
+    };
+    Value *p0 = node(-1), *p1 = node(0), *p2 = node(1), *p3 = node(2);
+    // Lagrange weights at s for nodes -1, 0, 1, 2.
+    Value* sm1 = dm.add(s, dm.c(1.0));
+    Value* s1 = dm.sub(s, dm.c(1.0));
+    Value* s2 = dm.sub(s, dm.c(2.0));
+    Value* w0 = dm.mul(dm.mul(s, dm.mul(s1, s2)), dm.c(-1.0 / 6.0));
+    Value* w1 = dm.mul(dm.mul(sm1, dm.mul(s1, s2)), dm.c(0.5));
+    Value* w2 = dm.mul(dm.mul(sm1, dm.mul(s, s2)), dm.c(-0.5));
+    Value* w3 = dm.mul(dm.mul(sm1, dm.mul(s, s1)), dm.c(1.0 / 6.0));
+    return dm.fma(w0, p0, dm.fma(w1, p1, dm.fma(w2, p2, dm.mul(w3, p3))));
+}
+
 Value* LaneEmitter::lerpFetch(llvm::GlobalVariable* table, Value* index, Value* t) {
     MathEmitter& pm = preciseMath_;
     Value* a = fetch(table, index);

@@ -57,6 +57,7 @@ const char* lambdaFormName(LambdaForm l) {
         case LambdaForm::RootSums: return "root-sums";
         case LambdaForm::ClosedForm: return "closed-form";
         case LambdaForm::WalterFit: return "walter-fit";
+        case LambdaForm::Table: return "table";
     }
     return "?";
 }
@@ -186,7 +187,7 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
              !em.masking.traits.needsPreciseHalfAngle && em.fresnel.halfAngleInFloatOk(material.fresnel, plan.fresnel))
         body.halfVector = HalfVectorForm::InFloat;
 
-    body.correctedSums = !inDouble;
+    body.correctedSums = !inDouble && role != BodyRole::FastGuarded;
 
     // In float, the masking sums are scaled; in double and in a guarded
     // body (whose guards keep the sums in range) they need not be.
@@ -223,7 +224,10 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
         plan.lambda = LambdaForm::RootSums;
     else if (variant.walterLambda && em.ndf.traits.beckmannProfileLambda)
         plan.lambda = LambdaForm::WalterFit;
-    else
+    else if (ndfEntry(*material.ndf.model).tabulatedLambda) {
+        plan.lambda = LambdaForm::Table;
+        plan.lambdaTable = lambdaTable(ndfEntry(*material.ndf.model), tabulatedLambdaShape(material));
+    } else
         plan.lambda = LambdaForm::ClosedForm;
 
     const FresnelEmitter& fresnel = em.fresnel;
@@ -262,6 +266,11 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     plan.sampling.cosineLobe = em.diffuse.present() || material.compensatesEnergy();
     plan.sampling.compensationAlbedo = material.compensatesEnergy();
     plan.sampling.body = plan.scalarBody;
+    plan.sampling.batchBody = plan.scalarBody;
+    if (plan.batchBodies == BatchBodies::FloatFirst && em.ndf.traits.floatFirstSampler) {
+        plan.sampling.batchBodies = BatchBodies::FloatFirst;
+        plan.sampling.batchBody = plan.batchBody;
+    }
     return plan;
 }
 
@@ -292,7 +301,9 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
     printBody(os, "batch-body", plan.batchBody);
     if (plan.fallbackBody) printBody(os, "fallback-body", *plan.fallbackBody);
     os << "ndf-isotropic: " << yesNo(plan.ndfIsotropic) << "\n";
-    os << "smith-lambda: " << lambdaFormName(plan.lambda) << "\n";
+    os << "smith-lambda: " << lambdaFormName(plan.lambda);
+    if (plan.lambdaTable) os << " (" << plan.lambdaTable->name() << ", " << plan.lambdaTable->z.size() << " nodes)";
+    os << "\n";
     os << "fresnel: substitute-schlick=" << yesNo(plan.fresnel.substituteSchlick)
        << " exact-in-float=" << yesNo(plan.fresnel.exactInFloat) << " range-guard=" << yesNo(plan.fresnel.rangeGuard)
        << " at-most-one=" << yesNo(plan.fresnel.atMostOne) << " can-vanish=" << yesNo(plan.fresnel.canVanish) << "\n";
@@ -301,7 +312,12 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
     os << "sampling: specular=" << specularSamplingName(plan.sampling.specular)
        << " cosine-lobe=" << yesNo(plan.sampling.cosineLobe)
        << " compensation-albedo=" << yesNo(plan.sampling.compensationAlbedo) << "\n";
-    if (plan.sampling.specular != SpecularSampling::None) printBody(os, "sampling-body", plan.sampling.body);
+    if (plan.sampling.specular != SpecularSampling::None) {
+        os << "sampling-batch-bodies: " << batchBodiesName(plan.sampling.batchBodies) << "\n";
+        printBody(os, "sampling-body", plan.sampling.body);
+        if (plan.sampling.batchBodies != BatchBodies::Plain)
+            printBody(os, "sampling-batch-body", plan.sampling.batchBody);
+    }
     return os.str();
 }
 

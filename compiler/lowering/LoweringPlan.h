@@ -11,8 +11,10 @@
 // nothing; `facet ir --plan FILE` prints it (printPlan).
 #pragma once
 
+#include "LambdaTable.h"
 #include "Material.h"
 
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -82,6 +84,7 @@ enum class LambdaForm {
     RootSums,   // from R(v) = sqrt((n.v)^2 + proj(v)) (the NDF's root form)
     ClosedForm, // the NDF's closed-form (n.v) Lambda(v)
     WalterFit,  // Walter et al. 2007's rational fit of the Beckmann-profile Lambda
+    Table,      // the NDF's tabulated Lambda (LambdaTable.h), embedded in the kernel
 };
 const char* lambdaFormName(LambdaForm l);
 
@@ -97,11 +100,14 @@ struct BodyPlan {
     // wi + wo and wi - wo from the float inputs as they are, plus the
     // normalization as a small correction w (1/|w| - 1) with |w|^2 - 1 in
     // double: each sum is then accurate relative to itself. Float bodies
-    // need it (the float-first body, every fast body): summing the unit
-    // directions rounded to float instead decides h by those roundings
+    // need it (the float-first body, the plain fast bodies): summing the
+    // unit directions rounded to float instead decides h by those roundings
     // where wi + wo cancels (near-opposite directions), which amplifies
     // them by 1/|wi + wo| and D by another ~2/alpha. Double bodies
-    // normalize in double.
+    // normalize in double. The guarded fast body sums the rounded unit
+    // directions (the double |w|^2 of the correction would cost it ~60%)
+    // and its NDF distrusts the lanes where that rounding would move D
+    // beyond fast mode's accuracy, which its fallback recomputes.
     bool correctedSums = false;
     // The masking forms in float are scaled by max(ci, co) and divide in
     // steps, so that no sum of products falls into the subnormal range and
@@ -140,11 +146,15 @@ struct SamplingPlan {
     SpecularSampling specular = SpecularSampling::None;
     bool cosineLobe = false;          // diffuse base or Kulla-Conty compensation
     bool compensationAlbedo = false;  // the lobe probability reads the Kulla-Conty table
-    // The body the sampler lanes compute in, scalar and SIMD alike: the
-    // plain body (no guarded float-first or fast body: the sampler's
-    // directions and pdf are not guarded, and one body keeps the scalar and
-    // SIMD samplers identical).
+    // The plain body: the scalar sample and pdf entries, the batch pdf
+    // entry, and the lanes a float-first sample batch body distrusts.
     BodyPlan body;
+    // The sample batch entry's bodies: Plain (`body` alone) or FloatFirst
+    // (an exact kernel whose NDF samples well in float: `batchBody`, the
+    // guarded float body, first, and `body` for the lanes it distrusts).
+    // Fast kernels sample in `body`, which is float already.
+    BatchBodies batchBodies = BatchBodies::Plain;
+    BodyPlan batchBody;
 };
 
 struct LoweringPlan {
@@ -155,6 +165,7 @@ struct LoweringPlan {
     std::optional<BodyPlan> fallbackBody;  // for the lanes a guarded batch body distrusts
     bool ndfIsotropic = false;           // one alpha, or equal constant alphas
     LambdaForm lambda = LambdaForm::None;
+    std::shared_ptr<const LambdaTable> lambdaTable;  // LambdaForm::Table: the material's table
     FresnelPlan fresnel;
     bool compensatesEnergy = false;
     bool flushDenormals = false;  // fast kernels on x86: MXCSR FTZ/DAZ for the call

@@ -62,6 +62,10 @@ struct NdfLoweringTraits {
     // emitter lacks it.
     bool samplesNormals = false;
     bool samplesVisibleNormals = false;
+    // Its samplers keep float's accuracy in a guarded float body (closed
+    // forms, no CDF inversion), distrusting the lanes where they would not
+    // (LaneEmitter::distrust): float-first exact sample batches.
+    bool floatFirstSampler = false;
 };
 
 class NdfEmitter {

@@ -91,7 +91,7 @@ struct ModelInfo {
     std::vector<ModelParam> canonical;  // at most kMaxModelParams
     std::vector<ModelForm> forms;       // at least one (an empty form for no arguments)
     // masking: a Smith form, which needs the NDF's Lambda.
-    // ndf: has a closed-form Smith Lambda.
+    // ndf: has a closed-form Smith Lambda (see also NdfEntry::tabulatedLambda).
     bool smith = false;
     const char* summary;
     // Canonical parameters that must be per-material constants when a table
@@ -251,6 +251,13 @@ struct NdfEntry : ModelInfo {
     // Shape-invariant (Heitz 2014): D is a stretch of one slope profile, so
     // its Smith Lambda depends on a = 1 / (alpha(v) tan theta) alone.
     bool shapeInvariant = false;
+    // Its Smith Lambda has no closed form and is tabulated by quadrature
+    // (LambdaTable.h, shape-invariant NDFs only): cosLambda interpolates the
+    // table of the material's tableShapeParams, which must then be constant.
+    bool tabulatedLambda = false;
+    // For a tabulated Lambda: why these shape values have none (e.g. an
+    // infinite Lambda), or "".
+    std::string (*lambdaShapeError)(const std::vector<double>& shape) = nullptr;
     // Why its Smith Lambda is only an approximation ("" when exact).
     const char* lambdaNote = "";
     // Why its F = 1 albedo is not bounded by 1 whatever the masking ("" when
@@ -339,6 +346,9 @@ int paramIndex(const ModelInfo& m, std::string_view name);
 inline bool samplesVisibleNormals(const NdfEntry& ndf, const MaskingEntry& masking) {
     return ndf.visibleNormals && masking.smith;
 }
+
+// The NDF has a Smith Lambda, closed-form or tabulated.
+inline bool hasSmithLambda(const NdfEntry& ndf) { return ndf.smith || ndf.tabulatedLambda; }
 
 const NdfEntry& ndfEntry(const ModelInfo& m);
 const MaskingEntry& maskingEntry(const ModelInfo& m);

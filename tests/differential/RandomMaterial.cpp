@@ -36,7 +36,7 @@ std::vector<Combo> combinations() {
             if (aniso && !hasAlphaXY(ndf)) continue;
             for (const ModelInfo* m : catalogSlot(ModelSlot::Masking)) {
                 if (ndf.wholeLobe && std::string(m->name) != "none") continue;
-                if (m->smith && !ndf.smith) continue;
+                if (m->smith && !hasSmithLambda(ndf)) continue;
                 for (const char* f : fresnels)
                     for (const char* d : diffuses) out.push_back({&ndf, aniso, m, f, d});
             }
@@ -91,6 +91,16 @@ private:
     std::mt19937_64 rng_;
 };
 
+// A shape parameter of an NDF with a tabulated Smith Lambda under a Smith
+// masking: a constant (the table is built for one value), one of a few
+// around the typical value so that the tables are shared between materials.
+double tabulatedShapeValue(Gen& g, const NdfEntry& ndf, const ModelParam& param) {
+    const double factors[] = {0.9, 1.25, 1.5};
+    double v = std::clamp(param.typical * factors[g.pick(3)], param.lo, param.hi);
+    if (ndf.lambdaShapeError && !ndf.lambdaShapeError({v}).empty()) v = param.typical;
+    return v;
+}
+
 }  // namespace
 
 int randomMaterialCombinationCount() { return int(combinations().size()); }
@@ -132,6 +142,8 @@ RandomMaterial randomMaterial(uint64_t seed, int i) {
         bool isShape = std::find(ndf.tableShapeParams.begin(), ndf.tableShapeParams.end(), int(p)) !=
                        ndf.tableShapeParams.end();
         if (name.rfind("alpha", 0) == 0) value = g.ranged(alphaLo, alphaHi);
+        else if (isShape && ndf.tabulatedLambda && c.masking->smith)
+            value = fmt::format("{:.9g}", tabulatedShapeValue(g, ndf, param));
         else if (isShape) value = g.ranged(std::max(param.lo, 0.5 * param.typical), 1.5 * param.typical);
         else value = fmt::format("{:.9g}", atAlpha[int(p)]);
         if (name == "alpha_x" && !c.anisotropic) name = "alpha";

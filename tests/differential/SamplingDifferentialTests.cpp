@@ -29,9 +29,12 @@
 //     u2 = 1 - 2^-24), which float and an approximate sqrt or sine move by
 //     far more than 2e-3;
 //   - no NaN, Inf or negative pdf or weight on any lane;
-//   - paired scalar and SIMD kernels of one math mode within 1e-6 of each other
-//     (exact; they are bit-identical today), 2e-3 (fast, regular lanes: the
-//     vector and scalar approximations of sqrt and division differ).
+//   - paired scalar and SIMD kernels of one math mode: wi within 2e-5 and
+//     pdf and weight within 2e-3 of each other (exact: the SIMD sampler of
+//     a float-first material computes its well-conditioned lanes in float,
+//     the scalar one in double, each within its bounds of the reference),
+//     2e-3 (fast, regular lanes: the vector and scalar approximations of
+//     sqrt and division differ).
 // Every kernel has a compiled sampler (Kernel::samplerTier() is "jit"; a
 // kernel that fell back to the reference sampler fails the test).
 #include "DiffHarness.h"
@@ -238,16 +241,20 @@ void compareWithReferenceSampler(const Kernel& k, const CheckedMaterial& m, cons
 }
 
 // Scalar and SIMD kernels of one math mode: the largest difference of wi
-// (absolute), pdf and weight (relative) over the lanes `counted` selects.
+// (absolute) and of pdf and weight (relative) over the lanes `counted`
+// selects.
+struct ScalarSimdDifference {
+    double wi = 0, value = 0;
+};
 template <typename Counted>
-double scalarSimdDifference(const SamplerOutput& a, const SamplerOutput& b, Counted counted) {
-    double worst = 0;
+ScalarSimdDifference scalarSimdDifference(const SamplerOutput& a, const SamplerOutput& b, Counted counted) {
+    ScalarSimdDifference worst;
     for (size_t i = 0; i < a.pdf.size(); ++i) {
         if (!counted(i)) continue;
-        worst = std::max(worst, relativeError(a.pdf[i], b.pdf[i]));
+        worst.value = std::max(worst.value, relativeError(a.pdf[i], b.pdf[i]));
         for (int c = 0; c < 3; ++c) {
-            worst = std::max(worst, std::abs(double(a.wi[c][i]) - b.wi[c][i]));
-            worst = std::max(worst, relativeError(a.weight[c][i], b.weight[c][i]));
+            worst.wi = std::max(worst.wi, std::abs(double(a.wi[c][i]) - b.wi[c][i]));
+            worst.value = std::max(worst.value, relativeError(a.weight[c][i], b.weight[c][i]));
         }
     }
     return worst;
@@ -260,7 +267,7 @@ TEST_CASE("random materials: JIT samplers against the reference sampler for the 
     const int widths[] = {4, 8, 16};
     int failures = 0, jitKernels = 0;
     std::map<std::string, SamplerStats> byRun;
-    double worstScalarSimdExact = 0, worstScalarSimdFast = 0;
+    ScalarSimdDifference worstScalarSimdExact, worstScalarSimdFast;
     int pairs = 0;
     size_t lanesTotal = 0;
     for (int i = 0; i < kMaterials && failures < 20; ++i) {
@@ -305,11 +312,12 @@ TEST_CASE("random materials: JIT samplers against the reference sampler for the 
             CHECK(a.invalid == b.invalid);
             // Exact kernels on every lane; fast ones on the regular lanes (see
             // compareWithReferenceSampler).
-            double difference = scalarSimdDifference(a, b, [&](size_t lane) {
+            ScalarSimdDifference difference = scalarSimdDifference(a, b, [&](size_t lane) {
                 return exact || (lane < lanes.randomLanes && lane % 16 >= 8);
             });
-            double& worst = exact ? worstScalarSimdExact : worstScalarSimdFast;
-            worst = std::max(worst, difference);
+            ScalarSimdDifference& worst = exact ? worstScalarSimdExact : worstScalarSimdFast;
+            worst.wi = std::max(worst.wi, difference.wi);
+            worst.value = std::max(worst.value, difference.value);
             ++pairs;
         }
         for (size_t k = 0; k < kernels.size(); ++k) {
@@ -344,10 +352,13 @@ TEST_CASE("random materials: JIT samplers against the reference sampler for the 
                                                                     s.maxWiHardFast, s.maxRelHardFast) : "",
                             s.choiceAmbiguous));
     MESSAGE(fmt::format("{} materials, {} JIT kernels over {} lanes; scalar vs SIMD ({} pairs) worst difference "
-                        "{:.3g} exact, {:.3g} fast",
-                        kMaterials, jitKernels, lanesTotal, pairs, worstScalarSimdExact, worstScalarSimdFast));
-    CHECK(worstScalarSimdExact <= 1e-6);
-    CHECK(worstScalarSimdFast <= 2e-3);
+                        "wi {:.3g}, pdf/weight {:.3g} exact; wi {:.3g}, pdf/weight {:.3g} fast",
+                        kMaterials, jitKernels, lanesTotal, pairs, worstScalarSimdExact.wi, worstScalarSimdExact.value,
+                        worstScalarSimdFast.wi, worstScalarSimdFast.value));
+    CHECK(worstScalarSimdExact.wi <= 2e-5);
+    CHECK(worstScalarSimdExact.value <= 2e-3);
+    CHECK(worstScalarSimdFast.wi <= 2e-3);
+    CHECK(worstScalarSimdFast.value <= 2e-3);
     // Every material of the stream was compared, and every eighth twice.
     CHECK(pairs == kMaterials / 8);
     CHECK(jitKernels == kMaterials + pairs);

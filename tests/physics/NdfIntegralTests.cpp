@@ -42,7 +42,7 @@ struct NdfCase {
     std::string label;   // material source of the ndf statement
     double scale;        // smallest roughness: width of the peak at theta = 0
     bool anisotropic;
-    bool exactSmith;     // has a closed-form Smith Lambda that is exact for it
+    bool exactSmith;     // has a Smith Lambda (closed-form or tabulated) that is exact for it
 };
 
 // `name(p0 = v0, p1 = v1, ...)` with every canonical parameter of the entry.
@@ -64,7 +64,7 @@ std::vector<NdfCase> ndfCases() {
     for (const ModelInfo* m : catalogSlot(ModelSlot::Ndf)) {
         const NdfEntry& ndf = ndfEntry(*m);
         if (ndf.wholeLobe) continue;
-        const bool exactSmith = ndf.smith && !*ndf.lambdaNote;
+        const bool exactSmith = facet::hasSmithLambda(ndf) && !*ndf.lambdaNote;
         std::vector<double> shape;
         for (int p : ndf.tableShapeParams) shape.push_back(ndf.canonical[p].typical);
         for (double a : kAlphas) out.push_back({callOf(ndf, ndf.argsAtAlpha(a, shape)), a, false, exactSmith});
@@ -80,7 +80,7 @@ std::vector<NdfCase> ndfCases() {
         for (double g : {1.0, 1.5, 3.0})
             out.push_back({"gtr(alpha = " + num(a) + ", gamma = " + num(g) + ")", a, false, false});
         for (double g : {1.6, 4.0})
-            out.push_back({"student_t(alpha = " + num(a) + ", gamma = " + num(g) + ")", a, false, false});
+            out.push_back({"student_t(alpha = " + num(a) + ", gamma = " + num(g) + ")", a, false, true});
     }
     return out;
 }
@@ -90,6 +90,8 @@ Hemisphere grid(const NdfCase& c, double thetaV, double phiV) {
     std::vector<Special> sp = {{0, c.scale / 8}};
     // Where the v.m > 0 region stops covering the whole azimuth circle.
     if (thetaV > 0) sp.push_back({kPi / 2 - thetaV, 1e-5});
+    // student_t's heavy tail: D ~ (n.m)^(2 gamma - 4) at the horizon, singular for gamma < 2.
+    if (c.label.rfind("student_t", 0) == 0) sp.push_back({kPi / 2, 1e-12});
     h.thetaBreaks = gradedBreaks(0, kPi / 2, sp, 0.1);
     h.center = phiV;
     h.phiPanels = c.anisotropic ? 48 : 8;
@@ -198,8 +200,10 @@ TEST_CASE("NDF projected area: the clamped (v.m)+ form is NOT v.n (back-facing f
 // Heitz 2014 eq. 43: a Smith Lambda is the exact solution of this identity
 // for its NDF. GGX and Beckmann Lambdas are exact (also anisotropic, with
 // alpha(v) projected on the azimuth of v).
-TEST_CASE("Weak white furnace: Int G1(v,m) D(m) (v.m)+ dw = v.n, GGX and Beckmann (iso and aniso)") {
-    MaxErr worst;
+// For student_t, G1 comes from the tabulated Lambda (LambdaTable.h); every
+// Smith form uses that one G1, so this covers each student_t x Smith pair.
+TEST_CASE("Weak white furnace: Int G1(v,m) D(m) (v.m)+ dw = v.n, GGX, Beckmann, student_t (iso and aniso)") {
+    MaxErr worst, tabulated;
     for (const NdfCase& c : ndfCases()) {
         if (!c.exactSmith) continue;
         Material m = makeMaterial("ndf = " + c.label + ";");
@@ -216,9 +220,16 @@ TEST_CASE("Weak white furnace: Int G1(v,m) D(m) (v.m)+ dw = v.n, GGX and Beckman
                 INFO(c.label, " theta_v = ", tv, " phi_v = ", pv, " integral = ", integral, " v.n = ", v.z);
                 CHECK(std::abs(integral - v.z) < kTol);
                 worst.add(std::abs(integral - v.z), c.label + " theta_v=" + num(tv) + " phi_v=" + num(pv));
+                // gamma = 1.6 excepted: this rule misses the horizon sliver below
+                // 1e-12 rad of its D ~ (n.m)^-0.8, ~6e-4 of the integral at alpha = 1
+                // (tests/energy checks its Lambda with a rule built for that singularity).
+                if (c.label.rfind("student_t", 0) == 0 && c.label.find("gamma = 1.6") == std::string::npos)
+                    tabulated.add(std::abs(integral - v.z), c.label + " theta_v=" + num(tv) + " phi_v=" + num(pv));
             }
     }
-    MESSAGE("max |Int G1 D (v.m)+ - v.n| (ggx, beckmann) = ", worst.err, " (", worst.where, ")");
+    MESSAGE("max |Int G1 D (v.m)+ - v.n| (ggx, beckmann, student_t) = ", worst.err, " (", worst.where, ")");
+    MESSAGE("max |Int G1 D (v.m)+ - v.n| (student_t, tabulated Lambda) = ", tabulated.err, " (", tabulated.where, ")");
+    CHECK(tabulated.err < 1e-4);
 }
 
 // Blinn-Phong has no closed-form Smith Lambda; the SPEC (after Walter et al.

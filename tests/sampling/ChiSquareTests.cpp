@@ -42,9 +42,13 @@ struct Run {
 std::vector<Run> plan() {
     std::vector<Run> runs;
     const std::vector<Combo>& all = combos();
-    for (size_t c = 0; c < all.size(); ++c)
+    for (size_t c = 0; c < all.size(); ++c) {
+        // A tabulated Smith Lambda only changes G (the sampler is the NDF's,
+        // checked with the NDF's other maskings): one run per such pair.
+        int stride = all[c].ndf->tabulatedLambda && all[c].masking->smith ? 16 : kStride;
         for (int k = 0; k < 16; ++k)
-            if ((k + int(c)) % kStride == 0) runs.push_back({&all[c], k / 4, k % 4, int(runs.size())});
+            if ((k + int(c)) % stride == 0) runs.push_back({&all[c], k / 4, k % 4, int(runs.size())});
+    }
     return runs;
 }
 

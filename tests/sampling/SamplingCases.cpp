@@ -32,6 +32,9 @@ std::string ndfStatement(const Combo& c, double alpha, int variant) {
         const ModelParam& param = ndf.canonical[p];
         shape.push_back(std::clamp(param.typical * factors[variant % 3], param.lo, param.hi));
     }
+    // Shape values without a Smith Lambda (student_t at gamma 1.5): the typical ones.
+    if (c.masking->smith && ndf.lambdaShapeError && !ndf.lambdaShapeError(shape).empty())
+        for (size_t i = 0; i < shape.size(); ++i) shape[i] = ndf.canonical[ndf.tableShapeParams[i]].typical;
     ModelArgs<double> args = ndf.argsAtAlpha(alpha, shape);
     if (c.anisotropic) {
         args.set(paramIndex(ndf, "alpha_x"), alpha);

@@ -178,9 +178,9 @@ TEST_CASE("material rules: ndf required, no duplicates, masking the NDF supports
                                    "requires 'masking = none', not 'smith_height_correlated'"});
     CHECK(checkErrors(inMaterial("ndf = gtr(0.1, 2);\nmasking = smith_separable;")) ==
           std::vector<std::string>{
-              "t.mat:3:11: error: masking 'smith_separable' needs the Smith Lambda of the NDF, and ndf 'gtr' has no "
-              "closed-form Lambda; use ggx, beckmann or blinn_phong, or a non-Smith masking such as cook_torrance or "
-              "schlick_smith"});
+              "t.mat:3:11: error: masking 'smith_separable' needs the Smith Lambda of the NDF, and ndf 'gtr' has "
+              "neither a closed-form nor a tabulated Lambda; use ggx, beckmann, blinn_phong or student_t, or a "
+              "non-Smith masking such as cook_torrance or schlick_smith"});
     // The same NDFs with a non-Smith masking are fine.
     mustCheck(inMaterial("ndf = gtr(0.1, 2);\nmasking = cook_torrance;"));
     mustCheck(inMaterial("ndf = gaussian(0.3);\nmasking = schlick_smith(0.2);"));

@@ -110,7 +110,7 @@ TEST_CASE("fast GGX: a guarded body only when isotropic") {
 TEST_CASE("float bodies sum the float directions with a normalization correction; double bodies normalize") {
     LoweringPlan guarded = fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
     REQUIRE(guarded.fallbackBody);
-    CHECK(guarded.batchBody.correctedSums);
+    CHECK_FALSE(guarded.batchBody.correctedSums);
     CHECK(guarded.fallbackBody->correctedSums);
     CHECK(guarded.scalarBody.correctedSums);
     for (const char* body : {"ndf = beckmann(0.3); fresnel = conductor(eta = 0.2, k = 3.7);",
@@ -150,6 +150,11 @@ TEST_CASE("the Smith Lambda form and the model substitutions") {
     CHECK(exactPlan("ndf = ggx(0.3); masking = smith_height_direction_correlated;").lambda == LambdaForm::ClosedForm);
     CHECK(exactPlan("ndf = beckmann(0.3); masking = smith_separable;").lambda == LambdaForm::ClosedForm);
     CHECK(exactPlan("ndf = ggx(0.3); masking = neumann;").lambda == LambdaForm::None);
+    // student_t: its tabulated Lambda, the table of the material's gamma carried by the plan.
+    LoweringPlan st = exactPlan("let g = 0.9 * 2; ndf = student_t(0.3, g); masking = smith_separable;");
+    CHECK(st.lambda == LambdaForm::Table);
+    REQUIRE(st.lambdaTable);
+    CHECK(st.lambdaTable->name() == "student_t_g1.8");
     MathVariant walter = MathVariant::exact();
     walter.walterLambda = true;
     CHECK(planLowering(material("ndf = beckmann(0.3); masking = smith_separable;"), walter, true).lambda ==
@@ -242,6 +247,11 @@ TEST_CASE("a kernel's key hashes only the tables it embeds") {
     CHECK(embeddedTables(material("ndf = ggx(0.3); fresnel = dielectric(1.5); energy = kulla_conty;")).empty());
     CHECK(embeddedTables(material("input eta = 1.5; ndf = ggx(0.3); fresnel = dielectric(eta);")).empty());
     CHECK(embeddedTables(material("ndf = gaussian(0.3);")).empty());
+    CHECK(embeddedTables(material("ndf = student_t(0.3, 2.5); masking = cook_torrance;")).empty());
+    std::vector<EmbeddedTable> lambda = embeddedTables(material("ndf = student_t(0.3, 2.5); masking = smith_separable;"));
+    REQUIRE(lambda.size() == 1);
+    CHECK(lambda[0].name == "facet_lambda_student_t_g2.5");
+    CHECK(lambda[0].bytes == LambdaTable::kSize * sizeof(double));
     CheckedMaterial plain = material("ndf = ggx(0.3); fresnel = schlick(0.04);");
     CHECK(codegenIdentity(plain) == codegenIdentity(codegenSourceDigest(), {}));
 }

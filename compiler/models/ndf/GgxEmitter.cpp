@@ -19,6 +19,7 @@ public:
         traits.smithRootSums = true;
         traits.samplesNormals = true;
         traits.samplesVisibleNormals = true;
+        traits.floatFirstSampler = true;
     }
 
     NdfParams params(LaneEmitter& lane) const override {
@@ -59,6 +60,13 @@ public:
             // once (LaneEmitter::quarterDOver). a^2 = Inf there gives a NaN
             // lobe, which the lobe range guard rejects.
             if (lane.body.guarded()) lane.setQuarterDFraction(fm.mul(a2, fm.c(0.25 / kPi)), fm.mul(t, t));
+            // A body that sums the rounded unit directions (the guarded fast
+            // body, without correctedSums) has h off by ~1e-7 / |wi + wo|,
+            // which moves D by up to ~2/alpha times that: it distrusts the
+            // lanes where alpha |wi + wo| / 2 = alpha (wo.h) < 5e-4 (D within
+            // ~2e-4 elsewhere), which its fallback body recomputes.
+            if (lane.body.guarded() && !lane.body.correctedSums)
+                lane.distrust(fm.lt(fm.mul(fm.convert(geo.cosD, fm.type()), n.ax), fm.c(5e-4)));
             // a^2 beyond float (alpha > 1.8e19): D < 1e-38 / mz^4 is 0, not Inf/Inf.
             return pm.convert(fm.select(fm.isFinite(a2), D, fm.c(0.0)), pm.type());
         }
@@ -113,12 +121,26 @@ public:
         Value* inv = pm.div(pm.c(1.0), pm.sqrt(pm.fma(vx, vx, pm.fma(vy, vy, pm.mul(wo[2], wo[2])))));
         vx = pm.mul(vx, inv), vy = pm.mul(vy, inv);
         Value* vz = pm.mul(wo[2], inv);
-        Value* z = pm.fma(pm.sub(pm.c(1.0), u2), pm.add(pm.c(1.0), vz), pm.neg(vz));
-        Value* r = pm.sqrt(pm.maxnum(pm.mul(pm.sub(pm.c(1.0), z), pm.add(pm.c(1.0), z)), pm.c(0.0)));
+        // c.z = z = (1 - u2)(1 + v.z) - v.z, taken apart so that nothing
+        // cancels: 1 - z = u2 (1 + v.z), 1 + z = (1 - u2)(1 + v.z) + (1 - v.z)
+        // and z + v.z = (1 - u2)(1 + v.z). (The radius sqrt(1 - z^2) of z
+        // rounded near the pole would be off by sqrt(2 ulp): 5e-4 in float.)
+        Value* onePlusVz = pm.add(pm.c(1.0), vz);
+        Value* oneMinusU2 = pm.sub(pm.c(1.0), u2);
+        Value* oneMinusZ = pm.mul(u2, onePlusVz);
+        Value* onePlusZ = pm.fma(oneMinusU2, onePlusVz, pm.sub(pm.c(1.0), vz));
+        Value* r = pm.sqrt(pm.maxnum(pm.mul(oneMinusZ, onePlusZ), pm.c(0.0)));  // v.z may round above 1
         auto [sinPhi, cosPhi] = pm.sinCosTurns(u1);
         Value* hx = pm.fma(r, cosPhi, vx);
         Value* hy = pm.fma(r, sinPhi, vy);
-        Value* hz = pm.maxnum(pm.add(z, vz), pm.c(0.0));
+        Value* hz = pm.mul(oneMinusU2, onePlusVz);
+        // In float, v + c carries an absolute error of a few ulp (its
+        // components cancel near c = -v), which moves D of the drawn m
+        // relative to itself by ~1e-6 / |v + c| (measured 1.04e-5 at alpha
+        // 0.01 and |v + c| ~ 0.1): a guarded body leaves |v + c|^2 < 0.03 to
+        // the precise body.
+        if (lane.body.guarded())
+            lane.distrust(pm.lt(pm.fma(hx, hx, pm.fma(hy, hy, pm.mul(hz, hz))), pm.c(0.03)));
         Value* mx = pm.mul(n.axD, hx);
         Value* my = pm.mul(n.ayD, hy);
         Value* len2 = pm.fma(mx, mx, pm.fma(my, my, pm.mul(hz, hz)));

@@ -4,10 +4,14 @@
 //   e = (mx^2/ax^2 + my^2/ay^2) / mz^2,
 // a slope distribution normalized for any gamma > 1 (the paper takes gamma
 // > 1.5, where the slopes have a finite mean and Smith Lambda exists). gamma
-// = 2 is GGX; gamma -> infinity is Beckmann. Its Smith Lambda has no closed
-// form usable here (the paper's needs hypergeometric functions), so Smith
-// maskings are refused until the tabulated Lambda lands.
+// = 2 is GGX; gamma -> infinity is Beckmann. Its Smith Lambda is tabulated
+// (LambdaTable.h): the slopes' marginal is a Student-t in x / sqrt(gamma - 1)
+// with 2 gamma - 2 degrees of freedom, so Lambda does have a closed form
+// through the incomplete beta function (numeric/StudentT.h), but the kernel
+// would need that continued fraction in IR; the table serves both
+// evaluators. Lambda is finite only for gamma > 1.5 (a finite mean slope).
 #include "QuadMath.h"
+#include "LambdaTable.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
 
@@ -35,6 +39,13 @@ struct StudentTFormulas final : NdfFormulas<Real> {
         Real logD = x > 1 ? -g * (log(s / (g - 1)) + log1p(1 / x)) + (g - 2) * logZ2 : -g * log1p(x) - 2 * logZ2;
         return exp(logD) / (kPi<Real> * ax * ay);
     }
+    // The tabulated (n.v) Lambda(v) of the material's gamma (stretched: a
+    // depends on alpha(v) only through proj).
+    Real cosLambda(const ModelArgs<Real>& a, const Vec3<Real>& v) const override {
+        static const NdfEntry& self = ndfEntry(modelNamed(ModelSlot::Ndf, "student_t"));
+        const LambdaTable& table = *lambdaTable(self, {double(a[kGamma])});
+        return Real(table.cosLambda(double(smithProjection(a[kAlphaX], a[kAlphaY], v)), double(v.z)));
+    }
     // The standard slopes have the radial CDF 1 - (1 + r^2/(gamma - 1))^(1 - gamma):
     // r^2 = (gamma - 1) expm1(log1p(-u) / (1 - gamma)) (Beckmann's -log1p(-u)
     // as gamma grows).
@@ -61,6 +72,11 @@ std::vector<const ModelInfo*> facetModels_ndf_StudentT() {
                               {"alpha_y", ValueType::Float, {kAlphaY}},
                               {"gamma", ValueType::Float, {kGamma}}}}};
         e.shapeInvariant = true;
+        e.tabulatedLambda = true;
+        e.lambdaShapeError = [](const std::vector<double>& shape) -> std::string {
+            if (shape.at(0) > 1.5) return "";
+            return "its Smith Lambda needs gamma > 1.5 (at 1.5 the mean slope and Lambda are infinite)";
+        };
         e.tableShapeParams = {kGamma};
         e.equivalentAlphas = equivalentAlphas;
         e.argsAtAlpha = [](double alpha, const std::vector<double>& shape) {
@@ -81,6 +97,10 @@ std::vector<const ModelInfo*> facetModels_ndf_StudentT() {
             {"hcc_student_t_gamma_max", "ndf = student_t(0.3, 1e4); masking = none; fresnel = schlick(0.04);"},
             {"hcc_student_t_alpha_min", "ndf = student_t(1e-4, 2); masking = neumann; fresnel = dielectric(1.5);"},
             {"hcc_student_t_aniso", "ndf = student_t(alpha_x = 1, alpha_y = 1e-4, gamma = 1.6); masking = kelemen;"},
+            {"hcc_student_t_smith_heavy", "ndf = student_t(alpha_x = 1, alpha_y = 1e-3, gamma = 1.55); "
+                                          "masking = smith_height_direction_correlated;"},
+            {"hcc_student_t_smith_beckmann_like", "ndf = student_t(1e-3, 1e4); masking = smith_separable; "
+                                                  "fresnel = dielectric(1.5);"},
         };
         e.formulas = makeFormulas<NdfFormulas, StudentTFormulas>();
         return e;

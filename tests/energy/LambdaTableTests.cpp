@@ -1,0 +1,177 @@
+// Tabulated Smith Lambdas (compiler/LambdaTable.h): the student_t table
+// against an independent 2D quadrature in long double (Gauss-Legendre over
+// the polar angle and the azimuth, written here, not the table's closed-form
+// azimuth integral), and the tabulation method against the closed-form
+// Lambdas of ggx and beckmann (iso- and anisotropic).
+#include "LambdaTable.h"
+
+#include "Checker.h"
+#include "Interpreter.h"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace {
+
+using facet::LambdaTable;
+using facet::ModelArgs;
+using facet::NdfEntry;
+using facet::Vec3;
+using LD = long double;
+
+const NdfEntry& ndfNamed(const char* name) { return facet::ndfEntry(facet::modelNamed(facet::ModelSlot::Ndf, name)); }
+
+const LD kPiL = 3.141592653589793238462643383279502884L;
+
+// n-point Gauss-Legendre on [a, b] in long double, nodes by Newton on P_n.
+struct Rule {
+    std::vector<LD> x, w;
+    explicit Rule(int n) : x(n), w(n) {
+        for (int i = 0; i < n; ++i) {
+            LD z = std::cos(kPiL * (i + 0.75L) / (n + 0.5L)), dp = 0;
+            for (int it = 0; it < 100; ++it) {
+                LD p0 = 1, p1 = z;
+                for (int k = 2; k <= n; ++k) {
+                    LD p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
+                    p0 = p1, p1 = p2;
+                }
+                dp = n * (z * p1 - p0) / (z * z - 1);
+                LD dz = p1 / dp;
+                z -= dz;
+                if (std::fabs(dz) < 1e-19L) break;
+            }
+            x[i] = z, w[i] = 2 / ((1 - z * z) * dp * dp);
+        }
+    }
+    template <typename F>
+    LD on(const F& f, LD a, LD b) const {
+        LD mid = (a + b) / 2, half = (b - a) / 2, s = 0;
+        for (size_t i = 0; i < x.size(); ++i) s += w[i] * f(mid + half * x[i]);
+        return s * half;
+    }
+};
+
+// (n.v) Lambda(v) for v at polar angle theta (azimuth 0) of the isotropic D
+// given by `args`: Int [(v.m)+ - (n.v)(n.m)] D(m) dm over the facets that
+// v can see from behind, m at polar angle pi/2 - w, w in (0, theta) (for the
+// others (v.m) >= 0 on the whole azimuth circle, where the bracket
+// integrates to 0). w = theta y^8 tames D's power-law singularity at the
+// horizon (heavy tails); y runs over panels graded toward both ends. At each
+// w the azimuth integral is split where v.m = 0: there the bracket is
+// A cos(phi) below the cut and -B beyond it.
+LD referenceCosLambda(const NdfEntry& ndf, const ModelArgs<LD>& args, LD theta) {
+    static const Rule rule(16);
+    const facet::NdfFormulas<LD>& f = ndf.formulas.get<LD>();
+    LD st = std::sin(theta), ct = std::cos(theta);
+    auto atW = [&](LD w) {
+        LD A = st * std::cos(w), B = ct * std::sin(w);  // v.m = A cos(phi) + B
+        LD cut = std::acos(-B / A);
+        auto bracket = [&](LD phi) {
+            Vec3<LD> m{std::cos(w) * std::cos(phi), std::cos(w) * std::sin(phi), std::sin(w)};
+            LD D = f.D(args, m);
+            LD vm = A * std::cos(phi) + B;
+            return (vm > 0 ? vm - B : -B) * D;
+        };
+        // Over [0, pi] (D is even in phi), twice; sin(theta_m) = cos(w).
+        LD s = 0;
+        for (int k = 0; k < 2; ++k) {
+            s += rule.on(bracket, cut * k / 2, cut * (k + 1) / 2);
+            s += rule.on(bracket, cut + (kPiL - cut) * k / 2, cut + (kPiL - cut) * (k + 1) / 2);
+        }
+        return 2 * s * std::cos(w);
+    };
+    std::vector<LD> br = {0};
+    for (LD h = 1e-6L; h < 0.25L; h *= 2) br.push_back(h);
+    for (LD h = 0.25L; h > 1e-9L; h /= 2) br.push_back(1 - h);
+    br.push_back(1);
+    LD sum = 0;
+    for (size_t i = 0; i + 1 < br.size(); ++i)
+        sum += rule.on([&](LD y) { return atW(theta * std::pow(y, 8)) * 8 * theta * std::pow(y, 7); }, br[i], br[i + 1]);
+    return sum;
+}
+
+LD toRad(double deg) { return deg * kPiL / 180; }
+
+const double kThetas[] = {0.5, 5, 20, 40, 55, 70, 80, 85, 88, 89.5, 89.9, 89.99};
+
+}  // namespace
+
+TEST_SUITE("lambda") {
+
+TEST_CASE("student_t: the tabulated Lambda within 1e-6 of an independent 2D quadrature") {
+    const NdfEntry& st = ndfNamed("student_t");
+    double worst = 0;
+    std::string where;
+    int checked = 0;
+    for (double gamma : {1.6, 2.0, 3.0, 20.0, 1e4}) {
+        auto table = facet::lambdaTable(st, {gamma});
+        MESSAGE("student_t gamma ", gamma, ": table built in ", table->buildMillis, " ms");
+        for (double alpha : {1e-3, 0.01, 1.0}) {
+            ModelArgs<LD> args = facet::convertArgs<LD>(st.argsAtAlpha(alpha, {gamma}));
+            for (double deg : kThetas) {
+                LD theta = toRad(deg);
+                LD ref = referenceCosLambda(st, args, theta);  // (n.v) Lambda
+                double lambdaRef = double(ref / std::cos(theta));
+                if (!(lambdaRef > 1e-280)) continue;  // below the table's floor: 1 + Lambda = 1
+                double s = double(std::sin(theta)), c = double(std::cos(theta));
+                double lambdaTab = table->cosLambda(alpha * alpha * s * s, c) / c;
+                double rel = std::fabs(lambdaTab / lambdaRef - 1);
+                INFO("gamma ", gamma, " alpha ", alpha, " theta ", deg, ": table ", lambdaTab, " reference ", lambdaRef);
+                CHECK(rel < 1e-6);
+                ++checked;
+                if (rel > worst) worst = rel, where = "gamma " + std::to_string(gamma) + " alpha " +
+                                                      std::to_string(alpha) + " theta " + std::to_string(deg);
+            }
+        }
+    }
+    CHECK(checked >= 150);
+    MESSAGE("max relative error of the tabulated student_t Lambda: ", worst, " (", where, ")");
+}
+
+TEST_CASE("the tabulation reproduces the closed-form Lambdas of ggx and beckmann within 1e-6") {
+    double worst = 0;
+    for (const char* name : {"ggx", "beckmann"}) {
+        const NdfEntry& ndf = ndfNamed(name);
+        auto table = facet::tabulateCosLambda(ndf, {}, facet::quadratureCosLambda);
+        const facet::NdfFormulas<double>& f = ndf.formulas.get<double>();
+        for (auto [ax, ay] : {std::pair{1e-3, 1e-3}, {0.05, 0.05}, {0.3, 0.3}, {1.0, 1.0}, {0.05, 0.6}, {0.9, 0.02}}) {
+            ModelArgs<double> args = ndf.argsAtAlpha(ax, {});
+            args.set(facet::paramIndex(ndf, "alpha_y"), ay);
+            for (double deg : kThetas)
+                for (double phi : {0.0, 0.7, 1.9}) {
+                    double th = double(toRad(deg));
+                    Vec3<double> v{std::sin(th) * std::cos(phi), std::sin(th) * std::sin(phi), std::cos(th)};
+                    double exact = f.cosLambda(args, v);
+                    if (!(exact / v.z > 1e-280)) continue;
+                    double proj = v.x * v.x * ax * ax + v.y * v.y * ay * ay;
+                    double rel = std::fabs(table->cosLambda(proj, v.z) / exact - 1);
+                    INFO(name, " alpha (", ax, ", ", ay, ") theta ", deg, " phi ", phi, ": exact ", exact);
+                    CHECK(rel < 1e-6);
+                    worst = std::max(worst, rel);
+                }
+        }
+    }
+    MESSAGE("max relative error of ggx/beckmann Lambda through the tabulation: ", worst);
+}
+
+TEST_CASE("student_t with a Smith masking: constant gamma > 1.5 only") {
+    auto errors = [](const std::string& body) {
+        facet::DiagnosticEngine diags;
+        facet::loadProgramText("material t {\n" + body + "\n}\n", "lambda.mat", diags);
+        return diags.str();
+    };
+    CHECK(errors("ndf = student_t(0.3, 1.8); masking = smith_height_correlated;") == "");
+    CHECK(errors("let g = 2 * 1.5; ndf = student_t(0.3, g); masking = smith_separable;") == "");
+    std::string input = errors("input g = 2; ndf = student_t(0.3, g); masking = smith_separable;");
+    CHECK(input.find("needs a constant gamma") != std::string::npos);
+    CHECK(input.find("input 'g'") != std::string::npos);
+    std::string low = errors("ndf = student_t(0.3, 1.2); masking = smith_direction_correlated;");
+    CHECK(low.find("gamma > 1.5") != std::string::npos);
+    // Other maskings take any gamma, input-dependent included.
+    CHECK(errors("input g = 2; ndf = student_t(0.3, g); masking = cook_torrance;") == "");
+}
+
+}  // TEST_SUITE
