@@ -136,9 +136,9 @@ public:
         Value* hz = pm.mul(oneMinusU2, onePlusVz);
         // In float, v + c carries an absolute error of a few ulp (its
         // components cancel near c = -v), which moves D of the drawn m
-        // relative to itself by ~1e-6 / |v + c| (measured 1.04e-5 at alpha
-        // 0.01 and |v + c| ~ 0.1): a guarded body leaves |v + c|^2 < 0.03 to
-        // the precise body.
+        // relative to itself by ~1e-6 / |v + c|: a guarded body leaves
+        // |v + c|^2 < 0.03 to the precise body, so that the pdf stays within
+        // exact mode's 1e-5 (docs/numerics.md).
         if (lane.body.guarded())
             lane.distrust(pm.lt(pm.fma(hx, hx, pm.fma(hy, hy, pm.mul(hz, hz))), pm.c(0.03)));
         Value* mx = pm.mul(n.axD, hx);
