@@ -345,8 +345,10 @@ EvalResult<Real> Interpreter<Real>::eval(const Real wi[3], const Real wo[3], con
     return out;
 }
 
+template class Interpreter<float>;
 template class Interpreter<double>;
 template class Interpreter<long double>;
+template struct ResolvedMaterial<float>;
 template struct ResolvedMaterial<double>;
 template struct ResolvedMaterial<long double>;
 // __float128: the high-precision reference of the hard-case checks (QuadMath.h).

@@ -1,7 +1,8 @@
 // Interpreter: the reference evaluator of a checked material.
 //
 // It walks the checked material in double precision (or any wider real type;
-// the hard-case checks run it in long double) and evaluates each model term
+// the hard-case checks run it in __float128; in float it is the SPEC
+// formula evaluated in float, fast mode's accuracy bar) and evaluates each model term
 // from the formulas of SPEC section 3, written for obvious correctness rather
 // than speed. Every compiled evaluator is tested against it, so it shares no
 // code with the JIT lowering: only the checked material and the builtin
@@ -131,8 +132,10 @@ private:
     std::shared_ptr<EnergyTableSlot> energy_;  // kulla_conty only
 };
 
+extern template class Interpreter<float>;
 extern template class Interpreter<double>;
 extern template class Interpreter<long double>;
+extern template struct ResolvedMaterial<float>;
 extern template struct ResolvedMaterial<double>;
 extern template struct ResolvedMaterial<long double>;
 // __float128 (libquadmath): include QuadMath.h before this header to compute with it.

@@ -141,16 +141,15 @@ Value* LaneEmitter::unitCorrection(const std::array<Value*, 3>& w) {
 // are renormalized. Normalization and the half vector are computed in the
 // precise type (double in exact mode): wi + wo cancels when the directions
 // are nearly opposite, and the float rounding of the renormalization would
-// then decide h (and so D, G and F) by itself. Fast mode keeps them in
-// float (its accuracy at grazing, near-opposite directions is in
-// docs/numerics.md).
+// then decide h (and so D, G and F) by itself. Float bodies (the plan's
+// correctedSums) sum the float inputs and correct for the normalization.
 LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo, bool wiSampled) {
     MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
     std::array<Value*, 3> wiD, woD;
     std::array<Value*, 3> wiF{}, woF{};  // unit directions in float, where unitDirection() made them
     std::array<Value*, 3> hD, diff;
-    if (body.role == BodyRole::FloatGuarded) {
+    if (body.correctedSums) {
         // Float body. Rounding the normalized directions to float and then
         // adding them would lose h where wi + wo cancels (error eps/|wi + wo|,
         // amplified ~2/alpha by D). Instead the float inputs are summed as

@@ -231,7 +231,7 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
     const SamplingPlan& sp = plan.sampling;
     internal_assert(sp.specular != SpecularSampling::None) << "a sampler without a specular technique";
     Vec wo;
-    if (body.role == BodyRole::FloatGuarded) {
+    if (body.correctedSums) {
         Value* corr = unitCorrection(woIn);
         for (int i = 0; i < 3; ++i) wo[i] = fm.fma(woIn[i], corr, woIn[i]);
     } else {

@@ -187,6 +187,8 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
              !em.masking.traits.needsPreciseHalfAngle && em.fresnel.halfAngleInFloatOk(material.fresnel, plan.fresnel))
         body.halfVector = HalfVectorForm::InFloat;
 
+    body.correctedSums = !inDouble && role != BodyRole::FastGuarded;
+
     // In float, the masking sums are scaled; in double and in a guarded
     // body (whose guards keep the sums in range) they need not be.
     body.scaleMaskingSums = !(inDouble || body.guarded());
@@ -283,6 +285,7 @@ namespace {
 void printBody(std::ostringstream& os, const char* what, const BodyPlan& body) {
     os << what << ": role=" << bodyRoleName(body.role) << " precise=" << precisionName(body.precise)
        << " expressions=" << precisionName(body.expressions) << " half-vector=" << halfVectorFormName(body.halfVector)
+       << " corrected-sums=" << (body.correctedSums ? "yes" : "no")
        << " estimates=" << (body.estimates ? "yes" : "no")
        << " short-polynomials=" << (body.shortPolynomials ? "yes" : "no")
        << " scale-masking-sums=" << (body.scaleMaskingSums ? "yes" : "no")

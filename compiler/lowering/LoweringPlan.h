@@ -97,6 +97,18 @@ struct BodyPlan {
     bool estimates = false;         // reciprocal/rsqrt estimates allowed
     bool shortPolynomials = false;  // the fast elementary functions
     HalfVectorForm halfVector = HalfVectorForm::Precise;
+    // wi + wo and wi - wo from the float inputs as they are, plus the
+    // normalization as a small correction w (1/|w| - 1) with |w|^2 - 1 in
+    // double: each sum is then accurate relative to itself. Float bodies
+    // need it (the float-first body, the plain fast bodies): summing the
+    // unit directions rounded to float instead decides h by those roundings
+    // where wi + wo cancels (near-opposite directions), which amplifies
+    // them by 1/|wi + wo| and D by another ~2/alpha. Double bodies
+    // normalize in double. The guarded fast body sums the rounded unit
+    // directions (the double |w|^2 of the correction would cost it ~60%)
+    // and its NDF distrusts the lanes where that rounding would move D
+    // beyond fast mode's accuracy, which its fallback recomputes.
+    bool correctedSums = false;
     // The masking forms in float are scaled by max(ci, co) and divide in
     // steps, so that no sum of products falls into the subnormal range and
     // an intermediate overflows only if the result does. Unneeded in double,

@@ -26,6 +26,7 @@ template <typename Real>
 Real NdfFormulas<Real>::wholeLobe(const ModelArgs<Real>&, const Vec3<Real>&, Real, Real) const {
     internal_error << "whole lobe requested for a microfacet NDF";
 }
+template struct NdfFormulas<float>;
 template struct NdfFormulas<double>;
 template struct NdfFormulas<long double>;
 template struct NdfFormulas<__float128>;

@@ -7,7 +7,8 @@
 // arguments, its traits (what the checker, the tables, the physics checks,
 // the previews and the generators need to know about it), and its reference
 // formulas (and, for NDFs, samplers), evaluated by the interpreter in
-// double, long double and __float128. The LLVM lowering writes its own
+// double, long double and __float128, and in float: the SPEC formula in
+// float that the hard-case tests hold fast mode's accuracy against. The LLVM lowering writes its own
 // formulas independently (the differential tests compare the two), so
 // nothing here emits IR.
 //
@@ -214,28 +215,31 @@ struct DiffuseFormulas {
     virtual Real value(const ModelArgs<Real>& a, int ch) const = 0;
 };
 
-// The three reference types of every entry, filled by makeFormulas.
+// The real types of every entry's formulas, filled by makeFormulas.
 template <template <typename> class Formulas>
 struct FormulaSet {
+    const Formulas<float>* f = nullptr;
     const Formulas<double>* d = nullptr;
     const Formulas<long double>* ld = nullptr;
     const Formulas<__float128>* q = nullptr;
     template <typename Real>
     const Formulas<Real>& get() const {
-        if constexpr (std::is_same_v<Real, double>) return *d;
+        if constexpr (std::is_same_v<Real, float>) return *f;
+        else if constexpr (std::is_same_v<Real, double>) return *d;
         else if constexpr (std::is_same_v<Real, long double>) return *ld;
         else return *q;
     }
 };
 
-// Instantiates an entry's formula template for the three reference types
+// Instantiates an entry's formula template for the four real types
 // (static instances: the formulas are stateless).
 template <template <typename> class Base, template <typename> class Impl>
 FormulaSet<Base> makeFormulas() {
+    static const Impl<float> f;
     static const Impl<double> d;
     static const Impl<long double> ld;
     static const Impl<__float128> q;
-    return {&d, &ld, &q};
+    return {&f, &d, &ld, &q};
 }
 
 // ---- entries -----------------------------------------------------------------

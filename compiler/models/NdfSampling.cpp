@@ -105,6 +105,7 @@ Vec3<Real> NdfFormulas<Real>::sampleVisibleNormal(const ModelArgs<Real>&, const 
     template Vec3<Real> NdfFormulas<Real>::sampleNormal(const ModelArgs<Real>&, Real, Real) const;       \
     template Vec3<Real> NdfFormulas<Real>::sampleVisibleNormal(const ModelArgs<Real>&, const Vec3<Real>&, \
                                                                Real, Real) const;
+FACET_NDF_SAMPLING(float)
 FACET_NDF_SAMPLING(double)
 FACET_NDF_SAMPLING(long double)
 FACET_NDF_SAMPLING(__float128)

@@ -33,6 +33,7 @@ Real gaussianNdfNorm(Real alpha) {
     return norm;
 }
 
+template float gaussianNdfNorm<float>(float);
 template double gaussianNdfNorm<double>(double);
 template long double gaussianNdfNorm<long double>(long double);
 template __float128 gaussianNdfNorm<__float128>(__float128);

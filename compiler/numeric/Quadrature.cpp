@@ -50,6 +50,7 @@ const GaussLegendre<Real>& gaussLegendre(int n) {
     return *rules[n];
 }
 
+template const GaussLegendre<float>& gaussLegendre<float>(int);
 template const GaussLegendre<double>& gaussLegendre<double>(int);
 template const GaussLegendre<long double>& gaussLegendre<long double>(int);
 template const GaussLegendre<__float128>& gaussLegendre<__float128>(int);

@@ -13,7 +13,10 @@
 //     kappa estimated in __float128), which are listed with kappa;
 //   - the exact-mode JIT against the double interpreter within the bound of
 //     apps/verify/Verify.h at well-conditioned inputs, and no valid lane
-//     reported invalid (fast mode: measured and printed).
+//     reported invalid (fast mode: measured and printed);
+//   - fast kernels within max(1e-3, 2 x the error of the SPEC formula
+//     evaluated in float, Interpreter<float>) on every lane, except the
+//     named gaps of kFastGaps (counted and printed).
 // Everything is computed once (two worker threads) and asserted by the test
 // cases below; the numbers quoted in docs/numerics.md are printed here.
 //
@@ -29,6 +32,9 @@
 #include "Verify.h"
 
 #include <doctest/doctest.h>
+#if defined(__x86_64__)
+#include <xmmintrin.h>
+#endif
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -36,6 +42,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <map>
 #include <mutex>
 #include <regex>
@@ -74,9 +82,49 @@ struct QuadStats {
     std::vector<std::string> failures;    // unexplained errors and validity mismatches
 };
 
+// A fast kernel against the SPEC formula evaluated in float (the catalog's
+// reference formulas through Interpreter<float>), both measured against the
+// double interpreter: fast mode may lose accuracy only where float itself
+// does, err_fast <= max(kFastFloor, kFastFactor err_float) on every valid lane.
+constexpr double kFastFloor = 1e-3, kFastFactor = 2;
+
+// The known gaps, counted and printed instead of failed (docs/numerics.md,
+// "Fast mode"): materials whose name contains `material`, at input sweeps
+// (case label "<input> VALUE ...") with min <= VALUE <= max.
+struct FastGap {
+    const char *material, *input;
+    double min, max;
+    const char* why;
+};
+const FastGap kFastGaps[] = {
+    {"beckmann", "input alpha=", 0x1p64, INFINITY, "alpha^2 overflows float: the lane is dropped (diffuse or compensation lost)"},
+    {"beckmann", "all inputs=", 0x1p64, INFINITY, "alpha^2 overflows float, as above"},
+    {"gtr", "input gamma=", 1e29, INFINITY, "fast D is 2% off at n.h = 1 (cause not yet found)"},
+    {"_kc_", "input eta=", 0.999, 1.001, "kulla_conty with F ~ 1e-13 near eta = 1: 1.6% off (cause not yet found)"},
+};
+const FastGap* fastGap(const std::string& material, const HardCase& c) {
+    for (const FastGap& g : kFastGaps) {
+        size_t n = std::strlen(g.input);
+        if (material.find(g.material) == std::string::npos || c.label.compare(0, n, g.input) != 0) continue;
+        double v = std::strtod(c.label.c_str() + n, nullptr);
+        if (v >= g.min && v <= g.max) return &g;
+    }
+    return nullptr;
+}
+
+struct FloatFormulaStats {
+    size_t compared = 0, beyond = 0;
+    std::map<const FastGap*, size_t> knownGap;  // values beyond at a case of kFastGaps
+    double worstRatio = 0;  // max of err_fast / max(kFastFloor, kFastFactor err_float)
+    double worstFast = 0, worstFloat = 0;
+    std::string worstCase;
+    std::vector<std::string> failures;  // the first few lanes beyond
+};
+
 struct KernelResult {
     std::string variant;
     SampleStats stats;
+    FloatFormulaStats vsFloat;  // fast kernels only
     std::vector<std::string> failureText;  // described failing cases
     std::string compileError;
 };
@@ -89,6 +137,68 @@ struct MaterialResult {
     QuadStats quad, quadRaw;
     std::vector<KernelResult> kernels;
 };
+
+// The float evaluation of the formula on the sample (the kernels' float
+// inputs, converted exactly), in fast mode's floating-point environment:
+// fast kernels flush subnormals (x86 MXCSR FTZ/DAZ, docs/numerics.md), so a
+// float-subnormal cosine is 0 to both, and the comparison measures the
+// formulas and approximations, not that documented flushing.
+std::vector<EvalResult<float>> evaluateInFloat(const Interpreter<float>& interp, const std::vector<HardCase>& cases) {
+#if defined(__x86_64__)
+    struct FlushSubnormals {
+        unsigned saved = _mm_getcsr();
+        FlushSubnormals() { _mm_setcsr(saved | 0x8040u); }  // FTZ (bit 15) and DAZ (bit 6)
+        ~FlushSubnormals() { _mm_setcsr(saved); }
+    } flush;
+#endif
+    std::vector<EvalResult<float>> out;
+    out.reserve(cases.size());
+    for (const HardCase& c : cases) {
+        float wi[3], wo[3];
+        for (int k = 0; k < 3; ++k) wi[k] = float(c.wi[k]), wo[k] = float(c.wo[k]);
+        std::vector<float> slots(c.slots.begin(), c.slots.end());
+        out.push_back(interp.eval(wi, wo, slots.empty() ? nullptr : slots.data()));
+    }
+    return out;
+}
+
+// Fast kernel vs float formula on every lane the reference finds valid and
+// float can hold. A lane the kernel drops (reports invalid) counts as 0; the
+// float formula's error is Inf where it is invalid or not finite (any fast
+// value passes there).
+FloatFormulaStats compareWithFloatFormula(const CheckedMaterial& m, const std::string& name, const char* variant,
+                                          const KernelRun& run, const std::vector<HardCase>& cases,
+                                          const HardCaseReference& ref, const std::vector<EvalResult<float>>& fl) {
+    FloatFormulaStats s;
+    for (size_t i = 0; i < cases.size(); ++i) {
+        const EvalResult<double>& r = ref.results[i];
+        if (cases[i].invalidInput || !r.valid || ref.floatOverflow[i]) continue;
+        for (int ch = 0; ch < 3; ++ch) {
+            double want = r.rgb[ch];
+            if (beyondFloatRange(want)) continue;
+            ++s.compared;
+            double fast = relativeError(run.invalid[i] ? 0.0 : run.rgb[i][ch], want);
+            double flt = fl[i].valid ? relativeError(fl[i].rgb[ch], want) : INFINITY;
+            double ratio = fast / std::max(kFastFloor, kFastFactor * flt);
+            if (const FastGap* g = ratio > 1 ? fastGap(name, cases[i]) : nullptr) {
+                ++s.knownGap[g];
+                continue;
+            }
+            if (ratio > s.worstRatio) {
+                s.worstRatio = ratio;
+                s.worstFast = fast;
+                s.worstFloat = flt;
+                s.worstCase = describeCase(m, cases[i]);
+            }
+            if (ratio > 1 && ++s.beyond <= 3)
+                s.failures.push_back(fmt::format("{} [{}] ch {}: fast {:.9g} (err {:.3g}), float formula {:.9g} "
+                                                 "(err {:.3g}), want {:.17g} at {}",
+                                                 name, variant, ch, run.rgb[i][ch], fast, fl[i].rgb[ch], flt, want,
+                                                 describeCase(m, cases[i])));
+        }
+    }
+    return s;
+}
 
 void quadCheck(const CheckedMaterial& m, const std::string& name, const std::vector<HardCase>& cases,
                const QuadReference& quad, const std::function<double(size_t)>& condition, QuadStats& q) {
@@ -165,6 +275,7 @@ MaterialResult runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& c
     if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
     HardCaseReference ref = evaluateHardCaseReference(interp, cases), refRaw = evaluateHardCaseReference(interp, raw);
+    std::vector<EvalResult<float>> inFloat = evaluateInFloat(Interpreter<float>(m, table), cases);
     r.interp = checkReference(cases, ref);
     r.interpRaw = checkReference(raw, refRaw);
     for (const SampleStats* s : {&r.interp, &r.interpRaw})
@@ -197,6 +308,7 @@ MaterialResult runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& c
         }
         KernelRun run = runKernel(*kernel, cases);
         k.stats = checkKernel(v.name, run, cases, ref, hardCaseBound(o.math), condition, hardCaseRoundoff(o.math));
+        if (o.math == MathMode::Fast) k.vsFloat = compareWithFloatFormula(m, hm.name, v.name, run, cases, ref, inFloat);
         for (const auto& [i, why] : k.stats.failures)
             k.failureText.push_back(fmt::format("{} [{}] {}: {}", hm.name, v.name, why, describeCase(m, cases[i])));
         r.kernels.push_back(std::move(k));
@@ -368,7 +480,8 @@ TEST_CASE("hard cases: JIT kernels never output NaN, Inf or negative values, and
 // and Beckmann tails it loses accuracy or drops lanes (docs/numerics.md,
 // "Fast mode"): its numbers are printed, not asserted here (its NaN/Inf/
 // negative/invalid-count guarantees are asserted above, and its accuracy on
-// the regular sample in tests/jit and tests/bench).
+// the regular sample in tests/jit and tests/bench; its bound relative to
+// float, in the next test case).
 TEST_CASE("hard cases: exact JIT kernels keep valid lanes valid and agree with the reference") {
     const Suite& s = suite();
     struct Worst {
@@ -419,6 +532,43 @@ TEST_CASE("hard cases: exact JIT kernels keep valid lanes valid and agree with t
         std::printf("  %zu x %s\n", entry.first, kind.c_str());
         for (const std::string& e : entry.second) std::printf("      %s\n", e.c_str());
     }
+}
+
+// Fast mode's accuracy on the hard cases: on every lane, within
+// max(1e-3, 2 x the error of the SPEC formula evaluated in float on the same
+// inputs), both errors against the double interpreter. Where float itself
+// cannot resolve f (near-opposite grazing pairs with small alpha, float-
+// subnormal cosines) fast mode may be as far off as float is, never worse.
+TEST_CASE("hard cases: fast kernels are never less accurate than the formula evaluated in float") {
+    const Suite& s = suite();
+    struct Worst {
+        double ratio = 0, fast = 0, flt = 0;
+        std::string where;
+    };
+    std::map<std::string, Worst> worst;  // per NDF family
+    size_t compared = 0;
+    std::map<const FastGap*, size_t> gaps;
+    for (const MaterialResult& r : s.results)
+        for (const KernelResult& k : r.kernels) {
+            if (k.variant.find("fast") == std::string::npos) continue;
+            const FloatFormulaStats& f = k.vsFloat;
+            compared += f.compared;
+            for (const auto& [g, n] : f.knownGap) gaps[g] += n;
+            CHECK_MESSAGE(f.beyond == 0, r.hm.name << " [" << k.variant << "]: " << f.beyond
+                                                   << " values less accurate than float; worst ratio " << f.worstRatio);
+            for (const std::string& e : f.failures) MESSAGE(e);
+            Worst& w = worst[familyOf(r)];
+            if (f.worstRatio > w.ratio)
+                w = {f.worstRatio, f.worstFast, f.worstFloat, r.hm.name + " [" + k.variant + "] " + f.worstCase};
+        }
+    std::printf("\nfast kernels against the formula in float on %zu values: err_fast / max(%g, %g err_float),\n"
+                "  errors against the double interpreter\n  %-12s %-8s %-10s %-10s %s\n",
+                compared, kFastFloor, kFastFactor, "ndf", "ratio", "err fast", "err float", "where (worst ratio)");
+    for (const auto& [family, w] : worst)
+        std::printf("  %-12s %-8.3g %-10.3g %-10.3g %s\n", family.c_str(), w.ratio, w.fast, w.flt, w.where.c_str());
+    for (const FastGap& g : kFastGaps)
+        std::printf("known gap, %zu values beyond: %s, %s%g..%g: %s\n", gaps[&g], g.material, g.input, g.min, g.max,
+                    g.why);
 }
 
 // The __float128 reference must compute in __float128 throughout: limits,

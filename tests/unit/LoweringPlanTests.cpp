@@ -107,6 +107,29 @@ TEST_CASE("fast GGX: a guarded body only when isotropic") {
     CHECK(lanes.fresnel.rangeGuard);
 }
 
+TEST_CASE("float bodies sum the float directions with a normalization correction; double bodies normalize") {
+    LoweringPlan guarded = fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
+    REQUIRE(guarded.fallbackBody);
+    CHECK_FALSE(guarded.batchBody.correctedSums);
+    CHECK(guarded.fallbackBody->correctedSums);
+    CHECK(guarded.scalarBody.correctedSums);
+    for (const char* body : {"ndf = beckmann(0.3); fresnel = conductor(eta = 0.2, k = 3.7);",
+                             "ndf = ggx(alpha_x = 0.3, alpha_y = 0.5); fresnel = dielectric(1.5);"}) {
+        LoweringPlan fast = fastPlan(body);
+        CHECK(fast.scalarBody.correctedSums);
+        CHECK(fast.batchBody.correctedSums);
+        CHECK(fast.sampling.body.correctedSums);
+        LoweringPlan exact = exactPlan(body);
+        CHECK_FALSE(exact.scalarBody.correctedSums);
+        CHECK(exact.batchBody.correctedSums == (exact.batchBodies == BatchBodies::FloatFirst));
+    }
+    LoweringPlan floatFirst = exactPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
+    REQUIRE(floatFirst.batchBodies == BatchBodies::FloatFirst);
+    CHECK(floatFirst.batchBody.correctedSums);
+    CHECK_FALSE(floatFirst.fallbackBody->correctedSums);
+    CHECK(printPlan(material("ndf = ggx(0.3);"), guarded).find("corrected-sums=yes") != std::string::npos);
+}
+
 TEST_CASE("the half angle in float: exponent NDFs with well-conditioned consumers") {
     CHECK(exactPlan("ndf = beckmann(0.3); masking = smith_separable; fresnel = schlick(f0 = 0.04);")
               .scalarBody.halfVector == HalfVectorForm::InFloat);
