@@ -89,12 +89,16 @@ LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value
 // infinite one makes it +inf, and both fail it.
 Value* LaneEmitter::checkedLength2(MathEmitter& math, const std::array<Value*, 3>& w, std::array<Value*, 3>& widened) {
     llvm::IRBuilder<>& b = builder;
-    for (int i = 0; i < 3; ++i) widened[i] = math.convert(w[i], math.type());
-    Value* len2 = math.fma(widened[0], widened[0], math.fma(widened[1], widened[1], math.mul(widened[2], widened[2])));
+    Value* len2 = length2(math, w, widened);
     Value* unit = b.CreateAnd(math.ge(len2, math.c((1 - kUnitTolerance) * (1 - kUnitTolerance))),
                               math.le(len2, math.c((1 + kUnitTolerance) * (1 + kUnitTolerance))));
     markInvalid(b.CreateNot(unit));
     return len2;
+}
+
+Value* LaneEmitter::length2(MathEmitter& math, const std::array<Value*, 3>& w, std::array<Value*, 3>& widened) {
+    for (int i = 0; i < 3; ++i) widened[i] = math.convert(w[i], math.type());
+    return math.fma(widened[0], widened[0], math.fma(widened[1], widened[1], math.mul(widened[2], widened[2])));
 }
 
 // A valid direction has |w| within 1e-3 of 1, so 1/|w| = (1 + delta)^(-1/2),
@@ -129,8 +133,17 @@ Value* LaneEmitter::unitCorrection(const std::array<Value*, 3>& w) {
     MathEmitter& fm = floatMath_;
     MathEmitter& dm = doubleMath_;
     std::array<Value*, 3> widened;
-    Value* len2 = checkedLength2(dm, w, widened);
-    Value* delta = fm.convert(dm.sub(len2, dm.c(1.0)), fm.type());
+    Value* delta = fm.convert(dm.sub(length2(dm, w, widened), dm.c(1.0)), fm.type());
+    // The precise body's range test on |w|^2 (checkedLength2), made on the
+    // float delta: near the bounds |w|^2 - 1 is exact in double, and rounding
+    // it to float is monotonic, so a delta strictly between the rounded
+    // bounds is a valid lane and one outside them an invalid lane. A delta
+    // equal to a rounded bound may be either: marked invalid here, the lane
+    // is recomputed by the precise body, which decides. (NaN fails the
+    // ordered test.) Float compares keep the lane masks in float-sized
+    // lanes, where double ones make the backend pack every mask.
+    const double lo = (1 - kUnitTolerance) * (1 - kUnitTolerance) - 1.0, hi = (1 + kUnitTolerance) * (1 + kUnitTolerance) - 1.0;
+    markInvalid(builder.CreateNot(builder.CreateAnd(fm.lt(fm.c(double(float(lo))), delta), fm.lt(delta, fm.c(double(float(hi)))))));
     // (1 + delta)^(-1/2) - 1, the series of unitDirection() to delta^3:
     // the rest, 0.28 delta^4 <= 5e-12 for |delta| <= 2e-3, is far below
     // the float rounding of the corrected values.

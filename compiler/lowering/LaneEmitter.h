@@ -237,9 +237,10 @@ private:
     // unit w in float too (unitF; else untouched).
     llvm::Value* checkedLength2(MathEmitter& math, const std::array<llvm::Value*, 3>& w,
                                 std::array<llvm::Value*, 3>& widened);
+    llvm::Value* length2(MathEmitter& math, const std::array<llvm::Value*, 3>& w, std::array<llvm::Value*, 3>& widened);
     std::array<llvm::Value*, 3> unitDirection(const std::array<llvm::Value*, 3>& w, std::array<llvm::Value*, 3>& unitF);
     // Float body: 1/|w| - 1 in float (the unit w is w + w times it), the
-    // length checked in double as the precise body checks it.
+    // length checked as the precise body checks it (undecided lanes go to it).
     llvm::Value* unitCorrection(const std::array<llvm::Value*, 3>& w);
 
     // LaneSampling.cpp

@@ -42,7 +42,7 @@ struct LaneEmitter::SamplingTerms {
     NdfParams n;
     Vec wo;                     // unit, n.wo > 0 (other lanes read (0, 0, 1)), precise type
     Value* p = nullptr;         // the specular lobe's probability
-    Value* smithDen = nullptr;  // visible normals: 4 ((n.wo) + (n.wo) Lambda(wo)), precise type (visibleCosLambda)
+    Value* smithDen = nullptr;  // visible normals: 4 (n.wo)(1 + Lambda(wo)), precise type (visibleSmithSum)
     Value* above = nullptr;     // n.wo > 0 (else no sample and pdf 0)
 };
 
@@ -57,7 +57,7 @@ LaneEmitter::SamplingTerms LaneEmitter::samplingTerms(const Vec& wo) {
     t.above = pm.gt(wo[2], pm.c(0.0));
     t.wo = selectVec(pm, t.above, wo, constantVec(pm, 0, 0, 1));
     if (plan.sampling.specular == SpecularSampling::VisibleNormals)
-        t.smithDen = pm.mul(pm.c(4.0), pm.add(t.wo[2], emitters_.ndf.visibleCosLambda(*this, t.n, t.wo)));
+        t.smithDen = pm.mul(pm.c(4.0), emitters_.ndf.visibleSmithSum(*this, t.n, t.wo));
     t.p = specularProbability(t);
     return t;
 }
@@ -295,6 +295,13 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
     for (int i = 0; i < 3; ++i) wiLane[i] = fm.convert(wi[i], fm.type());
     Vec wiEval = selectVec(fm, t.above, wiLane, constantVec(fm, 0, 0, 1));
     LaneGeometry geo = geometry(wiEval, woIn, true);
+    if (!pm.isDouble()) {
+        // A float body's eval reads wo as the sampler does (n for a lane
+        // below the horizon, whose weight is 0 below): the same values, so
+        // that the terms of wo both take (the Smith root) are computed once.
+        geo.wo = t.wo;
+        geo.woD = t.wo;
+    }
     Value* fromDrawn = sp.cosineLobe ? specular : llvm::Constant::getAllOnesValue(boolType());
     if (geo.hD[0])  // null where the plan keeps the half angle in float (no consumer of the unit h)
         for (int i = 0; i < 3; ++i) {
@@ -328,7 +335,8 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
     Vec f = brdfPrecise(geo, fValid);
 
     SampleResult r;
-    Value* weighted = b.CreateAnd(fValid, pm.gt(pdf, pm.c(0.0)));
+    // Below the horizon f is 0 (the lane's eval there may have read n for wo).
+    Value* weighted = b.CreateAnd(b.CreateAnd(fValid, t.above), pm.gt(pdf, pm.c(0.0)));
     Value* cosOverPdf = pm.div(wi[2], pdf);
     for (int ch = 0; ch < 3; ++ch) {
         Value* w = pm.select(weighted, pm.mul(f[ch], cosOverPdf), pm.c(0.0));

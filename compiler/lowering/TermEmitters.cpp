@@ -110,6 +110,12 @@ llvm::Value* NdfEmitter::visibleCosLambda(LaneEmitter& lane, const NdfParams& n,
     return pm.convert(cosLambda(lane, n, vLane), pm.type());
 }
 
+llvm::Value* NdfEmitter::visibleSmithSum(LaneEmitter& lane, const NdfParams& n,
+                                         const std::array<llvm::Value*, 3>& v) const {
+    MathEmitter& pm = lane.preciseMath();
+    return pm.add(v[2], visibleCosLambda(lane, n, v));
+}
+
 FresnelAverageArgs FresnelEmitter::averageArgs(LaneEmitter&) const { return {}; }
 
 LVal DiffuseEmitter::diffuse(LaneEmitter&) const { internal_error << "diffuse term of `none`"; }

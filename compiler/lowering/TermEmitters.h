@@ -113,6 +113,11 @@ public:
     // float, widened).
     virtual llvm::Value* visibleCosLambda(LaneEmitter& lane, const NdfParams& n,
                                           const std::array<llvm::Value*, 3>& v) const;
+    // (n.v)(1 + Lambda(v)) with visibleCosLambda's Lambda, for the unit v
+    // (n.v > 0), precise type: the visible-normal density's denominator
+    // over 4. By default n.v + visibleCosLambda.
+    virtual llvm::Value* visibleSmithSum(LaneEmitter& lane, const NdfParams& n,
+                                         const std::array<llvm::Value*, 3>& v) const;
 };
 
 struct MaskingLoweringTraits {

@@ -795,6 +795,58 @@ TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the p
     }
 }
 
+// The float body tests a direction's length on |w|^2 - 1 rounded to float
+// and hands the lanes that rounding cannot decide to the precise body: at
+// the unit tolerance's bounds, both bodies (and eval and sample) call the
+// same lanes invalid as the all-double kernel.
+TEST_CASE("float-first exact SIMD: directions at the unit tolerance's bounds are valid exactly as in double") {
+    const char* ggx = R"(material m { ndf = ggx(0.3); masking = smith_height_correlated; fresnel = schlick(0.04); })";
+    Compiler c;
+    c.setCacheDir("");
+    auto floatFirst = compile(c, ggx, "backend=simd;width=8;cache=off");
+    auto precise = compile(c, ggx, "backend=simd;width=8;cache=off;float_first=off");
+    // Directions scaled to |w|^2 within ~1e-9 of (1 -+ 1e-3)^2, rounded to
+    // float; the valid lanes are the ones the double test accepts.
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> uniform(0, 1);
+    const double bounds[2] = {(1 - 1e-3) * (1 - 1e-3), (1 + 1e-3) * (1 + 1e-3)};
+    const size_t n = 4096;
+    std::array<std::vector<float>, 3> wo, wi, u;
+    std::vector<uint8_t> expectInvalid;
+    int atRoundedBound = 0;
+    for (size_t i = 0; i < n; ++i) {
+        double z = 0.2 + 0.8 * uniform(rng), phi = 6.283185307179586 * uniform(rng), r = std::sqrt(1 - z * z);
+        double bound = bounds[i % 2], scale = std::sqrt(bound * (1 + 2e-9 * (uniform(rng) - 0.5)));
+        float w[3] = {float(r * std::cos(phi) * scale), float(r * std::sin(phi) * scale), float(z * scale)};
+        double len2 = double(w[0]) * w[0] + double(w[1]) * w[1] + double(w[2]) * w[2];
+        expectInvalid.push_back(len2 < bounds[0] || len2 > bounds[1]);
+        atRoundedBound += float(len2 - 1) == float(bound - 1);
+        for (int k = 0; k < 3; ++k) wo[k].push_back(w[k]), u[k].push_back(0.25f * float(k + 1));
+        wi[0].push_back(0.6f), wi[1].push_back(0.0f), wi[2].push_back(0.8f);
+    }
+    MESSAGE(atRoundedBound << " of " << n << " lanes with |w|^2 - 1 at a rounded bound");
+    CHECK(atRoundedBound > 10);
+    const float* woP[3] = {wo[0].data(), wo[1].data(), wo[2].data()};
+    const float* wiP[3] = {wi[0].data(), wi[1].data(), wi[2].data()};
+    const float* uP[3] = {u[0].data(), u[1].data(), u[2].data()};
+    std::array<std::vector<float>, 3> rgb, wiOut, weight;
+    std::vector<float> pdf(n);
+    for (int k = 0; k < 3; ++k) rgb[k].resize(n), wiOut[k].resize(n), weight[k].resize(n);
+    float* rgbP[3] = {rgb[0].data(), rgb[1].data(), rgb[2].data()};
+    float* wiOutP[3] = {wiOut[0].data(), wiOut[1].data(), wiOut[2].data()};
+    float* weightP[3] = {weight[0].data(), weight[1].data(), weight[2].data()};
+    const int64_t expected = std::count(expectInvalid.begin(), expectInvalid.end(), 1);
+    CHECK(expected > int64_t(n / 4));
+    CHECK(expected < int64_t(3 * n / 4));
+    for (const Kernel* k : {floatFirst.get(), precise.get()}) {
+        std::vector<uint8_t> status(n, 7);
+        CHECK(k->evalBatch(int64_t(n), wiP, woP, nullptr, rgbP, status.data()) == expected);
+        CHECK(status == expectInvalid);
+        CHECK(k->sampleBatch(int64_t(n), woP, uP, nullptr, wiOutP, pdf.data(), weightP) == expected);
+        for (size_t i = 0; i < n; ++i) CHECK((pdf[i] > 0) == !expectInvalid[i]);
+    }
+}
+
 namespace {
 // Outputs and invalid-lane counts of `k` on a sample, bit for bit.
 struct SampleOutput {

@@ -124,6 +124,18 @@ public:
         return fm.sqrt(fm.fma(v[2], v[2], lane.smithProjection(*this, n, v)));
     }
 
+    // (n.v)(1 + Lambda(v)) = ((n.v) + R(v)) / 2: a sum of positive terms, no
+    // division. R in float, as eval's Smith forms take it, so that a float
+    // body's sampler and eval share R(wo).
+    Value* visibleSmithSum(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
+        MathEmitter& fm = lane.floatMath();
+        MathEmitter& pm = lane.preciseMath();
+        std::array<Value*, 3> vLane;
+        for (int i = 0; i < 3; ++i) vLane[i] = fm.convert(v[i], fm.type());
+        Value* root = pm.convert(smithRoot(lane, n, vLane), pm.type());
+        return pm.mul(pm.add(v[2], root), pm.c(0.5));
+    }
+
     // The standard slope radius has the CDF r^2 / (1 + r^2).
     std::array<Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, Value* u1, Value* u2) const override {
         MathEmitter& pm = lane.preciseMath();
@@ -138,7 +150,10 @@ public:
                                               Value* u1, Value* u2) const override {
         MathEmitter& pm = lane.preciseMath();
         Value *vx = pm.mul(n.axD, wo[0]), *vy = pm.mul(n.ayD, wo[1]);
-        Value* inv = pm.div(pm.c(1.0), pm.sqrt(pm.fma(vx, vx, pm.fma(vy, vy, pm.mul(wo[2], wo[2])))));
+        // |v| before normalizing is R(wo): in float the same value as the
+        // density's and eval's, one square root for the three.
+        Value* len = pm.isDouble() ? pm.sqrt(pm.fma(vx, vx, pm.fma(vy, vy, pm.mul(wo[2], wo[2])))) : smithRoot(lane, n, wo);
+        Value* inv = pm.div(pm.c(1.0), len);
         vx = pm.mul(vx, inv), vy = pm.mul(vy, inv);
         Value* vz = pm.mul(wo[2], inv);
         // c.z = z = (1 - u2)(1 + v.z) - v.z, taken apart so that nothing
