@@ -11,6 +11,7 @@
 #include "TableCache.h"
 
 #include <algorithm>
+#include <array>
 #include <cfloat>
 #include <ctime>
 #include <cmath>
@@ -169,14 +170,19 @@ void evalScalarLanes(const Kernel& k, const LaneBatch& s, size_t begin, size_t e
     }
 }
 
-// Kernel::evalBatch on lanes [begin, end) of a sample.
+// Kernel::evalBatch on lanes [begin, end) of a sample. The input pointers
+// live on the stack up to 64 slots: the batch-size table times this per
+// call, and a heap allocation would cost more than a short batch.
 int64_t evalBatchRange(const Kernel& k, const LaneBatch& s, size_t begin, size_t end, Output& out) {
     const float* wi[3] = {s.wi()[0] + begin, s.wi()[1] + begin, s.wi()[2] + begin};
     const float* wo[3] = {s.wo()[0] + begin, s.wo()[1] + begin, s.wo()[2] + begin};
-    std::vector<const float*> in;
-    for (size_t j = 0; j < s.slots.size(); ++j) in.push_back(s.inputs()[j] + begin);
+    const size_t slots = s.slots.size();
+    std::array<const float*, 64> few;
+    std::vector<const float*> many(slots > few.size() ? slots : 0);
+    const float** in = slots > few.size() ? many.data() : few.data();
+    for (size_t j = 0; j < slots; ++j) in[j] = s.inputs()[j] + begin;
     float* rgb[3] = {out.ptr[0] + begin, out.ptr[1] + begin, out.ptr[2] + begin};
-    return k.evalBatch(int64_t(end - begin), wi, wo, in.empty() ? nullptr : in.data(), rgb);
+    return k.evalBatch(int64_t(end - begin), wi, wo, slots ? in : nullptr, rgb);
 }
 
 struct Mode {
