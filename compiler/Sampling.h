@@ -76,8 +76,11 @@ template <typename Real>
 bool visibleNormalSampling(const ResolvedMaterial<Real>& r, SamplingTechnique technique = SamplingTechnique::Material) {
     if (technique == SamplingTechnique::VisibleNormals) return true;
     if (technique == SamplingTechnique::Normals) return false;
+    // The shape values only where the entry asks for them: the reference
+    // samplers call this for every sample.
     std::vector<double> shape;
-    for (int p : r.ndf->tableShapeParams) shape.push_back(double(r.ndfArgs[p]));
+    if (r.ndf->visibleNormalsAtShape)
+        for (int p : r.ndf->tableShapeParams) shape.push_back(double(r.ndfArgs[p]));
     return samplesVisibleNormals(*r.ndf, *r.masking, shape);
 }
 
