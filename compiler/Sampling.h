@@ -76,12 +76,7 @@ template <typename Real>
 bool visibleNormalSampling(const ResolvedMaterial<Real>& r, SamplingTechnique technique = SamplingTechnique::Material) {
     if (technique == SamplingTechnique::VisibleNormals) return true;
     if (technique == SamplingTechnique::Normals) return false;
-    // The shape values only where the entry asks for them: the reference
-    // samplers call this for every sample.
-    std::vector<double> shape;
-    if (r.ndf->visibleNormalsAtShape)
-        for (int p : r.ndf->tableShapeParams) shape.push_back(double(r.ndfArgs[p]));
-    return samplesVisibleNormals(*r.ndf, *r.masking, shape);
+    return samplesVisibleNormals(*r.ndf, *r.masking);
 }
 
 // True when the material's NDF has an exact visible-normal sampler (what

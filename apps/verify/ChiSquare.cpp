@@ -115,14 +115,24 @@ Vec3<double> SphereGrid::direction(double t, double p) {
 }
 
 std::vector<double> integrateCells(const SphereGrid& grid, const PdfFunction& pdf, double tolerance, int maxDepth) {
-    auto f = [&](double t, double p) { return pdf(grid.direction(t, p)) * std::sin(t); };
     std::vector<double> out(grid.cellCount());
     const std::vector<double>&te = grid.thetaEdges(), &pe = grid.phiEdges();
-    for (int i = 0; i < grid.rings(); ++i)
+    for (int i = 0; i < grid.rings(); ++i) {
+        // theta = t0 + (t1 - t0)(3 s^2 - 2 s^3), s in [0, 1]: its derivative
+        // vanishes like s at both edges, which makes an edge singularity
+        // like |theta - edge|^-1/2 bounded (a heavy-tailed NDF's D ~
+        // mz^(2 gamma - 4) has one on the ring n.wi = -n.wo, an edge of the
+        // lobe grids) and leaves a smooth integrand smooth.
+        const double t0 = te[i], width = te[i + 1] - te[i];
+        auto f = [&](double s, double p) {
+            double t = t0 + width * s * s * (3 - 2 * s);
+            return pdf(grid.direction(t, p)) * std::sin(t) * 6 * width * s * (1 - s);
+        };
         for (int j = 0; j < grid.sectors(); ++j) {
-            Rect r{te[i], te[i + 1], pe[j], pe[j + 1]};
+            Rect r{0, 1, pe[j], pe[j + 1]};
             out[i * grid.sectors() + j] = adaptive(f, r, rule(f, r), tolerance, maxDepth);
         }
+    }
     return out;
 }
 

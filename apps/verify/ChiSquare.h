@@ -58,7 +58,9 @@ using PdfFunction = std::function<double(const Vec3<double>& wi)>;
 // The integral of pdf over each cell (solid angle), by 4x4 Gauss-Legendre
 // rules compared against the same rules on the cell's four quarters,
 // subdividing where they differ by more than `tolerance` (split between
-// the quarters) down to `maxDepth` levels.
+// the quarters) down to `maxDepth` levels. Theta is integrated through a
+// substitution flat at both edges of the ring, so that an integrable
+// singularity on a ring edge (|theta - edge|^-1/2) is integrated too.
 std::vector<double> integrateCells(const SphereGrid& grid, const PdfFunction& pdf, double tolerance = 1e-9,
                                    int maxDepth = 9);
 

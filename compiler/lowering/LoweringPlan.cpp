@@ -261,12 +261,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     // NDF's emitter says whether it has that sampler in IR.
     const NdfEntry& ndfEntry = facet::ndfEntry(*material.ndf.model);
     const MaskingEntry& masking = maskingEntry(*material.masking.model);
-    // The shape matters only where visibleNormalsAtShape is set, which
-    // needs it constant: under a Smith masking it is (the tabulated Lambda's).
-    std::vector<double> shape;
-    if (ndfEntry.visibleNormalsAtShape && ndfEntry.tabulatedLambda && masking.smith)
-        shape = tabulatedLambdaShape(material);
-    const bool visible = samplesVisibleNormals(ndfEntry, masking, shape);
+    const bool visible = samplesVisibleNormals(ndfEntry, masking);
     if (visible ? em.ndf.traits.samplesVisibleNormals : em.ndf.traits.samplesNormals)
         plan.sampling.specular = visible ? SpecularSampling::VisibleNormals : SpecularSampling::NdfNormals;
     plan.sampling.cosineLobe = em.diffuse.present() || material.compensatesEnergy();

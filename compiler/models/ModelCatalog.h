@@ -275,10 +275,6 @@ struct NdfEntry : ModelInfo {
     // visibleCosLambda exact for its D, so that the visible-normal density
     // integrates to 1.
     bool visibleNormals = false;
-    // Where that sampler serves only some constant values of the
-    // tableShapeParams: whether these do (null: all). The others sample
-    // through the NDF.
-    bool (*visibleNormalsAtShape)(const std::vector<double>& shape) = nullptr;
     FormulaSet<NdfFormulas> formulas;
 };
 
@@ -347,10 +343,8 @@ int paramIndex(const ModelInfo& m, std::string_view name);
 // The specular lobe of this pair is sampled through visible normals (an
 // NDF with an exact visible-normal sampler under a Smith masking, whose
 // weight F G2 / G1 is then at most F); otherwise through NDF sampling.
-// `shape` holds the values of the NDF's tableShapeParams (constants where
-// visibleNormalsAtShape is set and the masking is a Smith form).
-inline bool samplesVisibleNormals(const NdfEntry& ndf, const MaskingEntry& masking, const std::vector<double>& shape) {
-    return ndf.visibleNormals && masking.smith && (!ndf.visibleNormalsAtShape || ndf.visibleNormalsAtShape(shape));
+inline bool samplesVisibleNormals(const NdfEntry& ndf, const MaskingEntry& masking) {
+    return ndf.visibleNormals && masking.smith;
 }
 
 // The NDF has a Smith Lambda, closed-form or tabulated.

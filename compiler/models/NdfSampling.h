@@ -47,11 +47,14 @@ Vec3<Real> stretchedSlopeNormal(Real ax, Real ay, Real r2, Real u) {
 
 // x in [lo, hi] with cdf(x) = target, for a cdf increasing on [lo, hi]
 // with derivative pdf: Newton steps, falling back to bisection whenever a
-// step leaves the bracket; stops at the resolution of Real.
+// step leaves the bracket or is more than half the step before the last
+// (on a strongly curved cdf, such as a log cdf against log x, Newton's
+// steps can otherwise cycle between the two ends of the bracket); stops at
+// the resolution of Real.
 template <typename Real, typename Cdf, typename Pdf>
 Real invertIncreasing(const Cdf& cdf, const Pdf& pdf, Real target, Real lo, Real hi) {
     using std::fabs;
-    Real x = (lo + hi) / 2;
+    Real x = (lo + hi) / 2, step = hi - lo, stepBefore = hi - lo;
     for (int it = 0; it < 200; ++it) {
         Real f = cdf(x) - target;
         if (f == 0) return x;
@@ -59,7 +62,9 @@ Real invertIncreasing(const Cdf& cdf, const Pdf& pdf, Real target, Real lo, Real
         else lo = x;
         Real d = pdf(x);
         Real next = d > 0 ? x - f / d : (lo + hi) / 2;
-        if (!(next > lo && next < hi)) next = (lo + hi) / 2;
+        if (!(next > lo && next < hi) || 2 * fabs(next - x) > fabs(stepBefore)) next = (lo + hi) / 2;
+        stepBefore = step;
+        step = next - x;
         if (next == x || hi - lo <= std::numeric_limits<Real>::epsilon() * (fabs(lo) + fabs(hi))) return next;
         x = next;
     }
@@ -96,42 +101,58 @@ Real studentSlopeCosLambda(Real nu, const Vec3<Real>& v) {
     return cl > 0 ? cl : Real(0);
 }
 
+// The visible slope angle's floor above the horizon, in the co-angle b
+// below: for nu < 2 the quantiles of b near u = 0 go like u^(1/(nu - 1)),
+// beyond double's range as nu nears 1. A normal within 1e-20 of the horizon
+// reflects every wo with n.wo > 1e-19 below it, so the floor moves no
+// sample's direction; it keeps m.z, D(m) and the pdf finite in float.
+inline constexpr double kVisibleSlopeAngleFloor = 1e-20;
+
 // A visible normal of P22 for the unit wo. In the frame turned about n so
 // that wo' = (sin t, 0, cos t), the visible slopes (x, y) have the density
-// (1 - x tan t)+ P22(x, y) up to a constant. With x = tan psi, cos t times
-// the CDF of psi is
-//   G(psi) = cos t F(tan psi) + sin t c_nu cos^(nu-1) psi / (nu - 1),
-// F = 1 - T_nu, with G' = c_nu cos^(nu-2) psi sin(psi_max - psi) on
-// (-pi/2, psi_max], psi_max = pi/2 - t, and G(psi_max) = cos t + (n.wo)
-// Lambda(wo). Given x, y = sqrt(1 + x^2) tan chi, where tan chi has the
-// density p_(nu+1) (from (1 + x^2 + y^2) = (1 + x^2)(1 + tan^2 chi)).
-// Both angles by Newton's method; the normal of the slopes (x, y) is
-// (-sin psi cos chi, -sin chi, cos psi cos chi), turned back.
+// (1 - x tan t)+ P22(x, y) up to a constant. With x = tan psi = -cot b, b =
+// psi + pi/2 the slope angle's co-angle (from the horizon, so that normals
+// near it keep their relative accuracy), cos t times the CDF of b is
+//   G(b) = cos t F(-cot b) + sin t c_nu sin^(nu-1) b / (nu - 1),
+// F = 1 - T_nu, with G' = c_nu sin^(nu-2) b (cos t sin b + sin t cos b) on
+// (0, pi - t], and G(pi - t) = cos t + (n.wo) Lambda(wo). G ~ b^(nu-1)
+// near 0 (b^nu at t = 0): b is found by Newton's method on log G against
+// log b, where the function is nearly linear. Given x, y = sqrt(1 + x^2)
+// tan chi, where tan chi has the density p_(nu+1) (from (1 + x^2 + y^2) =
+// (1 + x^2)(1 + tan^2 chi)), found by Newton's method on its tail. The
+// normal of the slopes (x, y) is (cos b cos chi, -sin chi, sin b cos chi),
+// turned back.
 template <typename Real>
 Vec3<Real> studentSlopeVisibleNormal(Real nu, const Vec3<Real>& wo, Real u1, Real u2) {
-    using std::atan2; using std::cos; using std::sin; using std::sqrt;
+    using std::atan2; using std::cos; using std::exp; using std::log; using std::sin; using std::sqrt;
     const Real halfPi = kPi<Real> / 2;
     Real sxy = sqrt(wo.x * wo.x + wo.y * wo.y);
     Real cosPhi = sxy > 0 ? wo.x / sxy : Real(1), sinPhi = sxy > 0 ? wo.y / sxy : Real(0);
     Real norm = studentSlopeNorm(nu);
-    auto cdfPsi = [&](Real psi) {
-        Real s = sin(psi), c = cos(psi), s2 = s * s, c2 = c * c;
-        Real tail = studentSlopeTail(nu, s2, c2);
-        Real F = psi >= 0 ? 1 - tail : tail;
-        return wo.z * F + sxy * norm * powSin(c2, s2, nu - 1) / (nu - 1);
+    auto cdf = [&](Real b) {
+        Real s = sin(b), c = cos(b), s2 = s * s, c2 = c * c;
+        Real tail = studentSlopeTail(nu, c2, s2);  // at |x| = |cot b|
+        Real F = b >= halfPi ? 1 - tail : tail;
+        return wo.z * F + sxy * norm * powSin(s2, c2, nu - 1) / (nu - 1);
     };
-    auto pdfPsi = [&](Real psi) {
-        Real s = sin(psi), c = cos(psi);
-        Real d = wo.z * c - sxy * s;
-        return d > 0 ? norm * powSin(c * c, s * s, nu - 2) * d : Real(0);
+    auto density = [&](Real b) {
+        Real s = sin(b), c = cos(b);
+        Real d = wo.z * s + sxy * c;
+        return d > 0 ? norm * powSin(s * s, c * c, nu - 2) * d : Real(0);
     };
-    Real psiMax = atan2(wo.z, sxy);
+    // log G(e^y) and its derivative e^y G'/G: NaN where G underflows, which
+    // the inversion answers with a bisection.
+    auto logCdf = [&](Real y) { return log(cdf(exp(y))); };
+    auto logDensity = [&](Real y) {
+        Real b = exp(y);
+        return b * density(b) / cdf(b);
+    };
+    Real bMax = halfPi + atan2(wo.z, sxy);
     // Quantiles below 2^-32 (u = 0 in float) are taken at 2^-32: the
-    // limit u = 0 is the horizon, where the CDF underflows for large nu
-    // (the inversion could stop anywhere there) and where m.z = 0 would
-    // make the sample's pdf ill-conditioned.
+    // limit u = 0 is the horizon, where the CDF underflows for large nu.
     const Real floorU = Real(0x1p-32);
-    Real psi = invertIncreasing(cdfPsi, pdfPsi, (u1 > floorU ? u1 : floorU) * cdfPsi(psiMax), -halfPi, psiMax);
+    Real target = (u1 > floorU ? u1 : floorU) * cdf(bMax);
+    Real b = exp(invertIncreasing(logCdf, logDensity, log(target), log(Real(kVisibleSlopeAngleFloor)), log(bMax)));
     // tan chi from its tail q = min(u2, 1 - u2), the sign from the side.
     Real nuY = nu + 1, normY = studentSlopeNorm(nuY), q = u2 < Real(0.5) ? u2 : 1 - u2;
     auto minusTail = [&](Real chi) {
@@ -144,7 +165,7 @@ Vec3<Real> studentSlopeVisibleNormal(Real nu, const Vec3<Real>& wo, Real u1, Rea
     };
     Real chi = invertIncreasing(minusTail, pdfChi, -(q > floorU ? q : floorU), Real(0), halfPi);
     if (u2 < Real(0.5)) chi = -chi;
-    Real mx = -sin(psi) * cos(chi), my = -sin(chi), mz = cos(psi) * cos(chi);
+    Real mx = cos(b) * cos(chi), my = -sin(chi), mz = sin(b) * cos(chi);
     return {cosPhi * mx - sinPhi * my, sinPhi * mx + cosPhi * my, mz};
 }
 

@@ -96,9 +96,10 @@ struct Lanes {
     }
 };
 
-// The first material of each combination, at the roughness its index
-// picks (every combination covers one of the four; the combinations of one
-// NDF cover them all between them).
+// One material per combination, at the roughness and shape variant its
+// index picks (every combination covers one of the four roughnesses; the
+// combinations of one NDF cover them all between them, and its shape
+// parameters below, at and above their typical values).
 struct JitCase {
     const Combo* combo;
     double alpha;
@@ -109,8 +110,8 @@ std::vector<JitCase> jitCases() {
     std::vector<JitCase> out;
     int index = 0;
     for (const Combo& c : combos()) {
-        double alpha = kRoughness[index++ % 4];
-        auto m = makeMaterial(c, alpha);
+        double alpha = kRoughness[index % 4];
+        auto m = makeMaterial(c, alpha, index++);
         REQUIRE(m);
         out.push_back({&c, alpha, std::move(m)});
     }
@@ -149,8 +150,9 @@ TEST_CASE("jit sampling: the same u gives the reference's wi, pdf and weight") {
                 for (int64_t i = 0; i < lanes.size(); ++i) {
                     std::array<double, 3> u = {lanes.u[0][i], lanes.u[1][i], lanes.u[2][i]};
                     SampleResult<double> ref = facet::sampleBrdf(r, wo, u);
-                    INFO(jc.combo->name(), " alpha ", jc.alpha, " ", std::string(options), " theta_o ", theta, " u ", u[0], " ",
-                         u[1], " ", u[2]);
+                    INFO(text, " ", std::string(options), " theta_o ", theta, " u ", u[0], " ", u[1], " ", u[2], " wi ",
+                         lanes.wi[0][i], " ", lanes.wi[1][i], " ", lanes.wi[2][i], " reference ", ref.wi.x, " ", ref.wi.y,
+                         " ", ref.wi.z);
                     if (p < 1 && std::abs(u[0] - p) <= 1e-6) {
                         ++choiceDiffers;  // at most: the choice may go either way here
                         continue;
@@ -241,8 +243,15 @@ TEST_CASE("jit sampling: pdf and weight agree with the kernel's pdf and eval; sc
                     // wi + wo does not cancel.
                     V3 sum{wod.x + unit(wi).x, wod.y + unit(wi).y, wod.z + unit(wi).z};
                     if (math == "fast" && sum.x * sum.x + sum.y * sum.y + sum.z * sum.z < 0.01) continue;
-                    // Each side against the reference: pdf() at this wi, the sampled pdf at the drawn normal.
-                    CHECK(relDiff(pdf, refAtWi) <= tol);
+                    // Each side against the reference: pdf() at this wi, the
+                    // sampled pdf at the drawn normal. Where wi is nearly -wo
+                    // (reflected about a normal near the horizon), the half
+                    // vector of the float wi is ill-conditioned and D, unless
+                    // flat there (student_t at gamma = 2), follows it: pdf()
+                    // may then differ from the reference by as much as the
+                    // reference's own pdf at wi with and without renormalizing.
+                    double conditioning = relDiff(refAtWi, facet::brdfPdf(r, V3{wi[0], wi[1], wi[2]}, wod));
+                    CHECK(relDiff(pdf, refAtWi) <= tol + 2 * conditioning);
                     CHECK(relDiff(lanes.pdf[i], ref.pdf) <= tol);
                     worstPdf = std::max(worstPdf, relDiff(pdf, lanes.pdf[i]) - 2 * rounding);
                     CHECK(relDiff(pdf, lanes.pdf[i]) <= bound);

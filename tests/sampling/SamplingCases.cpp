@@ -32,9 +32,12 @@ std::string ndfStatement(const Combo& c, double alpha, int variant) {
         const ModelParam& param = ndf.canonical[p];
         shape.push_back(std::clamp(param.typical * factors[variant % 3], param.lo, param.hi));
     }
-    // Shape values without a Smith Lambda (student_t at gamma 1.5): the typical ones.
+    // Shape values without a Smith Lambda (student_t at gamma 1.5): halfway
+    // back to the typical ones (student_t at 1.75, where D is singular at
+    // the horizon and its visible normals crowd toward it).
     if (c.masking->smith && ndf.lambdaShapeError && !ndf.lambdaShapeError(shape).empty())
-        for (size_t i = 0; i < shape.size(); ++i) shape[i] = ndf.canonical[ndf.tableShapeParams[i]].typical;
+        for (size_t i = 0; i < shape.size(); ++i)
+            shape[i] = (shape[i] + ndf.canonical[ndf.tableShapeParams[i]].typical) / 2;
     ModelArgs<double> args = ndf.argsAtAlpha(alpha, shape);
     if (c.anisotropic) {
         args.set(paramIndex(ndf, "alpha_x"), alpha);

@@ -156,14 +156,20 @@ Value* studentSlopeCosLambda(MathEmitter& dm, Value* nu, const std::array<Value*
 }
 
 // Heitz & d'Eon 2014 on the slopes of P22: turned about n so that wo' =
-// (sin t, 0, cos t), the visible x = tan psi has cos t times the CDF
-//   G(psi) = cos t F(tan psi) + sin t c_nu cos^(nu-1) psi / (nu - 1),
-// F = 1 - T_nu, G' = c_nu cos^(nu-2) psi (cos t cos psi - sin t sin psi) on
-// (-pi/2, pi/2 - t]; then y = sqrt(1 + x^2) tan chi, tan chi with the
-// density p_(nu+1), drawn by its tail min(u2, 1 - u2) and the side.
-// Quantiles below 2^-32 are taken at 2^-32 (as the reference: not the
-// horizon, where the CDF underflows). m is the normal of the slopes (x, y),
-// (-sin psi cos chi, -sin chi, cos psi cos chi), turned back.
+// (sin t, 0, cos t), the visible x = tan psi = -cot b (b = psi + pi/2, the
+// co-angle from the horizon, in which normals near it keep their relative
+// accuracy) has cos t times the CDF
+//   G(b) = cos t F(-cot b) + sin t c_nu sin^(nu-1) b / (nu - 1),
+// F = 1 - T_nu, G' = c_nu sin^(nu-2) b (cos t sin b + sin t cos b) on (0,
+// pi - t]; then y = sqrt(1 + x^2) tan chi, tan chi with the density
+// p_(nu+1), drawn by its tail min(u2, 1 - u2) and the side. Quantiles
+// below 2^-32 are taken at 2^-32, and b is at least 1e-20 (as the
+// reference). Near the horizon G ~ b^(nu-1), as steep as b^0.02 for nu
+// near 1, where Newton's method on b would bisect hundreds of times: lanes
+// whose target lies below G(2^-4) solve log G = log target in log b (a
+// nearly linear function there), the others G = target in b, in one
+// Newton loop. m is the normal of the slopes (x, y), (cos b cos chi, -sin
+// chi, sin b cos chi), turned back.
 std::array<Value*, 3> studentSlopeVisibleNormal(LaneEmitter& lane, Value* nu, const std::array<Value*, 3>& wo,
                                                 Value* u1, Value* u2) {
     MathEmitter& pm = lane.doubleMath();
@@ -176,20 +182,32 @@ std::array<Value*, 3> studentSlopeVisibleNormal(LaneEmitter& lane, Value* nu, co
     auto sinCos = [&](Value* angle) { return pm.sinCosTurns(pm.mul(angle, pm.c(1 / (2 * kPi)))); };
     Value* nuM1 = pm.sub(nu, pm.c(1.0));
     Value* nuM2 = pm.sub(nu, pm.c(2.0));
-    auto cdfPsi = [&](Value* psi) -> std::pair<Value*, Value*> {
-        auto [s, c] = sinCos(psi);
-        Value *s2 = pm.mul(s, s), *c2 = pm.mul(c, c);
-        Value* T = studentTail(pm, tx, s2, c2);
-        Value* F = pm.select(pm.ge(psi, pm.c(0.0)), pm.sub(pm.c(1.0), T), T);
-        Value* side = pm.div(pm.mul(pm.mul(sxy, tx.norm), powRoot(pm, c2, s2, nuM1)), nuM1);
-        Value* visible = pm.maxnum(pm.sub(pm.mul(wo[2], c), pm.mul(sxy, s)), pm.c(0.0));
-        return {pm.fma(wo[2], F, side), pm.mul(pm.mul(tx.norm, powRoot(pm, c2, s2, nuM2)), visible)};
-    };
     const double halfPi = kPi / 2;
-    Value* psiMax = pm.atan2(wo[2], sxy);
-    const double floorU = 0x1p-32;
-    Value* target = pm.mul(pm.maxnum(u1, pm.c(floorU)), cdfPsi(psiMax).first);
-    Value* psi = lane.invertIncreasing(pm, cdfPsi, target, pm.c(-halfPi), psiMax, kNewtonSteps);
+    // G(b) and G'(b).
+    auto cdf = [&](Value* b) -> std::pair<Value*, Value*> {
+        auto [s, c] = sinCos(b);
+        Value *s2 = pm.mul(s, s), *c2 = pm.mul(c, c);
+        Value* T = studentTail(pm, tx, c2, s2);  // at |x| = |cot b|
+        Value* F = pm.select(pm.ge(b, pm.c(halfPi)), pm.sub(pm.c(1.0), T), T);
+        Value* side = pm.div(pm.mul(pm.mul(sxy, tx.norm), powRoot(pm, s2, c2, nuM1)), nuM1);
+        Value* visible = pm.maxnum(pm.fma(wo[2], s, pm.mul(sxy, c)), pm.c(0.0));
+        return {pm.fma(wo[2], F, side), pm.mul(pm.mul(tx.norm, powRoot(pm, s2, c2, nuM2)), visible)};
+    };
+    Value* bMax = pm.add(pm.atan2(wo[2], sxy), pm.c(halfPi));
+    const double floorU = 0x1p-32, floorB = 1e-20, switchB = 0x1p-4;
+    Value* target = pm.mul(pm.maxnum(u1, pm.c(floorU)), cdf(bMax).first);
+    Value* inLog = pm.lt(target, cdf(pm.c(switchB)).first);
+    Value* logTarget = pm.log(target);
+    auto phi = [&](Value* x) -> LaneEmitter::NewtonTerms {
+        Value* b = pm.select(inLog, pm.exp(x), x);
+        auto [G, dG] = cdf(b);
+        return {pm.select(inLog, pm.sub(pm.log(G), logTarget), pm.sub(G, target)),
+                pm.select(inLog, pm.div(pm.mul(b, dG), G), dG)};
+    };
+    Value* lo = pm.select(inLog, pm.c(std::log(floorB)), pm.c(switchB));
+    Value* hi = pm.select(inLog, pm.c(std::log(switchB)), bMax);
+    Value* x = lane.bracketedNewton(pm, phi, pm.mul(pm.add(lo, hi), pm.c(0.5)), lo, hi, kNewtonSteps);
+    Value* b = pm.select(inLog, pm.exp(x), x);
 
     StudentT ty = studentT(pm, pm.add(nu, pm.c(1.0)));
     Value* lower = pm.lt(u2, pm.c(0.5));
@@ -204,11 +222,11 @@ std::array<Value*, 3> studentSlopeVisibleNormal(LaneEmitter& lane, Value* nu, co
                                        kNewtonSteps);
     chi = pm.select(lower, pm.neg(chi), chi);
 
-    auto [sPsi, cPsi] = sinCos(psi);
+    auto [sB, cB] = sinCos(b);
     auto [sChi, cChi] = sinCos(chi);
-    Value* mx = pm.neg(pm.mul(sPsi, cChi));
+    Value* mx = pm.mul(cB, cChi);
     Value* my = pm.neg(sChi);
-    Value* mz = pm.mul(cPsi, cChi);
+    Value* mz = pm.mul(sB, cChi);
     return {pm.sub(pm.mul(cosPhi, mx), pm.mul(sinPhi, my)), pm.fma(sinPhi, mx, pm.mul(cosPhi, my)), mz};
 }
 

@@ -115,13 +115,6 @@ std::vector<const ModelInfo*> facetModels_ndf_StudentT() {
         e.shapeInvariant = true;
         e.tabulatedLambda = true;
         e.visibleNormals = true;
-        // Below gamma = 2 (nu < 2) D grows toward the horizon like
-        // mz^(2 gamma - 4), and the visible-slope quantiles near u = 0 put m
-        // within 1e-16 of the horizon (the CDF goes as cos^(nu - 1) of the
-        // slope angle there): m, and D at it, are then not determined by
-        // double arithmetic on that angle, so the density of a sample would
-        // depend on rounding. Those materials sample through the NDF.
-        e.visibleNormalsAtShape = [](const std::vector<double>& shape) { return shape.at(0) >= 2; };
         e.lambdaShapeError = [](const std::vector<double>& shape) -> std::string {
             if (shape.at(0) > 1.5) return "";
             return "its Smith Lambda needs gamma > 1.5 (at 1.5 the mean slope and Lambda are infinite)";
