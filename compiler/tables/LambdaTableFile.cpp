@@ -3,6 +3,7 @@
 // as exact doubles, and the checks a file must pass to be used.
 #include "TableCache.h"
 
+#include "CacheFiles.h"
 #include "LambdaTable.h"
 
 #include <fmt/format.h>
@@ -164,6 +165,20 @@ LambdaTableFileResult decodeLambdaTable(const std::string& bytes, const std::str
     r.status = TableFileStatus::Ok;
     r.table = std::move(t);
     return r;
+}
+
+LambdaTableFileResult readLambdaTableFile(const std::string& path, const NdfEntry& ndf,
+                                          const std::vector<double>& shape) {
+    std::string why;
+    bool missing = false;
+    std::optional<std::string> bytes = readRegularFile(path, kMaxLambdaTableFileBytes, why, &missing);
+    if (!bytes) {
+        LambdaTableFileResult r;
+        r.status = missing ? TableFileStatus::Missing : TableFileStatus::Unreadable;
+        r.message = missing ? "no file " + path : why;
+        return r;
+    }
+    return decodeLambdaTable(*bytes, path, &ndf, &shape);
 }
 
 }  // namespace facet

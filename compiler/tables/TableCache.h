@@ -108,6 +108,11 @@ struct LambdaTableFileResult {
 LambdaTableFileResult decodeLambdaTable(const std::string& bytes, const std::string& path,
                                         const NdfEntry* ndf = nullptr, const std::vector<double>* shape = nullptr);
 
+// Reads the Lambda table file at `path` (missing: Missing; refused or not
+// a regular file: Unreadable), expecting the table of `ndf` with `shape`.
+LambdaTableFileResult readLambdaTableFile(const std::string& path, const NdfEntry& ndf,
+                                          const std::vector<double>& shape);
+
 // Tables by key, shared by shared_ptr and immutable once built. Thread-safe:
 // concurrent requests for one key wait for a single load/build (the mutex is
 // not held while building). Owned by the caller (e.g. one per facet::Compiler);
