@@ -150,6 +150,16 @@ std::string energyTableLine(const MaterialBench& m) {
     return s;
 }
 
+std::string lambdaTableLine(const MaterialBench& m) {
+    if (!m.lambdaTable) return "";
+    const LambdaTableBench& e = *m.lambdaTable;
+    std::string s = fmt::format("Smith Lambda table: {}, built in {:.1f} ms (cold, {} nodes; one thread)", e.key,
+                                e.buildMs, e.nodes);
+    if (e.cachedLoadMs) s += fmt::format(" / loaded from cache in {:.3f} ms", *e.cachedLoadMs);
+    else s += fmt::format(" / not loaded from cache: {}", e.note);
+    return s;
+}
+
 std::string summaryLine(const MaterialBench& m) {
     const BenchRow* simd = m.find("simd", "exact");
     const BenchRow* scalar = m.find("scalar", "exact");
@@ -188,6 +198,7 @@ void printTable(const BenchReport& report, std::FILE* out) {
     for (const MaterialBench& m : report.materials) {
         std::fprintf(out, "\n%s\n", header(report, m).c_str());
         if (m.energyTable) std::fprintf(out, "  %s\n", energyTableLine(m).c_str());
+        if (m.lambdaTable) std::fprintf(out, "  %s\n", lambdaTableLine(m).c_str());
         std::fprintf(out, "%s", textTable(columns(), m.rows, cells).c_str());
         std::fprintf(out, "worst inputs (regular | hard):\n");
         for (const BenchRow& r : m.rows) {
@@ -226,6 +237,7 @@ std::string markdown(const BenchReport& report) {
                           m.aotModel.empty() ? (m.aotNote.empty() ? "none" : m.aotNote) : "`" + m.aotModel + "`");
         md += fmt::format(". Regular sample {} lanes, hard-case sample {} lanes.\n\n", m.regularLanes, m.hardLanes);
         if (m.energyTable) md += energyTableLine(m) + ".\n\n";
+        if (m.lambdaTable) md += lambdaTableLine(m) + ".\n\n";
         md += markdownTable(columns(), m.rows, cells);
         md += fmt::format("\n**Summary:** {}\n\nWorst inputs:\n\n", summaryLine(m));
         for (const BenchRow& r : m.rows)
@@ -390,6 +402,23 @@ void writeEnergyTable(Json& j, const std::optional<EnergyTableBench>& table) {
     j.close('}');
 }
 
+void writeLambdaTable(Json& j, const std::optional<LambdaTableBench>& table) {
+    if (!table) {
+        j.raw("null");
+        return;
+    }
+    const LambdaTableBench& e = *table;
+    j.open('{');
+    j.field("key", e.key);
+    j.field("nodes", int64_t(e.nodes));
+    j.field("build_ms", e.buildMs);
+    j.field("cached_load_ms", e.cachedLoadMs);
+    j.field("cached_load_runs", int64_t(e.loadRuns));
+    j.field("cache_file", e.cacheFile);
+    j.field("note", e.note);
+    j.close('}');
+}
+
 }  // namespace
 
 std::string json(const BenchReport& report) {
@@ -432,6 +461,8 @@ std::string json(const BenchReport& report) {
         j.field("kulla_conty_pair", m.energyTable ? m.energyTable->key : std::string());
         j.key("energy_table");
         writeEnergyTable(j, m.energyTable);
+        j.key("lambda_table");
+        writeLambdaTable(j, m.lambdaTable);
         j.field("regular_lanes", int64_t(m.regularLanes));
         j.field("hard_lanes", int64_t(m.hardLanes));
         j.field("summary", summaryLine(m));

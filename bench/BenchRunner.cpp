@@ -8,6 +8,7 @@
 #include "ReferenceModels.h"
 
 #include "KullaConty.h"
+#include "LambdaTable.h"
 #include "TableCache.h"
 
 #include <algorithm>
@@ -611,6 +612,30 @@ std::string aotTagFor(const std::string& source, const std::string& path, const 
     return "";
 }
 
+namespace {
+
+// The median CPU time of `runs` (at least one) reads of a table file by
+// `load`, which returns "" or why the file did not load: then `note` says so
+// and there is no time.
+template <typename Load>
+std::optional<double> timeLoads(int runs, const std::string& file, int& done, std::string& note, Load&& load) {
+    std::vector<double> ms;
+    for (int r = 0; r < std::max(1, runs); ++r) {
+        auto start = Clock::now();
+        std::string why = load();
+        double t = millisSince(start);
+        if (!why.empty()) {
+            note = fmt::format("cannot read {} back: {}", file, why);
+            return std::nullopt;
+        }
+        ms.push_back(t);
+    }
+    done = int(ms.size());
+    return median(ms);
+}
+
+}  // namespace
+
 std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& m, int loadRuns,
                                                  const std::optional<std::string>& cacheDir) {
     if (!m.compensatesEnergy() || kullaContyUnsupported(m)) return std::nullopt;
@@ -640,19 +665,45 @@ std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& m, int l
             return e;
         }
     }
-    std::vector<double> ms;
-    for (int r = 0; r < std::max(1, loadRuns); ++r) {
-        auto start = Clock::now();
+    e.cachedLoadMs = timeLoads(loadRuns, e.cacheFile, e.loadRuns, e.note, [&] {
         TableFileResult loaded = readEnergyTableExr(e.cacheFile, &key);
-        double t = millisSince(start);
-        if (loaded.status != TableFileStatus::Ok) {
-            e.note = fmt::format("cannot read {} back: {}", e.cacheFile, loaded.message);
+        return loaded.status == TableFileStatus::Ok ? std::string() : loaded.message;
+    });
+    return e;
+}
+
+std::optional<LambdaTableBench> benchLambdaTable(const CheckedMaterial& m, int loadRuns,
+                                                 const std::optional<std::string>& cacheDir) {
+    if (!usesTabulatedLambda(m)) return std::nullopt;
+    const NdfEntry& ndf = ndfEntry(*m.ndf.model);
+    std::vector<double> shape = tabulatedLambdaShape(m);
+    LambdaTableBench e;
+    e.key = lambdaTableName(ndf, shape);
+    // Cold: the quadrature itself, not the process's shared table.
+    std::shared_ptr<LambdaTable> table = tabulateCosLambda(ndf, shape, quadratureCosLambda);
+    e.buildMs = table->buildMillis;
+    e.nodes = int(table->z.size());
+    // Cached: the file in the table cache directory, written first if it is
+    // missing or not a valid table of this key (as a cache miss would).
+    std::string dir = cacheDir ? *cacheDir : defaultTableCacheDir();
+    if (dir.empty()) {
+        e.note = "no table cache directory (FACET_CACHE_DIR, XDG_CACHE_HOME and HOME unset)";
+        return e;
+    }
+    e.cacheFile = dir + "/" + lambdaTableFileName(ndf, shape);
+    if (readLambdaTableFile(e.cacheFile, ndf, shape).status != TableFileStatus::Ok) {
+        std::error_code ec;
+        std::filesystem::create_directories(dir, ec);
+        std::string err = writeFileAtomically(e.cacheFile, encodeLambdaTable(*table));
+        if (!err.empty()) {
+            e.note = "cannot write the table cache: " + err;
             return e;
         }
-        ms.push_back(t);
     }
-    e.cachedLoadMs = median(ms);
-    e.loadRuns = int(ms.size());
+    e.cachedLoadMs = timeLoads(loadRuns, e.cacheFile, e.loadRuns, e.note, [&] {
+        LambdaTableFileResult loaded = readLambdaTableFile(e.cacheFile, ndf, shape);
+        return loaded.status == TableFileStatus::Ok ? std::string() : loaded.message;
+    });
     return e;
 }
 
@@ -690,6 +741,7 @@ bool benchFile(const std::string& path, const BenchSettings& settings, BenchRepo
             else mb.aotModel = tag;
         }
         mb.energyTable = benchEnergyTable(m, std::max(3, settings.diskRuns));
+        mb.lambdaTable = benchLambdaTable(m, std::max(3, settings.diskRuns));
         if (progress) std::fprintf(progress, "bench %s (%s)\n", m.name.c_str(), path.c_str());
         MaterialRunner(m, settings, compiler, progress).run(mb);
         report.materials.push_back(std::move(mb));

@@ -128,6 +128,21 @@ struct EnergyTableBench {
     std::string pair() const { return ndf + " x " + masking; }
 };
 
+// The Smith Lambda table of a material whose masking needs its NDF's table
+// (LambdaTable.h, e.g. student_t): the time to build it by quadrature (cold:
+// directly, not through any cache; one thread) and the time to load it back
+// from its file in the table cache directory (median of `loadRuns` reads and
+// checks, spot-check quadrature included; CPU time like the other times).
+struct LambdaTableBench {
+    std::string key;  // the table's name, e.g. "student_t_g3"
+    int nodes = 0;
+    double buildMs = 0;
+    std::optional<double> cachedLoadMs;  // none when the cache could not be written or read (see note)
+    int loadRuns = 0;
+    std::string cacheFile;  // the file read back
+    std::string note;       // why cachedLoadMs is missing, else ""
+};
+
 // ns/eval by batch size (kBatchSizes): the regular sample evaluated in
 // consecutive batches of n lanes, one call each, as a wavefront renderer
 // evaluates its per-material queues; per call the caller's pointer
@@ -149,6 +164,7 @@ struct MaterialBench {
     std::string aotNote;   // why the AOT row is missing, if the tag did not fit
     double parseCheckMs = 0;
     std::optional<EnergyTableBench> energyTable;  // energy = kulla_conty only
+    std::optional<LambdaTableBench> lambdaTable;  // a tabulated Smith Lambda only
     size_t regularLanes = 0, hardLanes = 0;
     std::vector<BenchRow> rows;
     std::vector<SamplerRow> samplerRows;  // empty with BenchSettings::sampling off
@@ -175,6 +191,12 @@ bool benchFile(const std::string& path, const BenchSettings& settings, BenchRepo
 // defaultTableCacheDir(); "" or unwritable: no cached load) unless a valid
 // file is there already, and times reading that file back `loadRuns` times.
 std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& material, int loadRuns,
+                                                 const std::optional<std::string>& cacheDir = std::nullopt);
+
+// The same for the Lambda table of `material` (usesTabulatedLambda, else
+// nullopt): built cold, stored as lambda_<key>.bin in `cacheDir` (default
+// defaultTableCacheDir()) unless a valid file is there, read back `loadRuns` times.
+std::optional<LambdaTableBench> benchLambdaTable(const CheckedMaterial& material, int loadRuns,
                                                  const std::optional<std::string>& cacheDir = std::nullopt);
 
 // Fills the host fields of a report (CPU, features, vector width).

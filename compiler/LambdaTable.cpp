@@ -67,6 +67,17 @@ double quadratureCosLambda(const NdfEntry& ndf, const std::vector<double>& shape
     return theta * sum;
 }
 
+double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, int i,
+                       double (*cosLambdaAt)(const NdfEntry&, const std::vector<double>&, double)) {
+    // alpha = 1: tan(theta) = 1/a, and f = a Lambda = (n.v) Lambda / sin(theta).
+    double a = std::exp(LambdaTable::kX0 + i * LambdaTable::kStep);
+    double theta = std::atan2(1.0, a);
+    double f = cosLambdaAt(ndf, shape, theta) / std::sin(theta);
+    internal_assert(std::isfinite(f) && f >= 0) << "tabulated Lambda of " << lambdaTableName(ndf, shape) << ": f("
+                                                 << a << ") = " << f;
+    return std::max(std::log(f), LambdaTable::kLogFloor);
+}
+
 std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const std::vector<double>& shape,
                                                double (*cosLambdaAt)(const NdfEntry&, const std::vector<double>&,
                                                                      double)) {
@@ -76,15 +87,7 @@ std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const std::v
     table->ndf = &ndf;
     table->shape = shape;
     table->z.resize(LambdaTable::kSize);
-    for (int i = 0; i < LambdaTable::kSize; ++i) {
-        // alpha = 1: tan(theta) = 1/a, and f = a Lambda = (n.v) Lambda / sin(theta).
-        double a = std::exp(LambdaTable::kX0 + i * LambdaTable::kStep);
-        double theta = std::atan2(1.0, a);
-        double f = cosLambdaAt(ndf, shape, theta) / std::sin(theta);
-        internal_assert(std::isfinite(f) && f >= 0) << "tabulated Lambda of " << table->name() << ": f(" << a
-                                                     << ") = " << f;
-        table->z[i] = std::max(std::log(f), LambdaTable::kLogFloor);
-    }
+    for (int i = 0; i < LambdaTable::kSize; ++i) table->z[i] = lambdaTableNode(ndf, shape, i, cosLambdaAt);
     table->buildMillis = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return table;
 }
@@ -109,27 +112,57 @@ double LambdaTable::cosLambda(double proj, double vz) const {
     return root * fAt(u);
 }
 
-std::string LambdaTable::name() const {
-    std::string s = ndf->name;
-    for (size_t i = 0; i < ndf->tableShapeParams.size(); ++i)
-        s += fmt::format("_{}{}", ndf->canonical[ndf->tableShapeParams[i]].tableTag, shape.at(i));
+std::string lambdaTableName(const NdfEntry& ndf, const std::vector<double>& shape) {
+    std::string s = ndf.name;
+    for (size_t i = 0; i < ndf.tableShapeParams.size(); ++i)
+        s += fmt::format("_{}{}", ndf.canonical[ndf.tableShapeParams[i]].tableTag, shape.at(i));
     return s;
 }
 
-std::shared_ptr<const LambdaTable> lambdaTable(const NdfEntry& ndf, const std::vector<double>& shape) {
+std::string LambdaTable::name() const { return lambdaTableName(*ndf, shape); }
+
+namespace {
+
+// The process's memory layer (LambdaTable.h).
+struct MemoryLayer {
     using Key = std::pair<const NdfEntry*, std::vector<double>>;
+    std::mutex mutex;  // building (~0.5 s) under the lock: one build per key
+    std::map<Key, std::shared_ptr<const LambdaTable>> tables;
+    static MemoryLayer& get() {
+        static MemoryLayer layer;
+        return layer;
+    }
+};
+
+}  // namespace
+
+std::shared_ptr<const LambdaTable> lambdaTable(const NdfEntry& ndf, const std::vector<double>& shape) {
     // The last table per thread: the interpreter asks for the same one on
     // every evaluation.
-    thread_local Key lastKey;
+    thread_local MemoryLayer::Key lastKey;
     thread_local std::shared_ptr<const LambdaTable> last;
     if (last && lastKey.first == &ndf && lastKey.second == shape) return last;
-    static std::mutex mutex;
-    static std::map<Key, std::shared_ptr<const LambdaTable>> tables;
-    std::lock_guard<std::mutex> lock(mutex);  // building (~0.3 s) under the lock: one build per key
-    std::shared_ptr<const LambdaTable>& slot = tables[{&ndf, shape}];
+    MemoryLayer& layer = MemoryLayer::get();
+    std::lock_guard<std::mutex> lock(layer.mutex);
+    std::shared_ptr<const LambdaTable>& slot = layer.tables[{&ndf, shape}];
     if (!slot) slot = tabulateCosLambda(ndf, shape, quadratureCosLambda);
     lastKey = {&ndf, shape};
     last = slot;
+    return slot;
+}
+
+std::shared_ptr<const LambdaTable> residentLambdaTable(const NdfEntry& ndf, const std::vector<double>& shape) {
+    MemoryLayer& layer = MemoryLayer::get();
+    std::lock_guard<std::mutex> lock(layer.mutex);
+    auto it = layer.tables.find({&ndf, shape});
+    return it == layer.tables.end() ? nullptr : it->second;
+}
+
+std::shared_ptr<const LambdaTable> adoptLambdaTable(std::shared_ptr<const LambdaTable> table) {
+    MemoryLayer& layer = MemoryLayer::get();
+    std::lock_guard<std::mutex> lock(layer.mutex);
+    std::shared_ptr<const LambdaTable>& slot = layer.tables[{table->ndf, table->shape}];
+    if (!slot) slot = std::move(table);
     return slot;
 }
 
@@ -157,6 +190,10 @@ std::string tabulatedLambdaUnsupported(const CheckedMaterial& m, SourceLoc& loc)
         if (!why.empty()) return fmt::format("masking '{}' with ndf '{}': {}", m.masking.model->name, ndf.name, why);
     }
     return "";
+}
+
+bool usesTabulatedLambda(const CheckedMaterial& m) {
+    return m.masking.model && m.masking.model->smith && m.ndf.model && ndfEntry(*m.ndf.model).tabulatedLambda;
 }
 
 std::vector<double> tabulatedLambdaShape(const CheckedMaterial& m) {

@@ -40,6 +40,17 @@
 // Accuracy (tests/energy, LambdaTableTests): within 1e-6 relative of Lambda
 // against an independent 2D quadrature and against the closed forms of ggx
 // and beckmann put through the same tabulation.
+//
+// ---- sharing and caching -----------------------------------------------------
+//
+// A table is a pure function of (NDF, shape values), immutable once made.
+// lambdaTable() is the process's memory layer: the reference interpreter's
+// catalog formulas, the plan and the emitters' embedded-table hooks (which
+// see only the material) all ask it. A TableCache (tables/TableCache.h,
+// one per Compiler) is the disk layer above it: before a kernel is planned
+// it loads the table from its cache directory (or builds and writes it) and
+// adopts it into the memory layer, so that no quadrature runs when the file
+// is good.
 #pragma once
 
 #include "SourceLoc.h"
@@ -66,7 +77,8 @@ public:
     const NdfEntry* ndf = nullptr;
     std::vector<double> shape;  // the values of the NDF's tableShapeParams
     std::vector<double> z;      // kSize nodes, z[i] = log f(exp(kX0 + i kStep))
-    double buildMillis = 0;
+    double buildMillis = 0;     // the quadrature's time (read back from a cache file)
+    std::string origin = "built";  // or "disk"
 
     // Node coordinate u = (log(a) - kX0) / kStep clamped below at 0; the
     // slope of z per node beyond the last one.
@@ -79,13 +91,28 @@ public:
     std::string name() const;
 };
 
+// The table's name for `ndf` with `shape`: the NDF and each shape value
+// after its tag, printed shortest round-trip exact ("student_t_g1.8").
+std::string lambdaTableName(const NdfEntry& ndf, const std::vector<double>& shape);
+
 // (n.v) Lambda(v) of the isotropic lobe with alpha = 1 of `ndf` (shape
 // values given), by the quadrature above in double: the table's nodes.
 double quadratureCosLambda(const NdfEntry& ndf, const std::vector<double>& shape, double theta);
 
-// The table of `ndf` for the given shape values (built on first use, then
-// shared; thread-safe). `ndf` must be shapeInvariant.
+// Node i of the table: z = log f at a = exp(kX0 + i kStep) from the given
+// (n.v) Lambda, floored at kLogFloor.
+double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, int i,
+                       double (*cosLambdaAt)(const NdfEntry&, const std::vector<double>&, double) = quadratureCosLambda);
+
+// The table of `ndf` for the given shape values from the process's memory
+// layer (built there on first use, then shared; thread-safe). `ndf` must be
+// shapeInvariant.
 std::shared_ptr<const LambdaTable> lambdaTable(const NdfEntry& ndf, const std::vector<double>& shape);
+// The memory layer's table of (ndf, shape), or null (nothing is built).
+std::shared_ptr<const LambdaTable> residentLambdaTable(const NdfEntry& ndf, const std::vector<double>& shape);
+// Puts `table` (e.g. loaded from a cache file) into the memory layer unless
+// that already holds its key; returns the memory layer's table.
+std::shared_ptr<const LambdaTable> adoptLambdaTable(std::shared_ptr<const LambdaTable> table);
 
 // The table built for another D: `build` gives the nodes' (n.v) Lambda at
 // theta (tests put closed-form Lambdas through the same tabulation).
@@ -99,5 +126,7 @@ std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const std::v
 std::string tabulatedLambdaUnsupported(const CheckedMaterial& material, SourceLoc& loc);
 // The clamped constant shape values of the material's NDF.
 std::vector<double> tabulatedLambdaShape(const CheckedMaterial& material);
+// Whether the material's Smith masking needs its NDF's Lambda table.
+bool usesTabulatedLambda(const CheckedMaterial& material);
 
 }  // namespace facet

@@ -275,6 +275,9 @@ public:
     const std::string& cacheDir() const;
     // The warning given when the disk cache was refused (CacheFiles.h), or "".
     std::string cacheWarning() const;
+    // The Kulla-Conty and Lambda tables (memory + the default root's
+    // tables/ on disk) and its events: what was loaded, built or rebuilt.
+    const TableCache& tables() const { return *tables_; }
 
     // Runs the kernel pipeline (Pipeline.h) on this Compiler's JIT and
     // tables; for the timing tool and tests that look at its stages.
@@ -305,7 +308,7 @@ private:
 
     std::shared_ptr<FacetJit> jit_;
     std::shared_ptr<CacheDirectory> cache_;  // kernel objects; tables/ below it
-    std::unique_ptr<TableCache> tables_;     // Kulla-Conty E tables (memory + EXR on disk)
+    std::unique_ptr<TableCache> tables_;     // Kulla-Conty E and Lambda tables (memory + disk)
     std::shared_ptr<MemoryCache> memoryCache_;  // key -> compiled object (eval and sampler)
     // Its thread starts with the first tiered compile; the destructor stops
     // it first, because its running job uses everything above.

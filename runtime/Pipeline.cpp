@@ -71,7 +71,7 @@ void PipelineRun::rewindTo(PipelineStage stage) {
         context.reset();
     }
     if (stage < PipelineStage::Planned) lowering = LoweringOptions{}, plan = LoweringPlan{};
-    if (stage < PipelineStage::Specialized) specialized = CheckedMaterial{}, energyTable.reset();
+    if (stage < PipelineStage::Specialized) specialized = CheckedMaterial{}, energyTable.reset(), lambdaTable.reset();
     internal_assert(stage >= PipelineStage::Checked || readFile || !text.empty())
         << "a pipeline run given a checked material cannot rewind to its source";
     reached = stage;
@@ -98,6 +98,7 @@ bool specialize(PipelineRun& run, TableCache& tables, DiagnosticEngine& diags) {
     run.specialized = specializeMaterial(run.checked, run.options.bindings, diags);
     if (diags.hasErrors()) return false;
     if (run.specialized.compensatesEnergy()) run.energyTable = tables.getFor(run.specialized);
+    if (usesTabulatedLambda(run.specialized)) run.lambdaTable = tables.lambdaFor(run.specialized);
     return true;
 }
 

@@ -56,9 +56,12 @@ struct PipelineRun {
     bool readFile = false;
     CompileOptions options;
     bool simd = true;  // a batch entry (else the scalar one); from options.backend
-    // checked / specialized (with its Kulla-Conty table, if it compensates energy)
+    // checked / specialized (with its Kulla-Conty table, if it compensates
+    // energy, and its NDF's Lambda table, if its masking needs one: loaded
+    // through the TableCache, which puts it where the plan finds it)
     CheckedMaterial checked, specialized;
     std::shared_ptr<const EnergyTable> energyTable;
+    std::shared_ptr<const LambdaTable> lambdaTable;
     // planned
     LoweringOptions lowering;
     LoweringPlan plan;

@@ -1,7 +1,9 @@
-// TableCache: EXR I/O of the Kulla-Conty tables and the cache object.
+// TableCache: EXR I/O of the Kulla-Conty tables and the cache object (both
+// kinds of table; the Lambda file format is in LambdaTableFile.cpp).
 #include "TableCache.h"
 
 #include "CacheFiles.h"
+#include "Material.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -29,6 +31,37 @@ std::string exact(double x) { return fmt::format("{:.17g}", x); }
 
 double millisSince(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+// The table of `key` from `tables`, produced once: concurrent requests for
+// one key wait for a single produce() (the mutex is not held while it runs).
+template <typename Key, typename Table, typename Produce>
+std::shared_ptr<const Table> getOnce(std::mutex& mutex,
+                                     std::map<Key, std::shared_future<std::shared_ptr<const Table>>>& tables,
+                                     const Key& key, Produce&& produce) {
+    std::promise<std::shared_ptr<const Table>> promise;
+    std::shared_future<std::shared_ptr<const Table>> future;
+    bool mine = false;
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        auto it = tables.find(key);
+        if (it != tables.end()) {
+            future = it->second;
+        } else {
+            future = promise.get_future().share();
+            tables.emplace(key, future);
+            mine = true;
+        }
+    }
+    if (!mine) return future.get();  // another thread loads or builds it
+    try {
+        promise.set_value(produce());
+    } catch (...) {
+        promise.set_exception(std::current_exception());
+        std::lock_guard<std::mutex> lock(mutex);
+        tables.erase(key);  // a later request tries again
+    }
+    return future.get();
 }
 
 }  // namespace
@@ -264,29 +297,32 @@ std::vector<TableCache::Event> TableCache::events() const {
 }
 
 std::shared_ptr<const EnergyTable> TableCache::get(const EnergyTableKey& key) {
-    std::promise<std::shared_ptr<const EnergyTable>> promise;
-    std::shared_future<std::shared_ptr<const EnergyTable>> future;
-    bool mine = false;
-    {
-        std::lock_guard<std::mutex> lock(mutex_);
-        auto it = tables_.find(key);
-        if (it != tables_.end()) {
-            future = it->second;
-        } else {
-            future = promise.get_future().share();
-            tables_.emplace(key, future);
-            mine = true;
-        }
+    return getOnce(mutex_, tables_, key, [&] { return produce(key); });
+}
+
+std::shared_ptr<const LambdaTable> TableCache::getLambda(const NdfEntry& ndf, const std::vector<double>& shape) {
+    return getOnce(mutex_, lambdaTables_, std::make_pair(&ndf, shape), [&] { return produceLambda(ndf, shape); });
+}
+
+std::shared_ptr<const LambdaTable> TableCache::lambdaFor(const CheckedMaterial& material) {
+    return getLambda(ndfEntry(*material.ndf.model), tabulatedLambdaShape(material));
+}
+
+std::string TableCache::lambdaPathFor(const NdfEntry& ndf, const std::vector<double>& shape) const {
+    return dir_.empty() ? "" : dir_ + "/" + lambdaTableFileName(ndf, shape);
+}
+
+void TableCache::missed(Event& ev, bool haveBytes, TableFileStatus status, const std::string& message) const {
+    if (!cache_->usable() && dir_.empty()) {
+        ev.action = "built";
+        ev.reason = "memory-only cache";
+    } else if (!cache_->usable() || !haveBytes) {
+        ev.action = "built";
+        ev.reason = cache_->usable() ? "missing" : "refused: " + cache_->warning();
+    } else {
+        ev.action = "rebuilt";
+        ev.reason = std::string(tableFileStatusName(status)) + ": " + message;
     }
-    if (!mine) return future.get();  // another thread loads or builds it
-    try {
-        promise.set_value(produce(key));
-    } catch (...) {
-        promise.set_exception(std::current_exception());
-        std::lock_guard<std::mutex> lock(mutex_);
-        tables_.erase(key);  // a later request tries again
-    }
-    return future.get();
 }
 
 std::shared_ptr<const EnergyTable> TableCache::produce(const EnergyTableKey& key) {
@@ -295,31 +331,46 @@ std::shared_ptr<const EnergyTable> TableCache::produce(const EnergyTableKey& key
     ev.key = key.name();
     std::string path = pathFor(key), relPath = sub_ + "kc_" + key.name() + ".exr";
     std::shared_ptr<EnergyTable> table;
-    if (cache_->usable()) {
-        std::optional<std::string> bytes = cache_->read(relPath, kMaxTableFileBytes);
-        TableFileResult r;
-        if (bytes) r = decodeEnergyTableExr(*bytes, path, &key, quadrature_);
-        if (r.status == TableFileStatus::Ok) {
-            table = r.table;
-            ev.action = "disk";
-        } else if (!bytes) {
-            ev.action = "built";
-            ev.reason = cache_->usable() ? "missing" : "refused: " + cache_->warning();
-        } else {
-            ev.action = "rebuilt";
-            ev.reason = std::string(tableFileStatusName(r.status)) + ": " + r.message;
-        }
+    std::optional<std::string> bytes;
+    TableFileResult r;
+    if (cache_->usable()) bytes = cache_->read(relPath, kMaxTableFileBytes);
+    if (bytes) r = decodeEnergyTableExr(*bytes, path, &key, quadrature_);
+    if (r.status == TableFileStatus::Ok) {
+        table = r.table;
+        ev.action = "disk";
     } else {
-        ev.action = "built";
-        ev.reason = dir_.empty() ? "memory-only cache" : "refused: " + cache_->warning();
-    }
-    if (!table) {
+        missed(ev, bytes.has_value(), r.status, r.message);
         table = buildEnergyTable(key, quadrature_);
-        std::string bytes;
+        std::string encoded;
         if (cache_->usable()) {
-            ev.writeError = encodeEnergyTableExr(*table, bytes);
-            if (ev.writeError.empty()) ev.writeError = cache_->write(relPath, bytes);
+            ev.writeError = encodeEnergyTableExr(*table, encoded);
+            if (ev.writeError.empty()) ev.writeError = cache_->write(relPath, encoded);
         }
+    }
+    ev.millis = millisSince(start);
+    std::lock_guard<std::mutex> lock(mutex_);
+    events_.push_back(ev);
+    return table;
+}
+
+std::shared_ptr<const LambdaTable> TableCache::produceLambda(const NdfEntry& ndf, const std::vector<double>& shape) {
+    auto start = std::chrono::steady_clock::now();
+    Event ev;
+    std::string file = lambdaTableFileName(ndf, shape), relPath = sub_ + file;
+    ev.key = file.substr(0, file.size() - 4);  // without ".bin"
+    std::shared_ptr<const LambdaTable> table;
+    std::optional<std::string> bytes;
+    LambdaTableFileResult r;
+    if (cache_->usable()) bytes = cache_->read(relPath, kMaxLambdaTableFileBytes);
+    if (bytes) r = decodeLambdaTable(*bytes, lambdaPathFor(ndf, shape), &ndf, &shape);
+    if (r.status == TableFileStatus::Ok) {
+        table = adoptLambdaTable(r.table);
+        ev.action = "disk";
+    } else {
+        missed(ev, bytes.has_value(), r.status, r.message);
+        if (residentLambdaTable(ndf, shape)) ev.reason += " (the process already held the table)";
+        table = lambdaTable(ndf, shape);
+        if (cache_->usable()) ev.writeError = cache_->write(relPath, encodeLambdaTable(*table));
     }
     ev.millis = millisSince(start);
     std::lock_guard<std::mutex> lock(mutex_);

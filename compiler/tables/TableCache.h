@@ -1,5 +1,6 @@
 // TableCache: Kulla-Conty E tables (KullaConty.h) on disk as EXR files
-// through OpenImageIO, and an in-memory cache of them owned by the caller.
+// through OpenImageIO, tabulated Smith Lambdas (LambdaTable.h) on disk as
+// small binary files, and an in-memory cache of both owned by the caller.
 //
 // Library facet_tables (links OpenImageIO); the front end stays free of it.
 //
@@ -24,10 +25,27 @@
 // it, so a concurrent reader never sees half a file). The cache's files are
 // read and written through a CacheDirectory (CacheFiles.h): only files the
 // current user owns and nobody else can write are loaded.
+//
+// Lambda table files (one per NDF and shape, lambda_<name>.bin, e.g.
+// lambda_student_t_g1.8.bin, the shape printed shortest round-trip exact):
+// a text header of "field value" lines, an empty line, then the kSize nodes
+// z as IEEE binary64 little-endian (exact: a loaded table is bit-identical
+// to the built one). The first line is "facet lambda table"; the fields are
+// kind (smith_lambda), version (kLambdaTableVersion), key, ndf, shape
+// (comma-separated, %.17g), x0, step, count, floor, axis, encoding,
+// build_ms and checksum (FNV-1a 64 of the node bytes). Reading checks, in
+// order: the first line and the header's end (else "unreadable"); kind,
+// version, ndf, key and shape as expected, the grid and encoding this build
+// uses (else "stale"); the node bytes' count and checksum, every node finite
+// and at least the floor, and four nodes recomputed by quadrature (else
+// "corrupt"). A miss of any kind takes the table from the process's memory
+// layer (lambdaTable(), which builds it once per process) and rewrites the
+// file atomically; a hit is adopted into that layer (LambdaTable.h).
 #pragma once
 
 #include "CacheFiles.h"
 #include "KullaConty.h"
+#include "LambdaTable.h"
 
 #include <future>
 #include <map>
@@ -72,6 +90,29 @@ TableFileResult readEnergyTableExr(const std::string& path, const EnergyTableKey
 TableFileResult decodeEnergyTableExr(const std::string& bytes, const std::string& path,
                                      const EnergyTableKey* expected = nullptr, const EnergyQuadrature& quadrature = {});
 
+// Largest Lambda table file read (the nodes are 33 KB).
+constexpr uint64_t kMaxLambdaTableFileBytes = uint64_t(1) << 20;
+
+// "lambda_student_t_g1.8.bin".
+std::string lambdaTableFileName(const NdfEntry& ndf, const std::vector<double>& shape);
+// The bytes of the Lambda table file of `table`.
+std::string encodeLambdaTable(const LambdaTable& table);
+
+struct LambdaTableFileResult {
+    TableFileStatus status = TableFileStatus::Missing;
+    std::string message;                 // why it is not Ok
+    std::shared_ptr<LambdaTable> table;  // set when Ok, origin "disk"
+};
+// Reads the bytes of a Lambda table file; `path` names it in messages. With
+// `ndf`, a table for another NDF or `shape` is Stale.
+LambdaTableFileResult decodeLambdaTable(const std::string& bytes, const std::string& path,
+                                        const NdfEntry* ndf = nullptr, const std::vector<double>* shape = nullptr);
+
+// Reads the Lambda table file at `path` (missing: Missing; refused or not
+// a regular file: Unreadable), expecting the table of `ndf` with `shape`.
+LambdaTableFileResult readLambdaTableFile(const std::string& path, const NdfEntry& ndf,
+                                          const std::vector<double>& shape);
+
 // Tables by key, shared by shared_ptr and immutable once built. Thread-safe:
 // concurrent requests for one key wait for a single load/build (the mutex is
 // not held while building). Owned by the caller (e.g. one per facet::Compiler);
@@ -87,9 +128,16 @@ public:
     std::shared_ptr<const EnergyTable> get(const EnergyTableKey& key);
     // The table of a checked material with energy = kulla_conty.
     std::shared_ptr<const EnergyTable> getFor(const CheckedMaterial& material) { return get(energyTableKey(material)); }
+    // The Lambda table of `ndf` with `shape` (see the top of this file), the
+    // same object for every request to this cache.
+    std::shared_ptr<const LambdaTable> getLambda(const NdfEntry& ndf, const std::vector<double>& shape);
+    // The table of a checked material for which usesTabulatedLambda holds.
+    std::shared_ptr<const LambdaTable> lambdaFor(const CheckedMaterial& material);
 
     // kc_<key>.exr in dir (empty when dir is empty).
     std::string pathFor(const EnergyTableKey& key) const;
+    // lambda_<name>.bin in dir (empty when dir is empty).
+    std::string lambdaPathFor(const NdfEntry& ndf, const std::vector<double>& shape) const;
     const std::string& dir() const { return dir_; }
     // The warning given when the directory or a file in it was refused, or "".
     std::string refusal() const { return cache_->warning(); }
@@ -97,7 +145,9 @@ public:
     // What happened per request that reached the disk or built a table:
     // action is "disk" (loaded), "built" (no file), "rebuilt" (the file was
     // stale, unreadable or corrupt: reason says which), with the time taken
-    // and any failure to write the file.
+    // and any failure to write the file. key is the E table's key or the
+    // Lambda file's stem ("lambda_student_t_g1.8"); a Lambda table the
+    // process already held is not built again (reason says so).
     struct Event {
         std::string key, action, reason, writeError;
         double millis = 0;
@@ -106,6 +156,9 @@ public:
 
 private:
     std::shared_ptr<const EnergyTable> produce(const EnergyTableKey& key);
+    std::shared_ptr<const LambdaTable> produceLambda(const NdfEntry& ndf, const std::vector<double>& shape);
+    // The action and reason of a request that found no usable file.
+    void missed(Event& ev, bool haveBytes, TableFileStatus status, const std::string& message) const;
 
     std::shared_ptr<CacheDirectory> cache_;
     std::string sub_;  // "" or "SUBDIR/" below cache_'s root
@@ -113,6 +166,8 @@ private:
     EnergyQuadrature quadrature_;
     mutable std::mutex mutex_;
     std::map<EnergyTableKey, std::shared_future<std::shared_ptr<const EnergyTable>>> tables_;
+    std::map<std::pair<const NdfEntry*, std::vector<double>>, std::shared_future<std::shared_ptr<const LambdaTable>>>
+        lambdaTables_;
     std::vector<Event> events_;
 };
 

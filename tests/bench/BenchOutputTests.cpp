@@ -5,12 +5,14 @@
 // and carry every field with the right type for every row, and the scatter
 // plot must be written with the documented size. A quick bench of
 // materials/gold.mat (energy = kulla_conty) must report its Kulla-Conty
-// table (cold build, cached load) in the JSON, Markdown and terminal output.
+// table (cold build, cached load) in the JSON, Markdown and terminal output,
+// and bench/models/student_t_plastic.mat its Smith Lambda table.
 #include "BenchFormat.h"
 #include "BenchPlot.h"
 #include "BenchRunner.h"
 #include "Checker.h"
 #include "KullaConty.h"
+#include "LambdaTable.h"
 
 #include <OpenImageIO/imageio.h>
 #include <doctest/doctest.h>
@@ -185,6 +187,19 @@ const bench::BenchReport& kullaContyReport() {
     return report;
 }
 
+// What printTable writes for `report`.
+std::string terminalReport(const bench::BenchReport& report) {
+    char* buf = nullptr;
+    size_t size = 0;
+    std::FILE* out = open_memstream(&buf, &size);
+    REQUIRE(out);
+    bench::printTable(report, out);
+    std::fclose(out);
+    std::string text(buf, size);
+    std::free(buf);
+    return text;
+}
+
 // The JSON of a one-material report, parsed: that material's object.
 JsonObject materialJson(const bench::BenchReport& report) {
     std::string text = bench::json(report);
@@ -270,11 +285,13 @@ TEST_CASE("bench --json output parses and has every field") {
     for (const char* k : {"parse_check_ms", "regular_lanes", "hard_lanes"}) checkField(m, k, Kind::Number);
     checkField(m, "kulla_conty_ms", Kind::NumberOrNull);
     checkField(m, "energy_table", Kind::ObjectOrNull);
+    checkField(m, "lambda_table", Kind::ObjectOrNull);
     checkField(m, "rows", Kind::Array);
     CHECK(m.at("material").str() == "ggx_schlick");
     CHECK(m.at("aot").str() == "ggx_schlick");
     CHECK(m.at("energy_table").isNull());  // energy = none
     CHECK(m.at("kulla_conty_ms").isNull());
+    CHECK(m.at("lambda_table").isNull());  // ggx: a closed-form Lambda
 
     // Every backend x mode, and the AOT row.
     std::set<std::pair<std::string, std::string>> seen;
@@ -414,14 +431,7 @@ TEST_CASE("a kulla_conty material reports its table: cold build and cached load"
     CHECK(at != std::string::npos);
     CHECK(at > md.find("## gold"));
     CHECK(at < md.find("| backend |"));
-    char* buf = nullptr;
-    size_t size = 0;
-    std::FILE* out = open_memstream(&buf, &size);
-    REQUIRE(out);
-    bench::printTable(report, out);
-    std::fclose(out);
-    std::string text(buf, size);
-    std::free(buf);
+    std::string text = terminalReport(report);
     at = text.find("  " + line + "\n");
     CHECK(at != std::string::npos);
     CHECK(at < text.find("backend "));
@@ -438,6 +448,51 @@ TEST_CASE("the Kulla-Conty table bench without a cache directory reports why the
     CHECK(e->buildMs > 0);
     CHECK(!e->cachedLoadMs);
     CHECK(e->note.find("no table cache directory") != std::string::npos);
+}
+
+// The Lambda table of bench/models/student_t_plastic.mat (student_t, gamma
+// 3, under a Smith masking): built cold, written to and loaded from a cache
+// directory of its own, and reported in the JSON, Markdown and terminal
+// output (a report of that material alone, without its timing rows: about
+// a second, the quadrature's time).
+TEST_CASE("a material with a tabulated Smith Lambda reports its table: cold build and cached load") {
+    DiagnosticEngine diags;
+    const std::string file = std::string(FACET_SOURCE_DIR) + "/bench/models/student_t_plastic.mat";
+    CheckedProgram program = loadProgramFile(file, diags);
+    REQUIRE_MESSAGE(!diags.hasErrors(), diags.str());
+    std::filesystem::path dir = std::filesystem::temp_directory_path() / "facet-bench-lambda-test";
+    std::filesystem::remove_all(dir);
+    bench::BenchReport report;
+    bench::MaterialBench mb;
+    mb.file = file;
+    mb.material = program.materials.at(0).name;
+    mb.lambdaTable = bench::benchLambdaTable(program.materials.at(0), 3, dir.string());
+    REQUIRE(mb.lambdaTable);
+    report.materials.push_back(mb);
+    const JsonObject m = materialJson(report);
+    checkField(m, "lambda_table", Kind::Object);
+    const JsonObject& e = m.at("lambda_table").obj();
+    for (const char* k : {"key", "cache_file", "note"}) checkField(e, k, Kind::String);
+    for (const char* k : {"nodes", "build_ms", "cached_load_ms", "cached_load_runs"}) checkField(e, k, Kind::Number);
+    CHECK(e.at("key").str() == "student_t_g3");
+    CHECK(e.at("nodes").num() == LambdaTable::kSize);
+    CHECK(e.at("build_ms").num() > 0);
+    CHECK(e.at("cached_load_ms").num() > 0);
+    CHECK(e.at("cached_load_runs").num() == 3);
+    CHECK(e.at("note").str() == "");
+    // A load reads 33 KB and recomputes four nodes; the build computes 4128.
+    CHECK(e.at("cached_load_ms").num() < e.at("build_ms").num());
+    CHECK(e.at("cache_file").str() == (dir / "lambda_student_t_g3.bin").string());
+    CHECK(std::filesystem::exists(e.at("cache_file").str()));
+    MESSAGE(bench::lambdaTableLine(report.materials[0]));
+
+    std::string line = bench::lambdaTableLine(report.materials[0]);
+    CHECK(line.find("Smith Lambda table: student_t_g3, built in ") == 0);
+    CHECK(line.find(" ms (cold, 4128 nodes; one thread) / loaded from cache in ") != std::string::npos);
+    CHECK(bench::markdown(report).find(line + ".") != std::string::npos);
+    std::string text = terminalReport(report);
+    CHECK(text.find("  " + line + "\n") != std::string::npos);
+    std::filesystem::remove_all(dir);
 }
 
 TEST_CASE("the Markdown and terminal reports name every row") {

@@ -10,6 +10,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <cstring>
@@ -198,6 +199,58 @@ TEST_CASE("cache: an empty FACET_CACHE_DIR means no disk cache, for tables too")
         Compiler c;
         CHECK(c.cacheDir() == "");
     }
+    if (old) ::setenv("FACET_CACHE_DIR", saved.c_str(), 1);
+    else ::unsetenv("FACET_CACHE_DIR");
+}
+
+TEST_CASE("table cache: a Compiler writes the Lambda table, a second loads it and computes the same bits") {
+    ScratchDir scratch("lambda");
+    const char* old = std::getenv("FACET_CACHE_DIR");
+    std::string saved = old ? old : "";
+    ::setenv("FACET_CACHE_DIR", scratch.str().c_str(), 1);
+    // gamma 2.25: no other test of this binary uses it, so the first
+    // Compiler builds the table itself.
+    const char* text = "material m { input alpha = 0.3 in 0.001 .. 1; ndf = student_t(alpha, 2.25); "
+                       "masking = smith_height_correlated; }";
+    const fs::path file = scratch.path / "tables" / "lambda_student_t_g2.25.bin";
+    auto evalAll = [&](Compiler& c) {
+        auto k = compileWith(c, text, "backend=simd;codegen=optimized;cache=off");
+        std::vector<float> out;
+        for (float alpha : {0.01f, 0.3f, 1.0f})
+            for (double t : {0.0, 0.7, 1.3, 1.5, 1.5703}) {
+                float wi[3] = {float(std::sin(t)), 0, float(std::cos(t))}, wo[3] = {-0.6f, 0, 0.8f}, rgb[3];
+                k->eval(wi, wo, &alpha, rgb);
+                out.push_back(rgb[0]);
+            }
+        return out;
+    };
+    auto lambdaEvent = [](const Compiler& c) {
+        for (const TableCache::Event& e : c.tables().events())
+            if (e.key == "lambda_student_t_g2.25") return e;
+        FAIL("no Lambda table event");
+        return TableCache::Event{};
+    };
+    std::vector<float> first, second;
+    {
+        Compiler a;
+        first = evalAll(a);
+        TableCache::Event e = lambdaEvent(a);
+        CHECK(e.action == "built");
+        CHECK(e.reason == "missing");
+        CHECK(e.writeError == "");
+        CHECK(fs::exists(file));
+        struct stat st;
+        REQUIRE(::stat(file.c_str(), &st) == 0);
+        CHECK((st.st_mode & 0777) == 0600);
+    }
+    {
+        Compiler b;
+        second = evalAll(b);
+        CHECK(lambdaEvent(b).action == "disk");
+    }
+    REQUIRE(first.size() == second.size());
+    CHECK(std::memcmp(first.data(), second.data(), first.size() * sizeof(float)) == 0);
+    CHECK(std::any_of(first.begin(), first.end(), [](float v) { return v > 0; }));
     if (old) ::setenv("FACET_CACHE_DIR", saved.c_str(), 1);
     else ::unsetenv("FACET_CACHE_DIR");
 }

@@ -914,7 +914,7 @@ TEST_CASE("tiered compile: the quick code and the optimized code give the same b
             }
         }
     }
-    CHECK(kernels == 54);
+    CHECK(kernels == 57);
 }
 
 // Renderer threads keep evaluating while the tier-up switches the entry

@@ -1,0 +1,196 @@
+// The Lambda tables on disk (compiler/tables/TableCache.h, LambdaTableFile.cpp):
+// the file round trip is bit-exact; a cold cache writes the file and a second
+// cache loads it; truncated, damaged, wrong and stale files are rebuilt with
+// the reason; a memory-only or refused cache writes nothing. One gamma
+// throughout: the process builds its table once (~0.5 s), the rest is I/O.
+#include "LambdaTable.h"
+#include "TableCache.h"
+
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using facet::LambdaTable;
+using facet::TableCache;
+using facet::TableFileStatus;
+
+namespace {
+
+const facet::NdfEntry& studentT() { return facet::ndfEntry(facet::modelNamed(facet::ModelSlot::Ndf, "student_t")); }
+const std::vector<double> kShape = {2.5};
+
+struct TempDir {
+    fs::path path;
+    TempDir() {
+        static std::atomic<int> counter{0};
+        path = fs::temp_directory_path() / ("facet_lambda_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+        fs::remove_all(path);
+        fs::create_directories(path);
+        ::chmod(path.c_str(), 0700);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(path, ec);
+    }
+};
+
+bool sameBits(const std::vector<double>& a, const std::vector<double>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+std::string readAll(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), {}};
+}
+
+void writeAll(const std::string& path, const std::string& bytes) {
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+    ::chmod(path.c_str(), 0600);
+}
+
+TableCache::Event lastEvent(const TableCache& c) {
+    std::vector<TableCache::Event> events = c.events();
+    REQUIRE(!events.empty());
+    return events.back();
+}
+
+}  // namespace
+
+TEST_SUITE("lambda cache") {
+
+TEST_CASE("Lambda table file: the nodes round-trip bit for bit, the header names the table") {
+    auto table = facet::lambdaTable(studentT(), kShape);
+    std::string bytes = facet::encodeLambdaTable(*table);
+    CHECK(bytes.rfind("facet lambda table\nkind smith_lambda\nversion 1\nkey student_t_g2.5\n", 0) == 0);
+    CHECK(bytes.find("\nshape 2.5\n") != std::string::npos);
+    CHECK(bytes.find("\ncount 4128\n") != std::string::npos);
+    CHECK(facet::lambdaTableFileName(studentT(), kShape) == "lambda_student_t_g2.5.bin");
+    facet::LambdaTableFileResult r = facet::decodeLambdaTable(bytes, "t.bin", &studentT(), &kShape);
+    INFO(r.message);
+    REQUIRE(r.status == TableFileStatus::Ok);
+    CHECK(sameBits(r.table->z, table->z));
+    CHECK(r.table->ndf == &studentT());
+    CHECK(r.table->shape == kShape);
+    CHECK(r.table->origin == "disk");
+    CHECK(r.table->buildMillis == table->buildMillis);
+    // Another gamma's table under this name is stale, not used.
+    std::vector<double> other = {3.0};
+    facet::LambdaTableFileResult s = facet::decodeLambdaTable(bytes, "t.bin", &studentT(), &other);
+    CHECK(s.status == TableFileStatus::Stale);
+    CHECK(s.message.find("expected student_t_g3") != std::string::npos);
+}
+
+TEST_CASE("Lambda cache: a cold cache writes the file, a second loads it; bad files are rebuilt with the reason") {
+    TempDir dir;
+    auto reference = facet::lambdaTable(studentT(), kShape);
+    std::string path;
+    {
+        TableCache c(dir.path.string());
+        path = c.lambdaPathFor(studentT(), kShape);
+        CHECK(fs::path(path).filename() == "lambda_student_t_g2.5.bin");
+        auto t = c.getLambda(studentT(), kShape);
+        TableCache::Event e = lastEvent(c);
+        CHECK(e.key == "lambda_student_t_g2.5");
+        CHECK(e.action == "built");
+        CHECK(e.reason.rfind("missing", 0) == 0);
+        CHECK(e.writeError == "");
+        CHECK(fs::exists(path));
+        CHECK(sameBits(t->z, reference->z));
+        CHECK(c.getLambda(studentT(), kShape) == t);  // once per cache
+        CHECK(c.events().size() == 1);
+    }
+    {
+        TableCache c(dir.path.string());
+        auto t = c.getLambda(studentT(), kShape);
+        TableCache::Event e = lastEvent(c);
+        CHECK(e.action == "disk");
+        CHECK(sameBits(t->z, reference->z));
+        MESSAGE("Lambda table loaded from disk in ", e.millis, " ms (built in ", reference->buildMillis, " ms)");
+    }
+    const std::string good = readAll(path);
+    auto rebuiltBecause = [&](const char* status, const char* detail) {
+        TableCache c(dir.path.string());
+        auto t = c.getLambda(studentT(), kShape);
+        TableCache::Event e = lastEvent(c);
+        INFO("event: ", e.action, " / ", e.reason);
+        CHECK(e.action == "rebuilt");
+        CHECK(e.reason.rfind(status, 0) == 0);
+        CHECK(e.reason.find(detail) != std::string::npos);
+        CHECK(e.writeError == "");
+        CHECK(sameBits(t->z, reference->z));
+        CHECK(readAll(path) == good);  // rewritten
+    };
+    const size_t nodes = good.find("\n\n") + 2;
+    auto patchNode = [&](int i, double v) {
+        // A node changed and the checksum fixed up: only the values can tell.
+        LambdaTable copy = *reference;
+        copy.z[i] = v;
+        writeAll(path, facet::encodeLambdaTable(copy));
+    };
+    SUBCASE("corrupt: truncated") {
+        writeAll(path, good.substr(0, good.size() - 100));
+        rebuiltBecause("corrupt", "bytes of nodes, expected 33024");
+    }
+    SUBCASE("corrupt: a damaged byte") {
+        std::string bad = good;
+        bad[nodes + 8 * 1000 + 3] ^= 0x10;
+        writeAll(path, bad);
+        rebuiltBecause("corrupt", "checksum");
+    }
+    SUBCASE("corrupt: a NaN node") {
+        patchNode(77, std::nan(""));
+        rebuiltBecause("corrupt", "node 77 is nan");
+    }
+    SUBCASE("corrupt: a node off by 1e-9 where a spot check looks") {
+        patchNode(LambdaTable::kSize / 3, reference->z[LambdaTable::kSize / 3] + 1e-9);
+        rebuiltBecause("corrupt", "the quadrature gives");
+    }
+    SUBCASE("stale: another table version") {
+        std::string bad = good;
+        bad.replace(bad.find("version 1\n"), 10, "version 0\n");
+        writeAll(path, bad);
+        rebuiltBecause("stale", "version '0'");
+    }
+    SUBCASE("stale: another gamma's table under this name") {
+        LambdaTable copy = *reference;
+        copy.shape = {3.0};
+        writeAll(path, facet::encodeLambdaTable(copy));
+        rebuiltBecause("stale", "holds table student_t_g3");
+    }
+    SUBCASE("unreadable: not a table file") {
+        writeAll(path, "this is not a Lambda table");
+        rebuiltBecause("unreadable", "not a Facet Lambda table file");
+    }
+}
+
+TEST_CASE("Lambda cache: memory only, and a group-writable directory refused with the warning") {
+    {
+        TableCache c("");
+        CHECK(c.lambdaPathFor(studentT(), kShape) == "");
+        auto t = c.getLambda(studentT(), kShape);
+        CHECK(t == facet::lambdaTable(studentT(), kShape));
+        CHECK(lastEvent(c).action == "built");
+        CHECK(lastEvent(c).reason.rfind("memory-only cache", 0) == 0);
+    }
+    TempDir dir;
+    REQUIRE(::chmod(dir.path.c_str(), 0775) == 0);
+    std::vector<std::string> warnings;
+    auto cache = std::make_shared<facet::CacheDirectory>(dir.path.string(),
+                                                         [&](const std::string& m) { warnings.push_back(m); });
+    TableCache c(cache, "tables");
+    auto t = c.getLambda(studentT(), kShape);
+    REQUIRE(t);
+    REQUIRE(warnings.size() == 1);
+    CHECK(warnings[0].find("is writable by group or others") != std::string::npos);
+    CHECK(lastEvent(c).reason.rfind("refused: ", 0) == 0);
+    CHECK(fs::is_empty(dir.path));
+}
+
+}  // TEST_SUITE
