@@ -205,6 +205,60 @@ TEST_CASE("two compilers with two JITs in one process give identical results") {
         for (size_t i = 0; i < 100; ++i) CHECK(z.out[c][i] == x.out[c][i]);
 }
 
+TEST_CASE("a SIMD kernel's one-lane eval equals its batch lane, with few and with many input slots") {
+    // Many: eleven rgb tints and a roughness, 34 slots, more than eval()
+    // keeps on the stack.
+    std::string many = "material many {\n    input roughness = 0.35 in 0 .. 1;\n";
+    std::string f0 = "rgb(0.9, 0.6, 0.5)";
+    for (int t = 0; t < 11; ++t) {
+        many += fmt::format("    input tint{} = rgb(1, 0.98, 0.96) in 0 .. 1;\n", t);
+        f0 += fmt::format(" * tint{}", t);
+    }
+    many += "    ndf = ggx(roughness * roughness);\n    masking = smith_height_correlated;\n";
+    many += "    fresnel = schlick(f0 = " + f0 + ");\n}\n";
+    Compiler compiler;
+    for (const std::string& text : {std::string(kGold), many}) {
+        auto k = compile(compiler, text, "backend=simd;cache=off");
+        const int slots = k->inputCount();
+        CHECK(slots == (text == many ? 34 : 4));
+        // Lane 0 of every 7 is invalid (wi not unit): rgb 0 on both paths.
+        Batch lanes(301, 5);
+        for (size_t i = 0; i < lanes.size(); i += 7) lanes.dir[0][i] = 2.0f;
+        std::mt19937 rng(9);
+        std::uniform_real_distribution<float> u(0.5f, 1.0f);
+        lanes.slots.resize(size_t(slots));
+        for (int s = 1; s < slots; ++s)
+            for (size_t i = 0; i < lanes.size(); ++i) lanes.slots[size_t(s)].push_back(u(rng));
+        lanes.finish();
+        std::vector<float> batchOut[3];
+        for (auto& o : batchOut) o.assign(lanes.size(), -1.0f);
+        float* rgb[3] = {batchOut[0].data(), batchOut[1].data(), batchOut[2].data()};
+        CHECK(k->evalBatch(int64_t(lanes.size()), lanes.wi(), lanes.wo(), lanes.inputs(), rgb) == 43);
+        std::vector<float> in(static_cast<size_t>(slots));
+        for (size_t i = 0; i < lanes.size(); ++i) {
+            float wi[3] = {lanes.dir[0][i], lanes.dir[1][i], lanes.dir[2][i]};
+            float wo[3] = {lanes.dir[3][i], lanes.dir[4][i], lanes.dir[5][i]};
+            for (int s = 0; s < slots; ++s) in[size_t(s)] = lanes.slots[size_t(s)][i];
+            float one[3] = {-1, -1, -1};
+            k->eval(wi, wo, in.data(), one);
+            for (int c = 0; c < 3; ++c) CHECK(one[c] == batchOut[c][i]);
+            if (i % 7 == 0) CHECK(one[0] == 0.0f);
+            else CHECK(one[0] > 0.0f);
+        }
+        // inputs = NULL: every slot's default, as a batch without columns.
+        float wi[3] = {lanes.dir[0][1], lanes.dir[1][1], lanes.dir[2][1]};
+        float wo[3] = {lanes.dir[3][1], lanes.dir[4][1], lanes.dir[5][1]};
+        float one[3], viaBatch[3];
+        k->eval(wi, wo, nullptr, one);
+        const float* wiP[3] = {&wi[0], &wi[1], &wi[2]};
+        const float* woP[3] = {&wo[0], &wo[1], &wo[2]};
+        float* out[3] = {&viaBatch[0], &viaBatch[1], &viaBatch[2]};
+        CHECK(k->evalBatch(1, wiP, woP, nullptr, out) == 0);
+        for (int c = 0; c < 3; ++c) CHECK(one[c] == viaBatch[c]);
+        CHECK(one[0] > 0.0f);
+    }
+}
+
 TEST_CASE("concurrent batches from two threads on one kernel equal the serial result") {
     Compiler compiler;
     auto k = compile(compiler, kGold, "backend=simd;cache=off");
