@@ -12,6 +12,9 @@
 #include "Specialize.h"
 
 #include <doctest/doctest.h>
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 #include <atomic>
 #include <cstring>
 #include <filesystem>
@@ -258,6 +261,38 @@ TEST_CASE("a SIMD kernel's one-lane eval equals its batch lane, with few and wit
         CHECK(one[0] > 0.0f);
     }
 }
+
+#if defined(__x86_64__)
+TEST_CASE("fast kernels leave MXCSR as the host set it, and a host that flushes itself gets the same bits") {
+    // A fast kernel sets FTZ and DAZ for the call unless the host has both
+    // set already; either way the call runs flushed and restores the host's
+    // MXCSR.
+    Compiler compiler;
+    const unsigned host = _mm_getcsr();
+    for (const char* spec : {"backend=simd;math=fast;cache=off", "backend=scalar;math=fast;cache=off"}) {
+        CAPTURE(spec);
+        auto k = compile(compiler, kGold, spec);
+        Batch plain(1003, 3), flushed(1003, 3);
+        // A subnormal direction component and roughness on some lanes.
+        for (size_t i = 0; i < plain.size(); i += 5)
+            for (Batch* b : {&plain, &flushed}) {
+                b->dir[0][i] = 1e-39f, b->dir[1][i] = 0.0f, b->dir[2][i] = 1.0f;
+                b->slots[0][i] = 1e-40f;
+            }
+        // The control bits; the exception flags (bits 0-5) are sticky status
+        // that the host's own conversions may raise.
+        auto control = [] { return _mm_getcsr() & ~0x3fu; };
+        CHECK(plain.run(*k) == 0);
+        CHECK(control() == (host & ~0x3fu));
+        _mm_setcsr(host | 0x8040u);
+        CHECK(flushed.run(*k) == 0);
+        const unsigned during = control();
+        _mm_setcsr(host);
+        CHECK(during == ((host | 0x8040u) & ~0x3fu));
+        for (int c = 0; c < 3; ++c) CHECK(plain.out[c] == flushed.out[c]);
+    }
+}
+#endif
 
 TEST_CASE("concurrent batches from two threads on one kernel equal the serial result") {
     Compiler compiler;
