@@ -294,6 +294,39 @@ TEST_CASE("fast kernels leave MXCSR as the host set it, and a host that flushes 
 }
 #endif
 
+TEST_CASE("short batches (n = 1 .. 17, partial chunks) give the long batch's bits, invalid lanes and statuses") {
+    Compiler compiler;
+    for (const char* spec : {"backend=simd;math=exact;cache=off", "backend=simd;math=fast;cache=off",
+                             "backend=simd;math=exact;width=4;cache=off", "backend=simd;math=fast;width=16;cache=off"}) {
+        CAPTURE(spec);
+        auto k = compile(compiler, kGold, spec);
+        Batch whole(17 * 18 / 2, 21), pieces(17 * 18 / 2, 21);
+        // Every fifth lane invalid: a wo that is not unit.
+        size_t bad = 0;
+        for (size_t i = 0; i < whole.size(); i += 5, ++bad) whole.dir[5][i] = pieces.dir[5][i] = 3.0f;
+        std::vector<uint8_t> wholeStatus(whole.size(), 7), pieceStatus(whole.size(), 7);
+        const float* wi[3] = {whole.dir[0].data(), whole.dir[1].data(), whole.dir[2].data()};
+        const float* wo[3] = {whole.dir[3].data(), whole.dir[4].data(), whole.dir[5].data()};
+        const float* in[4] = {whole.slots[0].data(), nullptr, nullptr, nullptr};
+        float* rgb[3] = {whole.out[0].data(), whole.out[1].data(), whole.out[2].data()};
+        CHECK(k->evalBatch(int64_t(whole.size()), wi, wo, in, rgb, wholeStatus.data()) == int64_t(bad));
+        size_t begin = 0;
+        int64_t invalid = 0;
+        for (size_t n = 1; n <= 17; begin += n, ++n) {
+            const float* pwi[3] = {&pieces.dir[0][begin], &pieces.dir[1][begin], &pieces.dir[2][begin]};
+            const float* pwo[3] = {&pieces.dir[3][begin], &pieces.dir[4][begin], &pieces.dir[5][begin]};
+            const float* pin[4] = {&pieces.slots[0][begin], nullptr, nullptr, nullptr};
+            float* prgb[3] = {&pieces.out[0][begin], &pieces.out[1][begin], &pieces.out[2][begin]};
+            invalid += k->evalBatch(int64_t(n), pwi, pwo, pin, prgb, &pieceStatus[begin]);
+        }
+        REQUIRE(begin == whole.size());
+        CHECK(invalid == int64_t(bad));
+        CHECK(pieceStatus == wholeStatus);
+        for (int c = 0; c < 3; ++c) CHECK(pieces.out[c] == whole.out[c]);
+        for (size_t i = 0; i < whole.size(); ++i) CHECK(wholeStatus[i] == (i % 5 == 0 ? 1 : 0));
+    }
+}
+
 TEST_CASE("concurrent batches from two threads on one kernel equal the serial result") {
     Compiler compiler;
     auto k = compile(compiler, kGold, "backend=simd;cache=off");
