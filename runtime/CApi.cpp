@@ -61,19 +61,25 @@ std::string& lastError() {
     return message;
 }
 
-int64_t callError(const char* fn, const std::string& what) {
+[[gnu::noinline, gnu::cold]] int64_t callError(const char* fn, const std::string& what) {
     lastError() = std::string(fn) + ": error: " + what;
     return -1;
 }
 
-// Which required array is missing: the pointer array itself or one of its three entries.
+// Whether a required array and its three entries are all there: plain pointer
+// tests, inlined into every batch call.
 template <typename T>
-const char* missingArray(T* const* array, const char* name) {
-    static thread_local std::string text;
-    if (!array) text = std::string(name) + " is NULL";
-    else if (!array[0] || !array[1] || !array[2]) text = std::string(name) + "[" + std::to_string(!array[0] ? 0 : !array[1] ? 1 : 2) + "] is NULL";
-    else return nullptr;
-    return text.c_str();
+inline bool complete(T* const* array) {
+    return array && array[0] && array[1] && array[2];
+}
+
+// Which part of an incomplete array is missing: the pointer array itself or
+// one of its three entries. Only the failing call pays for the text (and for
+// the thread-local string behind facet_last_error).
+template <typename T>
+[[gnu::noinline, gnu::cold]] int64_t missingArray(const char* fn, T* const* array, const char* name) {
+    if (!array) return callError(fn, std::string(name) + " is NULL");
+    return callError(fn, std::string(name) + "[" + std::to_string(!array[0] ? 0 : !array[1] ? 1 : 2) + "] is NULL");
 }
 
 }  // namespace
@@ -129,9 +135,9 @@ int64_t facet_eval_batch_status(const facet_kernel* k, int64_t n, const float* c
     if (!k) return callError(fn, "the kernel is NULL");
     if (n < 0) return callError(fn, "n is negative (" + std::to_string(n) + ")");
     if (n == 0) return 0;
-    if (const char* missing = missingArray(wi, "wi")) return callError(fn, missing);
-    if (const char* missing = missingArray(wo, "wo")) return callError(fn, missing);
-    if (const char* missing = missingArray(rgb, "rgb")) return callError(fn, missing);
+    if (!complete(wi)) return missingArray(fn, wi, "wi");
+    if (!complete(wo)) return missingArray(fn, wo, "wo");
+    if (!complete(rgb)) return missingArray(fn, rgb, "rgb");
     return k->kernel->evalBatch(n, wi, wo, inputs, rgb, status);
 }
 
@@ -156,11 +162,11 @@ int64_t facet_sample_batch(const facet_kernel* k, int64_t n, const float* const 
     if (!k) return callError(fn, "the kernel is NULL");
     if (n < 0) return callError(fn, "n is negative (" + std::to_string(n) + ")");
     if (n == 0) return 0;
-    if (const char* missing = missingArray(wo, "wo")) return callError(fn, missing);
-    if (const char* missing = missingArray(u, "u")) return callError(fn, missing);
-    if (const char* missing = missingArray(wi, "wi")) return callError(fn, missing);
+    if (!complete(wo)) return missingArray(fn, wo, "wo");
+    if (!complete(u)) return missingArray(fn, u, "u");
+    if (!complete(wi)) return missingArray(fn, wi, "wi");
     if (!pdf) return callError(fn, "pdf is NULL");
-    if (const char* missing = missingArray(weight, "weight")) return callError(fn, missing);
+    if (!complete(weight)) return missingArray(fn, weight, "weight");
     return k->kernel->sampleBatch(n, wo, u, inputs, wi, pdf, weight);
 }
 
@@ -170,8 +176,8 @@ int64_t facet_pdf_batch(const facet_kernel* k, int64_t n, const float* const wi[
     if (!k) return callError(fn, "the kernel is NULL");
     if (n < 0) return callError(fn, "n is negative (" + std::to_string(n) + ")");
     if (n == 0) return 0;
-    if (const char* missing = missingArray(wi, "wi")) return callError(fn, missing);
-    if (const char* missing = missingArray(wo, "wo")) return callError(fn, missing);
+    if (!complete(wi)) return missingArray(fn, wi, "wi");
+    if (!complete(wo)) return missingArray(fn, wo, "wo");
     if (!pdf) return callError(fn, "pdf is NULL");
     return k->kernel->pdfBatch(n, wi, wo, inputs, pdf);
 }

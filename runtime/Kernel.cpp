@@ -460,14 +460,20 @@ void Kernel::eval(const float wi[3], const float wo[3], const float* inputs, flo
         scalar(wi, wo, inputs, rgb);
         return;
     }
-    // A SIMD kernel evaluates one lane through its batch entry.
+    // A SIMD kernel evaluates one lane through its batch entry. The column
+    // pointers of the lane's inputs live on the stack for the usual slot
+    // counts: a heap allocation would cost a sizeable part of the call.
     const float* const wiP[3] = {&wi[0], &wi[1], &wi[2]};
     const float* const woP[3] = {&wo[0], &wo[1], &wo[2]};
-    std::vector<const float*> in;
+    constexpr int kStackSlots = 32;
+    const int slots = inputCount();
+    const float* few[kStackSlots];
+    std::vector<const float*> many(inputs && slots > kStackSlots ? size_t(slots) : 0);
+    const float** in = slots > kStackSlots ? many.data() : few;
     if (inputs)
-        for (int s = 0; s < inputCount(); ++s) in.push_back(&inputs[s]);
+        for (int s = 0; s < slots; ++s) in[s] = &inputs[s];
     float* const out[3] = {&rgb[0], &rgb[1], &rgb[2]};
-    evalBatch(1, wiP, woP, inputs ? in.data() : nullptr, out);
+    evalBatch(1, wiP, woP, inputs ? in : nullptr, out);
 }
 
 int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,

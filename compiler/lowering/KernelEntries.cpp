@@ -58,6 +58,9 @@ void addKernelAttributes(llvm::Function* fn, int width, const BodyPlan& body) {
 // cycles, and fast kernels produce them routinely in NDF and Smith tails.
 // Exact mode keeps IEEE subnormals: a float-subnormal n.w is a valid input
 // there. The plan decides (LoweringPlan::flushDenormals).
+// LDMXCSR serializes the FP pipeline: the pair costs ~11 ns, a sixth of a
+// one-lane call. Hosts that run with FTZ and DAZ set themselves (renderers
+// commonly do) skip both writes: the kernel then runs under the same bits.
 class DenormalFlush {
 public:
     DenormalFlush(llvm::IRBuilder<>& b, llvm::Function* fn, const LoweringPlan& plan) : b_(b) {
@@ -67,17 +70,32 @@ public:
         llvm::Value* flushed = b.CreateAlloca(b.getInt32Ty(), nullptr, "mxcsr.flushed");
         b.CreateIntrinsic(llvm::Intrinsic::x86_sse_stmxcsr, {}, {saved_});
         llvm::Value* bits = b.CreateLoad(b.getInt32Ty(), saved_);
-        b.CreateStore(b.CreateOr(bits, b.getInt32(0x8040)), flushed);  // FTZ (bit 15) | DAZ (bit 6)
-        b.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {flushed});
+        llvm::Value* ftzDaz = b.getInt32(0x8040);  // FTZ (bit 15) | DAZ (bit 6)
+        needed_ = b.CreateICmpNE(b.CreateAnd(bits, ftzDaz), ftzDaz, "mxcsr.needed");
+        b.CreateStore(b.CreateOr(bits, ftzDaz), flushed);
+        conditionally([&] { b.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {flushed}); });
     }
     // Emits the restore at the current insertion point (before each return).
     void restore() {
-        if (saved_) b_.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {saved_});
+        if (saved_) conditionally([&] { b_.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {saved_}); });
     }
 
 private:
+    // Emits `write` in a block of its own, run only where needed_.
+    template <typename F>
+    void conditionally(F&& write) {
+        llvm::Function* fn = b_.GetInsertBlock()->getParent();
+        auto* writeBlock = llvm::BasicBlock::Create(fn->getContext(), "mxcsr.write", fn);
+        auto* done = llvm::BasicBlock::Create(fn->getContext(), "mxcsr.done", fn);
+        b_.CreateCondBr(needed_, writeBlock, done);
+        b_.SetInsertPoint(writeBlock);
+        write();
+        b_.CreateBr(done);
+        b_.SetInsertPoint(done);
+    }
     llvm::IRBuilder<>& b_;
     llvm::Value* saved_ = nullptr;
+    llvm::Value* needed_ = nullptr;
 };
 
 // The lane body of an entry point: the values of its output streams and
@@ -311,6 +329,12 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
     auto* exit = llvm::BasicBlock::Create(ctx, "exit", fn);
 
     b.SetInsertPoint(entry);
+    // The stage buffers of the partial chunk (below), in the entry block:
+    // static allocas, whatever blocks DenormalFlush adds after it.
+    const int streams = shape.inStreams() + mat.slotCount;
+    const int outStreams = shape.outStreams();
+    llvm::Value* stageIn = b.CreateAlloca(vecTy, b.getInt32(streams), "stage.in");
+    llvm::Value* stageOut = b.CreateAlloca(vecTy, b.getInt32(outStreams), "stage.out");
     DenormalFlush flush(b, fn, k.plan);
     std::vector<llvm::Value*> inP, outP;
     for (int g = 0; g < groupsIn; ++g)
@@ -350,18 +374,15 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
     // partial chunk is staged through W-lane buffers on the stack: masked
     // loads fill them (masked-off lanes read the padding, a valid direction
     // such as (0,0,1), and the slot defaults), the body runs on the buffers,
-    // and masked stores write the valid lanes back.
-    const int streams = shape.inStreams() + mat.slotCount;
-    const int outStreams = shape.outStreams();
-    llvm::Value* stageIn = b.CreateAlloca(vecTy, b.getInt32(streams), "stage.in");
-    llvm::Value* stageOut = b.CreateAlloca(vecTy, b.getInt32(outStreams), "stage.out");
+    // and a loop over the valid lanes copies them back.
+    llvm::BasicBlock* preheader = b.GetInsertBlock();
     b.CreateBr(header);
 
     b.SetInsertPoint(header);
     llvm::PHINode* i = b.CreatePHI(i64, 2, "i");
     llvm::PHINode* count = b.CreatePHI(i64, 2, "invalid");
-    i->addIncoming(llvm::ConstantInt::get(i64, 0), entry);
-    count->addIncoming(llvm::ConstantInt::get(i64, 0), entry);
+    i->addIncoming(llvm::ConstantInt::get(i64, 0), preheader);
+    count->addIncoming(llvm::ConstantInt::get(i64, 0), preheader);
     llvm::Value* remaining = b.CreateSub(n, i);
     b.CreateCondBr(b.CreateICmpSGT(remaining, llvm::ConstantInt::get(i64, 0)), bodyBlock, exit);
 
@@ -434,12 +455,25 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
     }
     b.CreateCondBr(partial, unstage, latch);
 
+    // The valid lanes go back in a loop of plain scalar stores, not masked
+    // ones: a load that follows a masked store to an address equal in its
+    // low 12 bits (columns of equal length are often page-aligned alike: the
+    // next chunk's inputs) waits until that store retires on AMD cores,
+    // which took a one-lane call of GGX from ~75 to ~200 ns.
     b.SetInsertPoint(unstage);
+    auto* unstageLanes = llvm::BasicBlock::Create(ctx, "unstage.lanes", fn);
+    b.CreateBr(unstageLanes);
+    b.SetInsertPoint(unstageLanes);
+    llvm::PHINode* lane = b.CreatePHI(i64, 2, "lane");
+    lane->addIncoming(llvm::ConstantInt::get(i64, 0), unstage);
     for (int c = 0; c < outStreams; ++c) {
-        llvm::Value* v = b.CreateAlignedLoad(vecTy, b.CreateConstGEP1_32(vecTy, stageOut, c), llvm::Align(4));
-        b.CreateMaskedStore(v, b.CreateGEP(f32, outP[c], i), llvm::Align(4), mask);
+        llvm::Value* from = b.CreateGEP(f32, b.CreateConstGEP1_32(vecTy, stageOut, c), lane);
+        b.CreateAlignedStore(b.CreateAlignedLoad(f32, from, llvm::Align(4)),
+                             b.CreateGEP(f32, outP[c], b.CreateAdd(i, lane)), llvm::Align(4));
     }
-    b.CreateBr(latch);
+    llvm::Value* nextLane = b.CreateAdd(lane, llvm::ConstantInt::get(i64, 1));
+    lane->addIncoming(nextLane, unstageLanes);
+    b.CreateCondBr(b.CreateICmpSLT(nextLane, remaining), unstageLanes, latch);
 
     b.SetInsertPoint(latch);
     i->addIncoming(b.CreateAdd(i, llvm::ConstantInt::get(i64, W)), latch);

@@ -12,6 +12,9 @@
 #include "Specialize.h"
 
 #include <doctest/doctest.h>
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 #include <atomic>
 #include <cstring>
 #include <filesystem>
@@ -203,6 +206,125 @@ TEST_CASE("two compilers with two JITs in one process give identical results") {
     z.run(*kd);
     for (int c = 0; c < 3; ++c)
         for (size_t i = 0; i < 100; ++i) CHECK(z.out[c][i] == x.out[c][i]);
+}
+
+TEST_CASE("a SIMD kernel's one-lane eval equals its batch lane, with few and with many input slots") {
+    // Many: eleven rgb tints and a roughness, 34 slots, more than eval()
+    // keeps on the stack.
+    std::string many = "material many {\n    input roughness = 0.35 in 0 .. 1;\n";
+    std::string f0 = "rgb(0.9, 0.6, 0.5)";
+    for (int t = 0; t < 11; ++t) {
+        many += fmt::format("    input tint{} = rgb(1, 0.98, 0.96) in 0 .. 1;\n", t);
+        f0 += fmt::format(" * tint{}", t);
+    }
+    many += "    ndf = ggx(roughness * roughness);\n    masking = smith_height_correlated;\n";
+    many += "    fresnel = schlick(f0 = " + f0 + ");\n}\n";
+    Compiler compiler;
+    for (const std::string& text : {std::string(kGold), many}) {
+        auto k = compile(compiler, text, "backend=simd;cache=off");
+        const int slots = k->inputCount();
+        CHECK(slots == (text == many ? 34 : 4));
+        // Lane 0 of every 7 is invalid (wi not unit): rgb 0 on both paths.
+        Batch lanes(301, 5);
+        for (size_t i = 0; i < lanes.size(); i += 7) lanes.dir[0][i] = 2.0f;
+        std::mt19937 rng(9);
+        std::uniform_real_distribution<float> u(0.5f, 1.0f);
+        lanes.slots.resize(size_t(slots));
+        for (int s = 1; s < slots; ++s)
+            for (size_t i = 0; i < lanes.size(); ++i) lanes.slots[size_t(s)].push_back(u(rng));
+        lanes.finish();
+        std::vector<float> batchOut[3];
+        for (auto& o : batchOut) o.assign(lanes.size(), -1.0f);
+        float* rgb[3] = {batchOut[0].data(), batchOut[1].data(), batchOut[2].data()};
+        CHECK(k->evalBatch(int64_t(lanes.size()), lanes.wi(), lanes.wo(), lanes.inputs(), rgb) == 43);
+        std::vector<float> in(static_cast<size_t>(slots));
+        for (size_t i = 0; i < lanes.size(); ++i) {
+            float wi[3] = {lanes.dir[0][i], lanes.dir[1][i], lanes.dir[2][i]};
+            float wo[3] = {lanes.dir[3][i], lanes.dir[4][i], lanes.dir[5][i]};
+            for (int s = 0; s < slots; ++s) in[size_t(s)] = lanes.slots[size_t(s)][i];
+            float one[3] = {-1, -1, -1};
+            k->eval(wi, wo, in.data(), one);
+            for (int c = 0; c < 3; ++c) CHECK(one[c] == batchOut[c][i]);
+            if (i % 7 == 0) CHECK(one[0] == 0.0f);
+            else CHECK(one[0] > 0.0f);
+        }
+        // inputs = NULL: every slot's default, as a batch without columns.
+        float wi[3] = {lanes.dir[0][1], lanes.dir[1][1], lanes.dir[2][1]};
+        float wo[3] = {lanes.dir[3][1], lanes.dir[4][1], lanes.dir[5][1]};
+        float one[3], viaBatch[3];
+        k->eval(wi, wo, nullptr, one);
+        const float* wiP[3] = {&wi[0], &wi[1], &wi[2]};
+        const float* woP[3] = {&wo[0], &wo[1], &wo[2]};
+        float* out[3] = {&viaBatch[0], &viaBatch[1], &viaBatch[2]};
+        CHECK(k->evalBatch(1, wiP, woP, nullptr, out) == 0);
+        for (int c = 0; c < 3; ++c) CHECK(one[c] == viaBatch[c]);
+        CHECK(one[0] > 0.0f);
+    }
+}
+
+#if defined(__x86_64__)
+TEST_CASE("fast kernels leave MXCSR as the host set it, and a host that flushes itself gets the same bits") {
+    // A fast kernel sets FTZ and DAZ for the call unless the host has both
+    // set already; either way the call runs flushed and restores the host's
+    // MXCSR.
+    Compiler compiler;
+    const unsigned host = _mm_getcsr();
+    for (const char* spec : {"backend=simd;math=fast;cache=off", "backend=scalar;math=fast;cache=off"}) {
+        CAPTURE(spec);
+        auto k = compile(compiler, kGold, spec);
+        Batch plain(1003, 3), flushed(1003, 3);
+        // A subnormal direction component and roughness on some lanes.
+        for (size_t i = 0; i < plain.size(); i += 5)
+            for (Batch* b : {&plain, &flushed}) {
+                b->dir[0][i] = 1e-39f, b->dir[1][i] = 0.0f, b->dir[2][i] = 1.0f;
+                b->slots[0][i] = 1e-40f;
+            }
+        // The control bits; the exception flags (bits 0-5) are sticky status
+        // that the host's own conversions may raise.
+        auto control = [] { return _mm_getcsr() & ~0x3fu; };
+        CHECK(plain.run(*k) == 0);
+        CHECK(control() == (host & ~0x3fu));
+        _mm_setcsr(host | 0x8040u);
+        CHECK(flushed.run(*k) == 0);
+        const unsigned during = control();
+        _mm_setcsr(host);
+        CHECK(during == ((host | 0x8040u) & ~0x3fu));
+        for (int c = 0; c < 3; ++c) CHECK(plain.out[c] == flushed.out[c]);
+    }
+}
+#endif
+
+TEST_CASE("short batches (n = 1 .. 17, partial chunks) give the long batch's bits, invalid lanes and statuses") {
+    Compiler compiler;
+    for (const char* spec : {"backend=simd;math=exact;cache=off", "backend=simd;math=fast;cache=off",
+                             "backend=simd;math=exact;width=4;cache=off", "backend=simd;math=fast;width=16;cache=off"}) {
+        CAPTURE(spec);
+        auto k = compile(compiler, kGold, spec);
+        Batch whole(17 * 18 / 2, 21), pieces(17 * 18 / 2, 21);
+        // Every fifth lane invalid: a wo that is not unit.
+        size_t bad = 0;
+        for (size_t i = 0; i < whole.size(); i += 5, ++bad) whole.dir[5][i] = pieces.dir[5][i] = 3.0f;
+        std::vector<uint8_t> wholeStatus(whole.size(), 7), pieceStatus(whole.size(), 7);
+        const float* wi[3] = {whole.dir[0].data(), whole.dir[1].data(), whole.dir[2].data()};
+        const float* wo[3] = {whole.dir[3].data(), whole.dir[4].data(), whole.dir[5].data()};
+        const float* in[4] = {whole.slots[0].data(), nullptr, nullptr, nullptr};
+        float* rgb[3] = {whole.out[0].data(), whole.out[1].data(), whole.out[2].data()};
+        CHECK(k->evalBatch(int64_t(whole.size()), wi, wo, in, rgb, wholeStatus.data()) == int64_t(bad));
+        size_t begin = 0;
+        int64_t invalid = 0;
+        for (size_t n = 1; n <= 17; begin += n, ++n) {
+            const float* pwi[3] = {&pieces.dir[0][begin], &pieces.dir[1][begin], &pieces.dir[2][begin]};
+            const float* pwo[3] = {&pieces.dir[3][begin], &pieces.dir[4][begin], &pieces.dir[5][begin]};
+            const float* pin[4] = {&pieces.slots[0][begin], nullptr, nullptr, nullptr};
+            float* prgb[3] = {&pieces.out[0][begin], &pieces.out[1][begin], &pieces.out[2][begin]};
+            invalid += k->evalBatch(int64_t(n), pwi, pwo, pin, prgb, &pieceStatus[begin]);
+        }
+        REQUIRE(begin == whole.size());
+        CHECK(invalid == int64_t(bad));
+        CHECK(pieceStatus == wholeStatus);
+        for (int c = 0; c < 3; ++c) CHECK(pieces.out[c] == whole.out[c]);
+        for (size_t i = 0; i < whole.size(); ++i) CHECK(wholeStatus[i] == (i % 5 == 0 ? 1 : 0));
+    }
 }
 
 TEST_CASE("concurrent batches from two threads on one kernel equal the serial result") {
