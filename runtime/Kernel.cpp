@@ -540,7 +540,7 @@ void Kernel::ensureSampler() const {
                 control.lowering = lowering;
                 PipelineTarget target;
                 target.jit = code.jit.get();
-                target.level = FacetJit::Level::Optimized;
+                target.level = samplerLevel_;
                 target.naturalWidth = code.jit->hostVectorWidth();
                 TableCache tables("");  // unused: the run starts specialized, with its table
                 DiagnosticEngine diags;
@@ -823,6 +823,8 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
     kernel->code_->optimized = level == FacetJit::Level::Optimized;
     link(*kernel->code_, cached->object, prefix, lowering);
     kernel->samplerLowering_ = lowering;
+    kernel->samplerLevel_ = options.codegen == CompileOptions::Codegen::Quick ? FacetJit::Level::Quick
+                                                                              : FacetJit::Level::Optimized;
     kernel->samplerPrefix_ = prefix;
     // The sampler's key: the kernel's, the sampler, and the variant its
     // eval code was compiled with.

@@ -193,9 +193,12 @@ private:
     // Gets and links the sampler's entry points once (see samplerTier).
     void ensureSampler() const;
     // What ensureSampler() needs: the eval kernel's lowering options and
-    // symbol prefix, the sampler's cache entry, and the caches (shared with
-    // the Compiler, which the kernel may outlive).
+    // symbol prefix, the codegen level (quick only under codegen=quick: the
+    // sampler is compiled once, so a tiered kernel's is optimized), the
+    // sampler's cache entry, and the caches (shared with the Compiler, which
+    // the kernel may outlive).
     LoweringOptions samplerLowering_;
+    FacetJit::Level samplerLevel_ = FacetJit::Level::Optimized;
     std::string samplerPrefix_, samplerKey_, samplerCachePath_;
     CompileOptions::Cache samplerCache_ = CompileOptions::Cache::Off;
     std::shared_ptr<MemoryCache> memoryCache_;

@@ -31,14 +31,20 @@ std::vector<std::string> materialFiles() {
     return files;
 }
 
-CompileOptions optionsFor(Backend b, int width, bool floatFirst = false) {
+// Random materials are compiled with quick codegen: the same bits as
+// optimized code (JitTests, "tiered compile"), without a tier-up compiling
+// every kernel a second time; the shipped materials go the default way.
+CompileOptions optionsFor(Backend b, int width, bool floatFirst = false,
+                          CompileOptions::Codegen codegen = CompileOptions::Codegen::Tiered) {
     CompileOptions o;
     o.backend = b;
     o.width = width;
     o.floatFirst = floatFirst;
     o.cache = CompileOptions::Cache::Memory;
+    o.codegen = codegen;
     return o;
 }
+constexpr auto kQuick = CompileOptions::Codegen::Quick;
 
 void checkStats(const DiffStats& stats, const std::string& what) {
     std::string why;
@@ -115,8 +121,8 @@ TEST_CASE("random materials agree across interpreter, scalar and SIMD") {
         const CheckedMaterial& m = program.materials.front();
         LaneBatch s = randomSample(m, 1500, 99 + i);
         DiagnosticEngine kd;
-        auto scalar = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Scalar, 0), kd);
-        auto simd = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Simd, widths[i % 3]), kd);
+        auto scalar = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Scalar, 0, false, kQuick), kd);
+        auto simd = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Simd, widths[i % 3], false, kQuick), kd);
         REQUIRE_MESSAGE((scalar && simd), kd.str() << rm.text);
         DiffStats stats;
         compare(*scalar, m, s, stats);
@@ -131,7 +137,7 @@ TEST_CASE("random materials agree across interpreter, scalar and SIMD") {
         }
         if (planLowering(m, MathVariant::exact(), true).batchBodies == BatchBodies::FloatFirst) {
             ++floatFirstCount;
-            auto floatFirst = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Simd, widths[i % 3], true), kd);
+            auto floatFirst = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Simd, widths[i % 3], true, kQuick), kd);
             REQUIRE_MESSAGE(floatFirst, kd.str() << rm.text);
             DiffStats ff;
             compare(*floatFirst, m, s, ff);

@@ -298,7 +298,9 @@ MaterialResult runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& c
         KernelResult k;
         k.variant = v.name;
         CompileOptions o;
-        std::string error = CompileOptions::parse(v.options, o);
+        // Quick codegen: the same bits as optimized code (JitTests, "tiered
+        // compile"), without a tier-up compiling every kernel a second time.
+        std::string error = CompileOptions::parse(std::string(v.options) + ";codegen=quick", o);
         DiagnosticEngine kd;
         std::unique_ptr<Kernel> kernel = error.empty() ? compiler.compileMaterial(m, o, kd) : nullptr;
         if (!kernel) {

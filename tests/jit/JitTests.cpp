@@ -987,17 +987,42 @@ SampleOutput runSample(const Kernel& k, const LaneBatch& s) {
     r.invalid = k.evalBatch(int64_t(s.size()), s.wi(), s.wo(), s.inputs(), out);
     return r;
 }
+// The sampler's outputs on a sample's wo and inputs, with u from `seed`
+// (every eighth lane at the edges 0 and 1 - 2^-24), bit for bit.
+struct SamplerBits {
+    int64_t invalid = 0;
+    std::vector<float> values[7];  // wi, pdf, weight
+    bool operator==(const SamplerBits& o) const {
+        for (int c = 0; c < 7; ++c)
+            if (std::memcmp(values[c].data(), o.values[c].data(), values[c].size() * sizeof(float)) != 0) return false;
+        return invalid == o.invalid;
+    }
+};
+SamplerBits runSampler(const Kernel& k, const LaneBatch& s, uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<float> uniform(0, 1);
+    std::vector<float> u[3];
+    for (size_t i = 0; i < s.size(); ++i)
+        for (int c = 0; c < 3; ++c) u[c].push_back(i % 8 == 0 ? (c == 1 ? 1 - 0x1p-24f : 0.0f) : std::min(uniform(rng), 1 - 0x1p-24f));
+    SamplerBits r;
+    float* out[7];
+    for (int c = 0; c < 7; ++c) r.values[c].assign(s.size(), -1.0f), out[c] = r.values[c].data();
+    const float* uP[3] = {u[0].data(), u[1].data(), u[2].data()};
+    r.invalid = k.sampleBatch(int64_t(s.size()), s.wo(), uP, s.inputs(), out, out[3], out + 4);
+    return r;
+}
 }  // namespace
 
 // Tiered compilation is only sound if the quick code computes exactly what
 // the optimized code does: every shipped and bench material, SIMD exact and
 // fast and scalar exact, on the bench's regular sample and on the hard-case
 // sample (grazing, degenerate and non-finite lanes; the two-body kernels'
-// precise bodies). Skipping Reassociate/InstCombine in the quick middle end
+// precise bodies); the SIMD samplers of codegen=quick and =optimized on the
+// same lanes and u. Skipping Reassociate/InstCombine in the quick middle end
 // for a fast kernel with contract flags fails this (plastic).
 TEST_CASE("tiered compile: the quick code and the optimized code give the same bits") {
     Compiler c;
-    size_t kernels = 0;
+    size_t kernels = 0, samplers = 0;
     std::vector<std::string> files;
     for (const char* dir : {"materials", "bench/models"})
         for (auto& e : std::filesystem::directory_iterator(std::string(FACET_SOURCE_DIR) + "/" + dir))
@@ -1032,11 +1057,22 @@ TEST_CASE("tiered compile: the quick code and the optimized code give the same b
                     CHECK(runSample(*tiered, *s) == want);
                 }
                 CHECK(tieredFirst == runSample(*optimized, hard));
+                // The sampler is compiled at the kernel's level too (quick
+                // only under codegen=quick); SIMD rows, where both levels
+                // schedule and allocate registers differently.
+                if (std::string_view(row).starts_with("backend=simd")) {
+                    REQUIRE(quick->samplerTier() == "jit");
+                    REQUIRE(optimized->samplerTier() == "jit");
+                    for (const LaneBatch* s : {&regular, &hard})
+                        CHECK(runSampler(*quick, *s, 91) == runSampler(*optimized, *s, 91));
+                    ++samplers;
+                }
                 ++kernels;
             }
         }
     }
     CHECK(kernels == 57);
+    CHECK(samplers == 38);
 }
 
 // Renderer threads keep evaluating while the tier-up switches the entry
