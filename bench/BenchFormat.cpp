@@ -137,6 +137,12 @@ std::string header(const BenchReport& report, const MaterialBench& m) {
                        report.hostWidth, m.regularLanes, m.hardLanes, m.parseCheckMs);
 }
 
+// " / loaded from cache in X ms", or why not.
+std::string cacheLoadText(const TableTiming& t) {
+    if (t.cachedLoadMs) return fmt::format(" / loaded from cache in {:.3f} ms", *t.cachedLoadMs);
+    return fmt::format(" / not loaded from cache: {}", t.note);
+}
+
 }  // namespace
 
 std::string energyTableLine(const MaterialBench& m) {
@@ -145,9 +151,7 @@ std::string energyTableLine(const MaterialBench& m) {
     std::string s = fmt::format("Kulla-Conty tables: {} ({}), built in {:.1f} ms (cold, {} x {} grid; wall time, {} "
                                 "thread{})",
                                 e.pair(), e.key, e.buildMs, e.muCount, e.alphaCount, e.threads, e.threads == 1 ? "" : "s");
-    if (e.cachedLoadMs) s += fmt::format(" / loaded from cache in {:.3f} ms", *e.cachedLoadMs);
-    else s += fmt::format(" / not loaded from cache: {}", e.note);
-    return s;
+    return s + cacheLoadText(e);
 }
 
 std::string lambdaTableLine(const MaterialBench& m) {
@@ -155,9 +159,7 @@ std::string lambdaTableLine(const MaterialBench& m) {
     const LambdaTableBench& e = *m.lambdaTable;
     std::string s = fmt::format("Smith Lambda table: {}, built in {:.1f} ms (cold, {} nodes; one thread)", e.key,
                                 e.buildMs, e.nodes);
-    if (e.cachedLoadMs) s += fmt::format(" / loaded from cache in {:.3f} ms", *e.cachedLoadMs);
-    else s += fmt::format(" / not loaded from cache: {}", e.note);
-    return s;
+    return s + cacheLoadText(e);
 }
 
 std::string summaryLine(const MaterialBench& m) {
@@ -381,6 +383,14 @@ void writeBatchSizes(Json& j, const std::vector<BatchSizeRow>& rows) {
     j.close(']');
 }
 
+void writeTableTiming(Json& j, const TableTiming& t) {
+    j.field("build_ms", t.buildMs);
+    j.field("cached_load_ms", t.cachedLoadMs);
+    j.field("cached_load_runs", int64_t(t.loadRuns));
+    j.field("cache_file", t.cacheFile);
+    j.field("note", t.note);
+}
+
 void writeEnergyTable(Json& j, const std::optional<EnergyTableBench>& table) {
     if (!table) {
         j.raw("null");
@@ -392,13 +402,9 @@ void writeEnergyTable(Json& j, const std::optional<EnergyTableBench>& table) {
     j.field("ndf", e.ndf);
     j.field("masking", e.masking);
     j.field("key", e.key);
-    j.field("build_ms", e.buildMs);
     j.field("build_threads", int64_t(e.threads));
-    j.field("cached_load_ms", e.cachedLoadMs);
-    j.field("cached_load_runs", int64_t(e.loadRuns));
     j.numbers("grid", std::array<int, 2>{e.muCount, e.alphaCount});  // mu nodes, alpha nodes
-    j.field("cache_file", e.cacheFile);
-    j.field("note", e.note);
+    writeTableTiming(j, e);
     j.close('}');
 }
 
@@ -411,11 +417,7 @@ void writeLambdaTable(Json& j, const std::optional<LambdaTableBench>& table) {
     j.open('{');
     j.field("key", e.key);
     j.field("nodes", int64_t(e.nodes));
-    j.field("build_ms", e.buildMs);
-    j.field("cached_load_ms", e.cachedLoadMs);
-    j.field("cached_load_runs", int64_t(e.loadRuns));
-    j.field("cache_file", e.cacheFile);
-    j.field("note", e.note);
+    writeTableTiming(j, e);
     j.close('}');
 }
 

@@ -110,21 +110,26 @@ struct SamplerRow {
     std::string label() const { return backend + " " + mode; }
 };
 
+// What the bench measures of a table cache file: the cold build time and
+// the time to load the file back.
+struct TableTiming {
+    double buildMs = 0;
+    std::optional<double> cachedLoadMs;  // none when the cache could not be written or read (see note)
+    int loadRuns = 0;
+    std::string cacheFile;  // the file read back
+    std::string note;       // why cachedLoadMs is missing, else ""
+};
+
 // The Kulla-Conty E table of a material with energy = kulla_conty: its
 // (NDF, masking) pair, the time to build it by quadrature (cold: directly,
 // not through any cache; wall time, on `threads` threads) and the time to
 // load it back from the EXR file in the table cache directory (median of
 // `loadRuns` reads, CPU time of the benchmarking thread like the other times).
-struct EnergyTableBench {
+struct EnergyTableBench : TableTiming {
     std::string ndf, masking;  // "ggx", "smith_height_correlated"
     std::string key;           // the table key, e.g. "ggx_smith_height_correlated"
     int muCount = 0, alphaCount = 0;
     int threads = 0;
-    double buildMs = 0;
-    std::optional<double> cachedLoadMs;  // none when the cache could not be written or read (see note)
-    int loadRuns = 0;
-    std::string cacheFile;  // the EXR read back
-    std::string note;       // why cachedLoadMs is missing, else ""
     std::string pair() const { return ndf + " x " + masking; }
 };
 
@@ -133,14 +138,9 @@ struct EnergyTableBench {
 // directly, not through any cache; one thread) and the time to load it back
 // from its file in the table cache directory (median of `loadRuns` reads and
 // checks, spot-check quadrature included; CPU time like the other times).
-struct LambdaTableBench {
+struct LambdaTableBench : TableTiming {
     std::string key;  // the table's name, e.g. "student_t_g3"
     int nodes = 0;
-    double buildMs = 0;
-    std::optional<double> cachedLoadMs;  // none when the cache could not be written or read (see note)
-    int loadRuns = 0;
-    std::string cacheFile;  // the file read back
-    std::string note;       // why cachedLoadMs is missing, else ""
 };
 
 // ns/eval by batch size (kBatchSizes): the regular sample evaluated in

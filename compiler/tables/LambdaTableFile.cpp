@@ -4,6 +4,7 @@
 #include "TableCache.h"
 
 #include "CacheFiles.h"
+#include "TableFileRead.h"
 #include "LambdaTable.h"
 
 #include <fmt/format.h>
@@ -169,16 +170,9 @@ LambdaTableFileResult decodeLambdaTable(const std::string& bytes, const std::str
 
 LambdaTableFileResult readLambdaTableFile(const std::string& path, const NdfEntry& ndf,
                                           const std::vector<double>& shape) {
-    std::string why;
-    bool missing = false;
-    std::optional<std::string> bytes = readRegularFile(path, kMaxLambdaTableFileBytes, why, &missing);
-    if (!bytes) {
-        LambdaTableFileResult r;
-        r.status = missing ? TableFileStatus::Missing : TableFileStatus::Unreadable;
-        r.message = missing ? "no file " + path : why;
-        return r;
-    }
-    return decodeLambdaTable(*bytes, path, &ndf, &shape);
+    return readTableFile<LambdaTableFileResult>(path, kMaxLambdaTableFileBytes, [&](const std::string& bytes) {
+        return decodeLambdaTable(bytes, path, &ndf, &shape);
+    });
 }
 
 }  // namespace facet

@@ -3,6 +3,7 @@
 #include "TableCache.h"
 
 #include "CacheFiles.h"
+#include "TableFileRead.h"
 #include "Material.h"
 
 #include <OpenImageIO/filesystem.h>
@@ -152,16 +153,9 @@ std::string encodeEnergyTableExr(const EnergyTable& t, std::string& bytes) {
 
 TableFileResult readEnergyTableExr(const std::string& path, const EnergyTableKey* expected,
                                    const EnergyQuadrature& quadrature) {
-    std::string why;
-    bool missing = false;
-    std::optional<std::string> bytes = readRegularFile(path, kMaxTableFileBytes, why, &missing);
-    if (!bytes) {
-        TableFileResult r;
-        r.status = missing ? TableFileStatus::Missing : TableFileStatus::Unreadable;
-        r.message = missing ? "no file " + path : why;
-        return r;
-    }
-    return decodeEnergyTableExr(*bytes, path, expected, quadrature);
+    return readTableFile<TableFileResult>(path, kMaxTableFileBytes, [&](const std::string& bytes) {
+        return decodeEnergyTableExr(bytes, path, expected, quadrature);
+    });
 }
 
 TableFileResult decodeEnergyTableExr(const std::string& bytes, const std::string& path,

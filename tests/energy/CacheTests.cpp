@@ -2,6 +2,7 @@
 // metadata, missing / stale / corrupt files rebuilt, memory sharing, and
 // thread safety (one build per key, two caches on one directory).
 #include "EnergyTestUtil.h"
+#include "../ScratchDir.h"
 
 #include <OpenImageIO/imageio.h>
 
@@ -18,24 +19,9 @@ namespace fs = std::filesystem;
 using facet::EnergyTableKey;
 using facet::TableCache;
 
-namespace {
+using facet::test::ScratchDir;
 
-struct TempDir {
-    fs::path path;
-    TempDir() {
-        path = fs::temp_directory_path() / ("facet_energy_" + std::to_string(::getpid()) + "_" + std::to_string(counter()++));
-        fs::remove_all(path);
-        fs::create_directories(path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-    static std::atomic<int>& counter() {
-        static std::atomic<int> c{0};
-        return c;
-    }
-};
+namespace {
 
 // Reads the float pixels of an EXR, lets `edit` change them, and writes the
 // file back with the same spec (metadata included).
@@ -85,7 +71,7 @@ const TableCache::Event& lastEvent(const TableCache& c) {
 TEST_SUITE("cache") {
 
 TEST_CASE("EXR round trip keeps every value and the metadata") {
-    TempDir dir;
+    ScratchDir dir("energy");
     auto t = memoryTables().get(ggx());
     std::string path = (dir.path / "t.exr").string();
     REQUIRE(facet::writeEnergyTableExr(*t, path) == "");
@@ -122,7 +108,7 @@ TEST_CASE("EXR round trip keeps every value and the metadata") {
 }
 
 TEST_CASE("missing, then disk; memory sharing; stale, corrupt and unreadable files are rebuilt") {
-    TempDir dir;
+    ScratchDir dir("energy");
     std::string path;
     {
         TableCache c(dir.path.string());
@@ -207,7 +193,7 @@ TEST_CASE("a memory-only cache never touches the disk") {
 }
 
 TEST_CASE("threads: one build per key, two caches on one directory") {
-    TempDir dir;
+    ScratchDir dir("energy");
     TableCache a(dir.path.string()), b(dir.path.string());
     std::vector<std::shared_ptr<const facet::EnergyTable>> got(8);
     std::vector<std::thread> pool;

@@ -5,6 +5,7 @@
 // throughout: the process builds its table once (~0.5 s), the rest is I/O.
 #include "LambdaTable.h"
 #include "TableCache.h"
+#include "../ScratchDir.h"
 
 #include <doctest/doctest.h>
 
@@ -21,25 +22,12 @@ using facet::LambdaTable;
 using facet::TableCache;
 using facet::TableFileStatus;
 
+using facet::test::ScratchDir;
+
 namespace {
 
 const facet::NdfEntry& studentT() { return facet::ndfEntry(facet::modelNamed(facet::ModelSlot::Ndf, "student_t")); }
 const std::vector<double> kShape = {2.5};
-
-struct TempDir {
-    fs::path path;
-    TempDir() {
-        static std::atomic<int> counter{0};
-        path = fs::temp_directory_path() / ("facet_lambda_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-        fs::remove_all(path);
-        fs::create_directories(path);
-        ::chmod(path.c_str(), 0700);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-};
 
 bool sameBits(const std::vector<double>& a, const std::vector<double>& b) {
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
@@ -88,7 +76,7 @@ TEST_CASE("Lambda table file: the nodes round-trip bit for bit, the header names
 }
 
 TEST_CASE("Lambda cache: a cold cache writes the file, a second loads it; bad files are rebuilt with the reason") {
-    TempDir dir;
+    ScratchDir dir("lambda");
     auto reference = facet::lambdaTable(studentT(), kShape);
     std::string path;
     {
@@ -179,7 +167,7 @@ TEST_CASE("Lambda cache: memory only, and a group-writable directory refused wit
         CHECK(lastEvent(c).action == "built");
         CHECK(lastEvent(c).reason.rfind("memory-only cache", 0) == 0);
     }
-    TempDir dir;
+    ScratchDir dir("lambda");
     REQUIRE(::chmod(dir.path.c_str(), 0775) == 0);
     std::vector<std::string> warnings;
     auto cache = std::make_shared<facet::CacheDirectory>(dir.path.string(),

@@ -7,6 +7,7 @@
 #include "Kernel.h"
 #include "ReferenceComparison.h"
 #include "TableCache.h"
+#include "../ScratchDir.h"
 
 #include <doctest/doctest.h>
 
@@ -23,26 +24,11 @@
 using namespace facet;
 namespace fs = std::filesystem;
 
+using facet::test::ScratchDir;
+
 namespace {
 
 const char* kLambert = "material m { ndf = ggx(0.5); diffuse = lambert(rgb(0.2, 0.4, 0.6)); }";
-
-// A fresh directory under the temporary directory, removed at scope exit.
-struct ScratchDir {
-    fs::path path;
-    explicit ScratchDir(const char* tag) {
-        static int counter = 0;
-        path = fs::temp_directory_path() / fmt::format("facet_hardening_{}_{}_{}", tag, ::getpid(), counter++);
-        fs::remove_all(path);
-        fs::create_directories(path);
-        ::chmod(path.c_str(), 0700);
-    }
-    ~ScratchDir() {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-    std::string str() const { return path.string(); }
-};
 
 struct Compiled {
     std::unique_ptr<Kernel> kernel;
