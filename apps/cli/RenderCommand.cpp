@@ -10,8 +10,9 @@
 //       the BRDF in the plane of incidence, one polar curve per theta_i
 //   facet render FILE --plot ndf -o ndf.png [--alpha A,B,...] [--size W]
 //       D(theta_m) of the material's NDF at several roughnesses
-//   facet render --plot ndf --compare ggx,beckmann,blinn_phong [--alpha A,...] -o ndf.png
-//       several NDFs at matched roughness (no material file needed)
+//   facet render --plot ndf --compare ggx,beckmann,student_t:gamma=3 [--alpha A,...] -o ndf.png
+//       several NDFs at matched roughness (no material file needed), each
+//       with its shape parameters' typical values or those given
 //   facet render FILE --plot pdf --wo X,Y,Z -o pdf.png [-n N] [--seed S] [--size W]
 //       the histogram of N importance samples of wi beside the pdf integrated
 //       over the same cells (PdfPlot.h), and their chi-square test
@@ -50,7 +51,7 @@ constexpr const char* kRenderUsage =
     "                    [--backend simd|scalar|interp] [--math exact|fast] [--set NAME=VALUE]...\n"
     "       facet render FILE --plot lobe -o lobe.png [--theta-i A,B,...] [--size WIDTH]\n"
     "       facet render FILE --plot ndf -o ndf.png [--alpha A,B,...] [--size WIDTH]\n"
-    "       facet render --plot ndf --compare NDF,NDF,... [--alpha A,...] -o ndf.png\n"
+    "       facet render --plot ndf --compare NDF[:PARAM=VALUE],... [--alpha A,...] -o ndf.png\n"
     "       facet render FILE --plot pdf --wo X,Y,Z -o pdf.png [-n N] [--seed S] [--size WIDTH]\n"
     "angles in degrees: THETA from the view axis +Z, PHI from +X towards +Y (world up)\n";
 
@@ -252,6 +253,56 @@ int lobePlotCommand(const RenderArgs& r) {
     return kExitOk;
 }
 
+// One NDF of --compare: NAME, or NAME:PARAM=VALUE[:PARAM=VALUE] with the
+// values of its shape parameters (student_t:gamma=3); the others take their
+// typical values.
+struct CompareModel {
+    const NdfEntry* ndf = nullptr;
+    std::vector<double> shape;  // per tableShapeParams entry
+    std::string shapeText;      // " gamma=3", for the legend
+};
+
+CompareModel parseCompareModel(const std::string& field) {
+    std::vector<std::string> parts;
+    for (size_t start = 0;;) {
+        size_t colon = field.find(':', start);
+        parts.push_back(field.substr(start, colon - start));
+        if (colon == std::string::npos) break;
+        start = colon + 1;
+    }
+    const ModelInfo* info = findModel(ModelSlot::Ndf, parts[0]);  // names and aliases of the language
+    if (!info || ndfEntry(*info).wholeLobe) {
+        std::vector<std::string> plottable;
+        for (const ModelInfo* m : catalogSlot(ModelSlot::Ndf))
+            if (!ndfEntry(*m).wholeLobe) plottable.push_back(m->name);
+        throw RenderUsageError{fmt::format("--compare: '{}' is not an NDF with a distribution to plot ({})", parts[0],
+                                           fmt::join(plottable, ", "))};
+    }
+    CompareModel out;
+    out.ndf = &ndfEntry(*info);
+    std::vector<std::string> names;
+    for (int p : out.ndf->tableShapeParams) {
+        names.push_back(out.ndf->canonical[p].name);
+        out.shape.push_back(out.ndf->canonical[p].typical);
+    }
+    for (size_t i = 1; i < parts.size(); ++i) {
+        size_t eq = parts[i].find('=');
+        std::string name = parts[i].substr(0, eq);
+        auto it = std::find(names.begin(), names.end(), name);
+        if (it == names.end())
+            throw RenderUsageError{fmt::format("--compare: '{}' has no shape parameter '{}' (its shape parameters: {})",
+                                               out.ndf->name, name, names.empty() ? "none" : fmt::format("{}", fmt::join(names, ", ")))};
+        std::optional<double> value = eq == std::string::npos ? std::nullopt : parseNumber(parts[i].substr(eq + 1));
+        const ModelParam& param = out.ndf->canonical[out.ndf->tableShapeParams[size_t(it - names.begin())]];
+        if (!value || !(*value >= param.lo && *value <= param.hi))
+            throw RenderUsageError{fmt::format("--compare: '{}' is not NAME=VALUE with {} in [{:g}, {:g}]", parts[i],
+                                               name, param.lo, param.hi)};
+        out.shape[size_t(it - names.begin())] = *value;
+        out.shapeText += fmt::format(" {}={:g}", name, *value);
+    }
+    return out;
+}
+
 int ndfPlotCommand(const RenderArgs& r) {
     std::vector<preview::NdfCurve> curves;
     std::vector<double> alphas = r.alphas;
@@ -260,21 +311,12 @@ int ndfPlotCommand(const RenderArgs& r) {
     if (!r.compare.empty()) {
         // Several NDFs at matched roughness.
         if (alphas.empty()) alphas = {0.3};
-        std::vector<const NdfEntry*> models;
-        for (const std::string& name : splitFields(r.compare)) {
-            const ModelInfo* ndf = findModel(ModelSlot::Ndf, name);  // names and aliases of the language
-            if (!ndf || ndfEntry(*ndf).wholeLobe) {
-                std::vector<std::string> plottable;
-                for (const ModelInfo* m : catalogSlot(ModelSlot::Ndf))
-                    if (!ndfEntry(*m).wholeLobe) plottable.push_back(m->name);
-                throw RenderUsageError{fmt::format("--compare: '{}' is not an NDF with a distribution to plot ({})",
-                                                   name, fmt::join(plottable, ", "))};
-            }
-            models.push_back(&ndfEntry(*ndf));
-        }
+        std::vector<CompareModel> models;
+        for (const std::string& field : splitFields(r.compare)) models.push_back(parseCompareModel(field));
         for (double a : alphas)
-            for (const NdfEntry* m : models)
-                curves.push_back({fmt::format("{}, alpha = {:g}", m->name, a), preview::ndfAtAlpha(*m, a)});
+            for (const CompareModel& m : models)
+                curves.push_back({fmt::format("{}{}, alpha = {:g}", m.ndf->name, m.shapeText, a),
+                                  preview::ndfAtAlpha(*m.ndf, a, m.shape)});
         opt.title = alphas.size() == 1 ? fmt::format("D(theta_m) at matched roughness alpha = {:g}", alphas[0])
                                        : std::string("D(theta_m) at matched roughness");
     } else {

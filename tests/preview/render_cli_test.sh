@@ -42,6 +42,10 @@ check "ndf plot" 0 "$facet" render "$src/materials/aluminium.mat" --plot ndf -o 
 [[ "$(size_of "$out/ndf.png")" == "960 x 600" ]] || { echo "FAIL: ndf.png is $(size_of "$out/ndf.png")"; fail=1; }
 check "ndf compare" 0 "$facet" render --plot ndf --compare ggx,beckmann,blinn_phong --alpha 0.3 -o "$out/cmp.png"
 expect_text "ndf compare" "$out/stdout" "3 curves"
+check "ndf compare with shapes" 0 "$facet" render --plot ndf --compare gtr:gamma=1,student_t:gamma=3,student_t --alpha 0.2,0.4 -o "$out/cmp2.png"
+expect_text "ndf compare with shapes" "$out/stdout" "6 curves"
+# A shape value changes the curve: gamma = 3 and the typical gamma = 2 (GGX) differ.
+cmp -s "$out/cmp.png" "$out/cmp2.png" && { echo "FAIL: the shape values did not change the plot"; fail=1; }
 
 check "pdf plot" 0 "$facet" render "$src/materials/plastic.mat" --plot pdf --wo 0.6,0,0.8 -n 200000 -o "$out/pdf.png" --size 600
 [[ "$(size_of "$out/pdf.png")" == "600 x 225" ]] || { echo "FAIL: pdf.png is $(size_of "$out/pdf.png")"; fail=1; }
@@ -67,6 +71,12 @@ check "bad sky" 2 "$facet" render "$src/materials/gold.mat" -o "$out/x.png" --sk
 expect_text "bad sky" "$out/stderr" "--sky expects gradient, constant or none"
 check "bad compare" 2 "$facet" render --plot ndf --compare ggx,ward -o "$out/x.png"
 expect_text "bad compare" "$out/stderr" "'ward' is not an NDF"
+check "compare: unknown shape parameter" 2 "$facet" render --plot ndf --compare student_t:gama=3 -o "$out/x.png"
+expect_text "compare: unknown shape parameter" "$out/stderr" "'student_t' has no shape parameter 'gama' (its shape parameters: gamma)"
+check "compare: shape value outside" 2 "$facet" render --plot ndf --compare student_t:gamma=1 -o "$out/x.png"
+expect_text "compare: shape value outside" "$out/stderr" "'gamma=1' is not NAME=VALUE with gamma in .1.5, 10000."
+check "compare: no shape parameters" 2 "$facet" render --plot ndf --compare ggx:gamma=2 -o "$out/x.png"
+expect_text "compare: no shape parameters" "$out/stderr" "'ggx' has no shape parameter 'gamma' (its shape parameters: none)"
 check "unknown input (a usage error, as in eval and ir)" 2 "$facet" render "$src/materials/gold.mat" -o "$out/x.png" --set shininess=3
 expect_text "unknown input" "$out/stderr" "--set: material 'gold' has no input 'shininess'"
 printf 'material broken {\n    ndf = ggx(;\n}\n' >"$out/broken.mat"
