@@ -545,12 +545,17 @@ private:
             row(fmt::format("simd {}", math),
                 [&](size_t b, size_t e) { evalBatchRange(*kernel, regular_, b, e, out); });
         }
+        // The AOT twins' inputs are the material's (mb.aotModel is set only
+        // then), a handful: their pointers live on the stack.
+        constexpr size_t kMaxAotInputs = 8;
+        if (model && regular_.slots.size() > kMaxAotInputs)
+            throw std::logic_error(fmt::format("bench: aot model '{}' has more than {} inputs", mb.aotModel, kMaxAotInputs));
         auto aotRange = [&](aot::BatchFn fn) {
             return [this, fn, &out](size_t b, size_t e) {
                 const float* wi[3] = {regular_.wi()[0] + b, regular_.wi()[1] + b, regular_.wi()[2] + b};
                 const float* wo[3] = {regular_.wo()[0] + b, regular_.wo()[1] + b, regular_.wo()[2] + b};
-                const float* in[8] = {};
-                size_t slots = std::min<size_t>(regular_.slots.size(), 8);
+                const float* in[kMaxAotInputs] = {};
+                const size_t slots = regular_.slots.size();
                 for (size_t j = 0; j < slots; ++j) in[j] = regular_.inputs()[j] + b;
                 float* rgb[3] = {out.ptr[0] + b, out.ptr[1] + b, out.ptr[2] + b};
                 fn(int64_t(e - b), wi, wo, slots ? in : nullptr, rgb);
