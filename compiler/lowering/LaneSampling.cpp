@@ -130,7 +130,21 @@ Value* LaneEmitter::bracketedNewton(MathEmitter& pm, const std::function<NewtonT
     v->addIncoming(next, latch);
     lo->addIncoming(nextLo, latch);
     hi->addIncoming(nextHi, latch);
-    llvm::BranchInst* back = b.CreateCondBr(b.CreateICmpSLT(k1, b.getInt32(steps)), loop, done);
+    // Leave early once every lane has settled: its last step moved v by at
+    // most 2^-40 |v| in double, 2^-20 |v| in float (Newton's error is then of
+    // the order of that step squared; a bisection's bracket is that narrow),
+    // or it is NaN (and stays NaN). Waiting for next == v exactly would run
+    // all `steps` on most vectors: some lane's last bits keep moving by an
+    // ulp. A root at 0 never settles early and runs every step.
+    const double settledStep = pm.type()->getScalarType()->isFloatTy() ? 0x1p-20 : 0x1p-40;
+    Value* settled = b.CreateOr(b.CreateFCmpUNO(next, v),
+                                pm.le(pm.abs(pm.sub(next, v)), pm.mul(pm.c(settledStep), pm.abs(v))));
+    if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(settled->getType())) {
+        llvm::Type* bitsTy = b.getIntNTy(unsigned(vt->getNumElements()));
+        settled = b.CreateICmpEQ(b.CreateBitCast(settled, bitsTy), llvm::ConstantInt::getAllOnesValue(bitsTy));
+    }
+    Value* more = b.CreateAnd(b.CreateICmpSLT(k1, b.getInt32(steps)), b.CreateNot(settled));
+    llvm::BranchInst* back = b.CreateCondBr(more, loop, done);
     // Kept rolled by the optimizer too (a constant trip count invites full
     // unrolling, which would bring the compile time back).
     llvm::LLVMContext& ctx = b.getContext();
