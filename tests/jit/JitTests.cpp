@@ -1036,7 +1036,7 @@ TEST_CASE("tiered compile: the quick code and the optimized code give the same b
             }
         }
     }
-    CHECK(kernels == 57);
+    CHECK(kernels == 60);
 }
 
 // Renderer threads keep evaluating while the tier-up switches the entry
