@@ -151,6 +151,18 @@ std::shared_ptr<const LambdaTable> lambdaTable(const NdfEntry& ndf, const std::v
     return slot;
 }
 
+double tabulatedCosLambda(const NdfEntry& ndf, double shape, double proj, double vz) {
+    thread_local const NdfEntry* memoNdf = nullptr;
+    thread_local double memoShape = 0;
+    thread_local std::shared_ptr<const LambdaTable> memo;
+    if (!memo || memoNdf != &ndf || memoShape != shape) {
+        memo = lambdaTable(ndf, {shape});
+        memoNdf = &ndf;
+        memoShape = shape;
+    }
+    return memo->cosLambda(proj, vz);
+}
+
 std::shared_ptr<const LambdaTable> residentLambdaTable(const NdfEntry& ndf, const std::vector<double>& shape) {
     MemoryLayer& layer = MemoryLayer::get();
     std::lock_guard<std::mutex> lock(layer.mutex);

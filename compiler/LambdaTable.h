@@ -108,6 +108,11 @@ double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, in
 // layer (built there on first use, then shared; thread-safe). `ndf` must be
 // shapeInvariant.
 std::shared_ptr<const LambdaTable> lambdaTable(const NdfEntry& ndf, const std::vector<double>& shape);
+// (n.v) Lambda(v) of `ndf` with the one shape value `shape`, from its
+// table, for the entries' reference cosLambda. The last table per thread is
+// kept: lambdaTable() locks a shared map, and an evaluation asks for the
+// same shape value lane after lane.
+double tabulatedCosLambda(const NdfEntry& ndf, double shape, double proj, double vz);
 // The memory layer's table of (ndf, shape), or null (nothing is built).
 std::shared_ptr<const LambdaTable> residentLambdaTable(const NdfEntry& ndf, const std::vector<double>& shape);
 // Puts `table` (e.g. loaded from a cache file) into the memory layer unless

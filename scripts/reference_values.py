@@ -162,6 +162,12 @@ def ndf_D(ndf, p, m):
         ax, ay, g = p["alpha_x"], p["alpha_y"], p["gamma"]
         e = (mx * mx / (ax * ax) + my * my / (ay * ay)) / (mz * mz)
         return math.exp(-g * math.log1p(e / (g - 1))) / (PI * ax * ay * mz ** 4)
+    if ndf == "epd":
+        # Holzschuch & Pacanowski 2017 eq. 34-38: p exp(-e^p) / (pi Gamma(1/p) ax ay mz^4),
+        # e = (mx^2/ax^2 + my^2/ay^2)/mz^2.
+        ax, ay, q = p["alpha_x"], p["alpha_y"], p["p"]
+        e = (mx * mx / (ax * ax) + my * my / (ay * ay)) / (mz * mz)
+        return q * math.exp(-e ** q) / (PI * math.gamma(1 / q) * ax * ay * mz ** 4)
     if ndf == "gaussian":
         a = p["alpha"]
         theta = math.atan2(math.sqrt(s2), mz)  # = acos(mz), accurate near 0
@@ -513,6 +519,7 @@ MODELS = {
         "gtr": [["alpha", "gamma"]],
         "student_t": [["alpha", "gamma"], ["alpha_x", "alpha_y", "gamma"]],
         "gaussian": [["alpha"]],
+        "epd": [["alpha", "p"], ["alpha_x", "alpha_y", "p"]],
     },
     "masking": {name: [[]] for name in (
         "none", "implicit", "cook_torrance", "kelemen", "neumann", "smith_separable",
@@ -600,6 +607,8 @@ class Material:
                 pn[key] = max(pn[key], MIN_ALPHA)
         if self.models["ndf"] == "student_t":  # SPEC 3: gamma > 1.5 (clamped to [1.5, 1e4])
             pn["gamma"] = min(max(pn["gamma"], 1.5), 1e4)
+        if self.models["ndf"] == "epd":  # p clamped to [0.25, 4]
+            pn["p"] = min(max(pn["p"], 0.25), 4.0)
         return params
 
     def eval(self, wi, wo, values):
@@ -820,7 +829,8 @@ def cmd_selftest():
     cases = [("ggx", {"alpha_x": 0.3, "alpha_y": 0.3}), ("ggx", {"alpha_x": 0.2, "alpha_y": 0.6}),
              ("beckmann", {"alpha_x": 0.4, "alpha_y": 0.25}), ("blinn_phong", {"exponent": 30.0}),
              ("gtr", {"alpha": 0.4, "gamma": 1.0}), ("gtr", {"alpha": 0.4, "gamma": 2.5}),
-             ("gtr", {"alpha": 1.0, "gamma": 3.0}), ("gaussian", {"alpha": 0.3})]
+             ("gtr", {"alpha": 1.0, "gamma": 3.0}), ("gaussian", {"alpha": 0.3}),
+             ("epd", {"alpha_x": 0.3, "alpha_y": 0.3, "p": 0.6}), ("epd", {"alpha_x": 0.2, "alpha_y": 0.5, "p": 2.0})]
     for ndf, p in cases:
         check("normalization %s %s" % (ndf, p), projected_area(ndf, p), 1.0, 1e-8)
     # Conductor with k = 0 is a dielectric (two independent formulas).

@@ -74,6 +74,7 @@ inline __float128 sqrt(__float128 x) { return sqrtq(x); }
 inline __float128 pow(__float128 x, __float128 y) { return powq(x, y); }
 inline __float128 erf(__float128 x) { return erfq(x); }
 inline __float128 erfc(__float128 x) { return erfcq(x); }
+inline __float128 lgamma(__float128 x) { return lgammaq(x); }
 inline __float128 sin(__float128 x) { return sinq(x); }
 inline __float128 cos(__float128 x) { return cosq(x); }
 inline __float128 tan(__float128 x) { return tanq(x); }

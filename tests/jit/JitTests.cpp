@@ -1071,8 +1071,8 @@ TEST_CASE("tiered compile: the quick code and the optimized code give the same b
             }
         }
     }
-    CHECK(kernels == 57);
-    CHECK(samplers == 38);
+    CHECK(kernels == 60);
+    CHECK(samplers == 40);
 }
 
 // Renderer threads keep evaluating while the tier-up switches the entry

@@ -179,7 +179,7 @@ TEST_CASE("material rules: ndf required, no duplicates, masking the NDF supports
     CHECK(checkErrors(inMaterial("ndf = gtr(0.1, 2);\nmasking = smith_separable;")) ==
           std::vector<std::string>{
               "t.mat:3:11: error: masking 'smith_separable' needs the Smith Lambda of the NDF, and ndf 'gtr' has "
-              "neither a closed-form nor a tabulated Lambda; use ggx, beckmann, blinn_phong or student_t, or a "
+              "neither a closed-form nor a tabulated Lambda; use ggx, beckmann, blinn_phong, student_t or epd, or a "
               "non-Smith masking such as cook_torrance or schlick_smith"});
     // The same NDFs with a non-Smith masking are fine.
     mustCheck(inMaterial("ndf = gtr(0.1, 2);\nmasking = cook_torrance;"));

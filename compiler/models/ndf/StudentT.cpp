@@ -42,18 +42,11 @@ struct StudentTFormulas final : NdfFormulas<Real> {
         return exp(logD) / (kPi<Real> * ax * ay);
     }
     // The tabulated (n.v) Lambda(v) of the material's gamma (stretched: a
-    // depends on alpha(v) only through proj). The last table per thread is
-    // kept: lambdaTable() locks a shared map, and an evaluation asks for
-    // the same gamma lane after lane.
+    // depends on alpha(v) only through proj).
     Real cosLambda(const ModelArgs<Real>& a, const Vec3<Real>& v) const override {
         static const NdfEntry& self = ndfEntry(modelNamed(ModelSlot::Ndf, "student_t"));
-        thread_local double memoGamma = 0;
-        thread_local std::shared_ptr<const LambdaTable> memo;
-        if (!memo || memoGamma != double(a[kGamma])) {
-            memo = lambdaTable(self, {double(a[kGamma])});
-            memoGamma = double(a[kGamma]);
-        }
-        return Real(memo->cosLambda(double(smithProjection(a[kAlphaX], a[kAlphaY], v)), double(v.z)));
+        return Real(tabulatedCosLambda(self, double(a[kGamma]), double(smithProjection(a[kAlphaX], a[kAlphaY], v)),
+                                       double(v.z)));
     }
     // The standard slopes have the radial CDF 1 - (1 + r^2/(gamma - 1))^(1 - gamma):
     // r^2 = (gamma - 1) expm1(log1p(-u) / (1 - gamma)) (Beckmann's -log1p(-u)

@@ -1,10 +1,12 @@
 // student_t: the Student's t-distribution of slopes as IR (the reference is
 // StudentT.cpp), in log form in the precise type, from u = wi + wo (h up to
 // scale): e is a ratio of u's components and mz^4 = uz^4 / |u|^4; its Smith
-// Lambda from the tabulated one the plan carries; its visible normals, and
+// Lambda from the tabulated one the plan carries (TabulatedLambdaEmitter.h,
+// whose functions are written here); its visible normals, and
 // the exact Lambda that normalizes them, from the Student-t slope
 // distribution of StudentSlopeEmitter.h, stretched.
 #include "StudentSlopeEmitter.h"
+#include "TabulatedLambdaEmitter.h"
 
 #include "LambdaTable.h"
 
@@ -59,27 +61,8 @@ public:
         return pm.exp(pm.sub(logD, logNorm));
     }
 
-    // (n.v) Lambda(v) = sqrt(proj) f(a), a = vz / sqrt(proj), from the
-    // plan's table of z = log f at u = (log a - x0) / h (LambdaTable.h): 4-point
-    // Lagrange up to the last node, linear in u beyond it, the first node
-    // below the grid; in double (z reaches -690).
     Value* cosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
-        internal_assert(lane.plan.lambda == LambdaForm::Table && lane.plan.lambdaTable)
-            << "student_t Smith Lambda without its table in the plan";
-        const LambdaTable& table = *lane.plan.lambdaTable;
-        MathEmitter& fm = lane.floatMath();
-        MathEmitter& dm = lane.doubleMath();
-        llvm::GlobalVariable* gv = lane.doubleTable(table.z, "facet_lambda_" + table.name());  // named as in tables()
-        Value* proj = lane.smithProjection(*this, n, v);
-        Value* projD = dm.convert(proj, dm.type());
-        Value* logRoot = dm.mul(dm.log(projD), dm.c(0.5));
-        Value* x = dm.sub(dm.log(dm.convert(v[2], dm.type())), logRoot);
-        Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(LambdaTable::kX0)), dm.c(LambdaTable::kStep)), dm.c(0.0));
-        Value* uc = dm.minnum(u, dm.c(LambdaTable::kSize - 1.0));
-        Value* z = lane.lagrangeFetch(gv, LambdaTable::kSize, uc);
-        if (table.endSlope() != 0) z = dm.fma(dm.sub(u, uc), dm.c(table.endSlope()), z);
-        Value* cl = dm.exp(dm.add(z, logRoot));
-        return fm.select(fm.gt(proj, fm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
+        return tabulatedCosLambda(lane, *this, n, v);
     }
 
     // The standard slope radius has the CDF 1 - (1 + r^2 / (gamma - 1))^(1 -
@@ -146,16 +129,40 @@ private:
 
 }  // namespace
 
+// (n.v) Lambda(v) = sqrt(proj) f(a), a = vz / sqrt(proj), from the plan's
+// table of z = log f at u = (log a - x0) / h (LambdaTable.h): 4-point
+// Lagrange up to the last node, linear in u beyond it, the first node below
+// the grid; in double (z reaches -690).
+Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
+                          const std::array<Value*, 3>& v) {
+    internal_assert(lane.plan.lambda == LambdaForm::Table && lane.plan.lambdaTable)
+        << "a tabulated Smith Lambda without its table in the plan";
+    const LambdaTable& table = *lane.plan.lambdaTable;
+    MathEmitter& fm = lane.floatMath();
+    MathEmitter& dm = lane.doubleMath();
+    llvm::GlobalVariable* gv = lane.doubleTable(table.z, "facet_lambda_" + table.name());  // as lambdaTableEmbedding
+    Value* proj = lane.smithProjection(ndf, n, v);
+    Value* projD = dm.convert(proj, dm.type());
+    Value* logRoot = dm.mul(dm.log(projD), dm.c(0.5));
+    Value* x = dm.sub(dm.log(dm.convert(v[2], dm.type())), logRoot);
+    Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(LambdaTable::kX0)), dm.c(LambdaTable::kStep)), dm.c(0.0));
+    Value* uc = dm.minnum(u, dm.c(LambdaTable::kSize - 1.0));
+    Value* z = lane.lagrangeFetch(gv, LambdaTable::kSize, uc);
+    if (table.endSlope() != 0) z = dm.fma(dm.sub(u, uc), dm.c(table.endSlope()), z);
+    Value* cl = dm.exp(dm.add(z, logRoot));
+    return fm.select(fm.gt(proj, fm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
+}
+
+std::vector<EmbeddedTable> lambdaTableEmbedding(const CheckedMaterial& material) {
+    if (!material.masking.model || !material.masking.model->smith) return {};
+    const NdfEntry& ndf = ndfEntry(*material.ndf.model);
+    std::shared_ptr<const LambdaTable> t = lambdaTable(ndf, tabulatedLambdaShape(material));
+    return {{"facet_lambda_" + t->name(), t->z.data(), t->z.size() * sizeof(double)}};  // kept by lambdaTable()
+}
+
 std::vector<TermEmitterEntry> facetEmitters_ndf_StudentTEmitter() {
     static const StudentTEmitter emitter;
-    // The Lambda table under a Smith masking (cosLambda).
-    auto tables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {
-        if (!material.masking.model || !material.masking.model->smith) return {};
-        const NdfEntry& ndf = ndfEntry(*material.ndf.model);
-        std::shared_ptr<const LambdaTable> t = lambdaTable(ndf, tabulatedLambdaShape(material));
-        return {{"facet_lambda_" + t->name(), t->z.data(), t->z.size() * sizeof(double)}};  // kept by lambdaTable()
-    };
-    return {{ModelSlot::Ndf, "student_t", &emitter, tables}};
+    return {{ModelSlot::Ndf, "student_t", &emitter, lambdaTableEmbedding}};
 }
 
 }  // namespace facet
