@@ -10,6 +10,7 @@
 #include "Checker.h"
 #include "Interpreter.h"
 #include "KullaConty.h"
+#include "LambdaTable.h"
 
 #include <algorithm>
 #include <cfloat>
@@ -374,18 +375,29 @@ std::vector<HardCaseMaterial> hardCaseMaterials(std::vector<std::string>* reject
         else if (rejected)
             rejected->push_back(text);
     };
+    // Whether a Smith masking can go with this NDF example: a closed-form
+    // Lambda, or a tabulated one whose shape parameters the example makes
+    // constants within the entry's domain.
+    auto smithAccepts = [](const ModelInfo& ndf, const ModelExample& ex) {
+        if (ndf.smith) return true;
+        if (!ndfEntry(ndf).tabulatedLambda) return false;
+        std::optional<CheckedMaterial> m = checked("material t {\n" + ex.inputs + "\nndf = " + ex.stmt + ";\n" + ex.extra + "}\n");
+        SourceLoc loc;
+        return m && tabulatedLambdaUnsupported(*m, loc).empty();
+    };
     // Every example of every NDF x masking x Fresnel model the checker
     // accepts, parameters as unranged inputs. A sparse example is combined
     // only with the representative masking and Fresnel models.
     std::vector<const ModelInfo*> ndfs = catalogSlot(ModelSlot::Ndf), maskings = catalogSlot(ModelSlot::Masking),
                                   fresnels = catalogSlot(ModelSlot::Fresnel);
     for (const ModelInfo* n : ndfs)
-        for (const ModelExample& ne : n->examples)
+        for (const ModelExample& ne : n->examples) {
+            const bool withSmith = smithAccepts(*n, ne);
             for (const ModelInfo* g : maskings)
                 for (const ModelExample& ge : g->examples)
                     for (const ModelInfo* f : fresnels)
                         for (const ModelExample& fe : f->examples) {
-                            if (g->smith && !n->smith) continue;
+                            if (g->smith && !withSmith) continue;
                             if (ndfEntry(*n).wholeLobe && std::string_view(g->name) != "none") continue;
                             bool sparse = ne.sparse || ge.sparse || fe.sparse;
                             if (sparse && (!g->representative && !ge.sparse)) continue;
@@ -395,6 +407,7 @@ std::vector<HardCaseMaterial> hardCaseMaterials(std::vector<std::string>* reject
                                                ge.extra + fe.extra + "\n";
                             add("hc_" + ne.key + "_" + ge.key + "_" + fe.key, body);
                         }
+        }
     // Each model's own extremes: constant parameters at the edges of its
     // domain (folded by the JIT) and range-clamped inputs.
     for (const ModelInfo* m : catalog())
