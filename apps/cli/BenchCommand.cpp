@@ -8,6 +8,7 @@
 #include "BenchPlot.h"
 #include "BenchRunner.h"
 #include "Commands.h"
+#include "MaterialFile.h"
 #include "OutputFile.h"
 
 #include <cstdio>
@@ -22,8 +23,6 @@ namespace facet {
 
 namespace {
 
-constexpr int kExitOk = 0, kExitUsage = 2, kExitMaterialError = 65, kExitFailed = 1;
-
 const char* kBenchUsage =
     "usage: facet bench FILE... [--out DIR] [--json] [--quick] [--lanes N] [--runs N]\n"
     "  --out DIR   write bench.md, bench.json and bench.png there (default ./bench-out)\n"
@@ -36,7 +35,6 @@ int usage(const std::string& message) {
     std::fprintf(stderr, "facet bench: %s\n%s", message.c_str(), kBenchUsage);
     return kExitUsage;
 }
-
 
 }  // namespace
 

@@ -18,6 +18,7 @@
 #include "Checker.h"
 #include "Commands.h"
 #include "Kernel.h"
+#include "MaterialFile.h"
 #include "Specialize.h"
 
 #include <llvm/ADT/StringExtras.h>
@@ -36,8 +37,6 @@
 
 namespace facet {
 namespace {
-
-constexpr int kExitOk = 0, kExitUsage = 2, kExitMaterialError = 65;
 
 struct BuildUsageError {
     std::string message;
@@ -284,18 +283,11 @@ int runBuild(const std::vector<std::string>& args) {
         return kExitUsage;
     }
 
-    DiagnosticEngine diags;
-    CheckedProgram program = loadProgramFile(opt.file, diags);
-    if (diags.hasErrors()) {
-        std::fputs(diags.str().c_str(), stderr);
-        return kExitMaterialError;
-    }
-    const CheckedMaterial* material = program.find(opt.material);
+    NamedMaterial named = loadNamedMaterial(opt.file, opt.material);
+    if (named.fileErrors) return kExitMaterialError;
+    const CheckedMaterial* material = named.material;
     if (!material) {
-        std::string names;
-        for (const CheckedMaterial& m : program.materials) names += (names.empty() ? "" : ", ") + m.name;
-        std::fprintf(stderr, "%s: error: no material named '%s' (materials: %s)\n", opt.file.c_str(),
-                     opt.material.c_str(), names.c_str());
+        std::fprintf(stderr, "facet: error: %s\n", named.missing.c_str());
         return kExitMaterialError;
     }
     for (const auto& [name, values] : options.bindings)
@@ -312,6 +304,7 @@ int runBuild(const std::vector<std::string>& args) {
                      : opt.emit == "bitcode" ? AotOutput::Bitcode
                                              : AotOutput::Object;
     Compiler compiler;
+    DiagnosticEngine diags;
     std::optional<AotKernel> aot =
         compiler.compileAot(*material, options, *target.machine, target.width, opt.prefix, kind, diags);
     if (!aot) {

@@ -13,6 +13,7 @@
 #include "CsvTable.h"
 #include "Interpreter.h"
 #include "Kernel.h"
+#include "MaterialFile.h"
 #include "OutputFile.h"
 
 #include <algorithm>
@@ -26,8 +27,6 @@
 
 namespace facet {
 namespace {
-
-constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitUsage = 2, kExitMaterialError = 65;
 
 const char* kUsage =
     "usage: facet <command> [options]\n"
@@ -145,14 +144,10 @@ int cmdEval(const std::vector<std::string>& args) {
     CompileOptions compileOptions = compileOptionsFor(opt);
     const bool jitBackend = compileOptions.backend != Backend::Interp;
 
-    DiagnosticEngine diags;
-    CheckedProgram program = loadProgramFile(opt.file, diags);
-    if (diags.hasErrors()) {
-        std::fputs(diags.str().c_str(), stderr);
-        return kExitMaterialError;
-    }
-    const CheckedMaterial* material = program.find(opt.material);
-    if (!material) throw UsageError{fmt::format("eval: no material named '{}' in {}", opt.material, opt.file)};
+    NamedMaterial named = loadNamedMaterial(opt.file, opt.material);
+    if (named.fileErrors) return kExitMaterialError;
+    if (!named.material) throw UsageError{"eval: " + named.missing};
+    const CheckedMaterial* material = named.material;
 
     // Slot values: defaults, overridden by --set, overridden per row by columns.
     std::vector<double> slots = material->defaultSlots();
@@ -330,10 +325,10 @@ int cmdEval(const std::vector<std::string>& args) {
             outText += fmt::format("{:.9g},{:.9g},{:.9g}\n", float(results[r][0]), float(results[r][1]),
                                    float(results[r][2]));
     }
-    if (!writeOutput(opt.out, outText)) return kExitCheckFailed;
+    if (!writeOutput(opt.out, outText)) return kExitFailed;
     if (bad) {
         std::fprintf(stderr, "%d of %zu rows invalid\n", bad, rows);
-        return kExitCheckFailed;
+        return kExitFailed;
     }
     return kExitOk;
 }
@@ -367,22 +362,18 @@ int cmdIr(const std::vector<std::string>& args) {
     opt.backend = simd ? "simd" : "scalar";
     CompileOptions options = compileOptionsFor(opt);
     options.bindings = opt.bindings;
+    NamedMaterial named = loadNamedMaterial(opt.file, opt.material);
+    if (named.fileErrors) return kExitMaterialError;
+    if (!named.material) throw UsageError{"ir: " + named.missing};
+    checkBindings(*named.material, opt.bindings);
     DiagnosticEngine diags;
-    CheckedProgram program = loadProgramFile(opt.file, diags);
-    if (diags.hasErrors()) {
-        std::fputs(diags.str().c_str(), stderr);
-        return kExitMaterialError;
-    }
-    const CheckedMaterial* material = program.find(opt.material);
-    if (!material) throw UsageError{fmt::format("ir: no material named '{}' in {}", opt.material, opt.file)};
-    checkBindings(*material, opt.bindings);
     Compiler compiler;
     std::string ir = compiler.irText(opt.file, opt.material, options, simd, output, diags);
     if (diags.hasErrors()) {
         std::fputs(diags.str().c_str(), stderr);
         return kExitMaterialError;
     }
-    return writeOutput("", ir) ? kExitOk : kExitCheckFailed;
+    return writeOutput("", ir) ? kExitOk : kExitFailed;
 }
 
 }  // namespace
@@ -396,7 +387,7 @@ int main(int argc, char** argv) {
             std::fputs(kUsage, stderr);
             return kExitUsage;
         }
-        return writeOutput("", kUsage) ? kExitOk : kExitCheckFailed;
+        return writeOutput("", kUsage) ? kExitOk : kExitFailed;
     }
     std::string command = args[0];
     args.erase(args.begin());
@@ -413,14 +404,14 @@ int main(int argc, char** argv) {
         else if (command == "sample") status = cmdSample(args);
         else throw UsageError{fmt::format("unknown command '{}'", command)};
         // Whatever a command printed must have reached its destination.
-        if (status == kExitOk && !finishStandardOutput()) status = kExitCheckFailed;
+        if (status == kExitOk && !finishStandardOutput()) status = kExitFailed;
         return status;
     } catch (const UsageError& e) {
         std::fprintf(stderr, "facet: %s\n%s", e.message.c_str(), kUsage);
         return kExitUsage;
     } catch (const std::runtime_error& e) {
         std::fprintf(stderr, "facet: error: %s\n", e.what());
-        return kExitCheckFailed;
+        return kExitFailed;
     } catch (const InternalError& e) {
         std::fprintf(stderr, "facet: %s\n", e.what());
         return 70;

@@ -12,6 +12,7 @@
 #include "Checker.h"
 #include "Interpreter.h"
 #include "KullaContyEval.h"
+#include "MaterialFile.h"
 #include "TableCache.h"
 
 #include <cstdio>
@@ -29,7 +30,7 @@ int cmdLut(const std::vector<std::string>& args) {
     int threads = 0;
     auto usage = [](const std::string& msg) {
         std::fprintf(stderr, "facet: lut: %s\n%s", msg.c_str(), kLutUsage);
-        return 2;
+        return kExitUsage;
     };
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
@@ -55,18 +56,14 @@ int cmdLut(const std::vector<std::string>& args) {
     if (file.empty()) return usage("no material file given");
     if (out.empty()) return usage("-o TABLES.exr is required");
 
-    DiagnosticEngine diags;
-    CheckedProgram program = loadProgramFile(file, diags);
-    if (diags.hasErrors()) {
-        std::fputs(diags.str().c_str(), stderr);
-        return 65;
-    }
-    const CheckedMaterial* m = program.find(material);
-    if (!m) return usage(fmt::format("no material named '{}' in {}", material, file));
+    NamedMaterial named = loadNamedMaterial(file, material);
+    if (named.fileErrors) return kExitMaterialError;
+    if (!named.material) return usage(named.missing);
+    const CheckedMaterial* m = named.material;
     if (auto why = kullaContyUnsupported(*m)) {
         std::fprintf(stderr, "%s: error: material '%s': %s\n", why->loc.str().c_str(), m->name.c_str(),
                      why->message.c_str());
-        return 65;
+        return kExitMaterialError;
     }
     EnergyTableKey key = energyTableKey(*m);
     int nt = threads ? threads : int(std::max(1u, std::thread::hardware_concurrency()));
@@ -74,7 +71,7 @@ int cmdLut(const std::vector<std::string>& args) {
     std::string err = writeEnergyTableExr(*table, out);
     if (!err.empty()) {
         std::fprintf(stderr, "facet: lut: %s\n", err.c_str());
-        return 1;
+        return kExitFailed;
     }
     std::printf("material %s: table %s, %d x %d (mu x alpha), alpha in [%g, %g], built in %.1f ms (%d threads)\n",
                 m->name.c_str(), key.name().c_str(), table->muCount, table->alphaCount, table->alphaMin,
@@ -92,7 +89,7 @@ int cmdLut(const std::vector<std::string>& args) {
                     1 - table->ecAvgAt(alpha), fresnelAverage(r, 0), fresnelAverage(r, 1), fresnelAverage(r, 2));
     }
     std::printf("wrote %s\n", out.c_str());
-    return 0;
+    return kExitOk;
 }
 
 }  // namespace facet

@@ -26,6 +26,7 @@
 #include "CsvTable.h"
 #include "ChiSquare.h"
 #include "Kernel.h"
+#include "MaterialFile.h"
 #include "PdfPlot.h"
 #include "Plots.h"
 #include "Sampling.h"
@@ -41,8 +42,6 @@
 namespace facet {
 
 namespace {
-
-constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitUsage = 2, kExitMaterialError = 65;
 
 constexpr const char* kRenderUsage =
     "usage: facet render FILE -o OUT.png|OUT.exr [--material NAME] [--size N] [--light THETA,PHI]\n"
@@ -200,31 +199,24 @@ int renderSphereCommand(const RenderArgs& r) {
                 lanes / 1e6 / std::max(s.seconds, 1e-9), s.kernelSeconds, kernel->samplerTier().c_str());
     if (std::string err = preview::writeSphereImage(image, r.scene, r.out); !err.empty()) {
         std::fprintf(stderr, "facet: render: %s\n", err.c_str());
-        return kExitCheckFailed;
+        return kExitFailed;
     }
     std::printf("wrote %s\n", r.out.c_str());
     if (s.invalidLanes) {
         std::fprintf(stderr, "facet: render: %lld of %lld kernel lanes were invalid (shaded black): the material's "
                      "parameters are not finite at these inputs\n", (long long)s.invalidLanes,
                      (long long)(s.evaluations + s.samples));
-        return kExitCheckFailed;
+        return kExitFailed;
     }
     return kExitOk;
 }
 
-// Loads r.file into `program` and returns its material r.material; null
-// after printing the diagnostics of a material file error. A missing
-// material is a usage error.
-const CheckedMaterial* loadRenderMaterial(const RenderArgs& r, CheckedProgram& program) {
-    DiagnosticEngine diags;
-    program = loadProgramFile(r.file, diags);
-    if (diags.hasErrors()) {
-        std::fputs(diags.str().c_str(), stderr);
-        return nullptr;
-    }
-    const CheckedMaterial* m = program.find(r.material);
-    if (!m) throw RenderUsageError{fmt::format("no material named '{}' in {}", r.material, r.file)};
-    return m;
+// Loads r.file and finds its material r.material (null in `material`
+// after a material file error). A missing material is a usage error.
+NamedMaterial loadRenderMaterial(const RenderArgs& r) {
+    NamedMaterial named = loadNamedMaterial(r.file, r.material);
+    if (!named.fileErrors && !named.material) throw RenderUsageError{named.missing};
+    return named;
 }
 
 int lobePlotCommand(const RenderArgs& r) {
@@ -239,7 +231,7 @@ int lobePlotCommand(const RenderArgs& r) {
     preview::LobePlotResult result = preview::writeLobePlot(*kernel, opt, r.out);
     if (!result.error.empty()) {
         std::fprintf(stderr, "facet: render: %s\n", result.error.c_str());
-        return kExitCheckFailed;
+        return kExitFailed;
     }
     if (!result.warning.empty()) std::fprintf(stderr, "facet: render: warning: %s\n", result.warning.c_str());
     for (size_t i = 0; i < result.peakValue.size(); ++i)
@@ -248,7 +240,7 @@ int lobePlotCommand(const RenderArgs& r) {
     std::printf("wrote %s\n", r.out.c_str());
     if (result.invalidLanes) {
         std::fprintf(stderr, "facet: render: %lld kernel lanes were invalid\n", (long long)result.invalidLanes);
-        return kExitCheckFailed;
+        return kExitFailed;
     }
     return kExitOk;
 }
@@ -320,14 +312,14 @@ int ndfPlotCommand(const RenderArgs& r) {
         opt.title = alphas.size() == 1 ? fmt::format("D(theta_m) at matched roughness alpha = {:g}", alphas[0])
                                        : std::string("D(theta_m) at matched roughness");
     } else {
-        CheckedProgram program;
-        const CheckedMaterial* m = loadRenderMaterial(r, program);
+        NamedMaterial named = loadRenderMaterial(r);
+        const CheckedMaterial* m = named.material;
         if (!m) return kExitMaterialError;
         const NdfEntry& model = ndfEntry(*m->ndf.model);
         if (model.wholeLobe) {
             std::fprintf(stderr, "%s: error: material '%s': the %s model has no microfacet distribution D to plot\n",
                          m->loc.str().c_str(), m->name.c_str(), model.name);
-            return kExitCheckFailed;
+            return kExitFailed;
         }
         Interpreter<double> interp(*m);
         ResolvedMaterial<double> resolved = interp.resolve(nullptr);
@@ -345,7 +337,7 @@ int ndfPlotCommand(const RenderArgs& r) {
     }
     if (std::string err = preview::writeNdfPlot(curves, opt, r.out); !err.empty()) {
         std::fprintf(stderr, "facet: render: %s\n", err.c_str());
-        return kExitCheckFailed;
+        return kExitFailed;
     }
     std::printf("wrote %s (%zu curves)\n", r.out.c_str(), curves.size());
     return kExitOk;
@@ -357,8 +349,8 @@ constexpr int kPdfPlotRows = 48, kPdfPlotColumns = 96;
 int pdfPlotCommand(const RenderArgs& r) {
     std::array<double, 3> wo;
     if (std::string why = parseViewDirection("--wo", r.wo, wo); !why.empty()) throw RenderUsageError{why};
-    CheckedProgram program;
-    const CheckedMaterial* m = loadRenderMaterial(r, program);
+    NamedMaterial named = loadRenderMaterial(r);
+    const CheckedMaterial* m = named.material;
     if (!m) return kExitMaterialError;
     std::unique_ptr<Interpreter<double>> sampler = referenceSampler(*m);
 
@@ -380,7 +372,7 @@ int pdfPlotCommand(const RenderArgs& r) {
     if (invalid) {
         std::fprintf(stderr, "facet: render: %ld of %ld samples are invalid (the material's default inputs are not "
                      "finite, or a result overflowed)\n", invalid, r.samples);
-        return kExitCheckFailed;
+        return kExitFailed;
     }
     double n = double(r.samples);
     auto pdf = [&](const Vec3<double>& wi) {
@@ -404,7 +396,7 @@ int pdfPlotCommand(const RenderArgs& r) {
     std::string warning;
     if (std::string err = preview::writePdfPlot(h, opt, r.out, &warning); !err.empty()) {
         std::fprintf(stderr, "facet: render: %s\n", err.c_str());
-        return kExitCheckFailed;
+        return kExitFailed;
     }
     if (!warning.empty()) std::fprintf(stderr, "facet: render: warning: %s\n", warning.c_str());
     std::printf("%ld samples (%ld with no direction), %d cells: pdf integral %.6f; %s\n", r.samples, none,

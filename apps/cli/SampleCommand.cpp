@@ -18,6 +18,7 @@
 
 #include "Checker.h"
 #include "Kernel.h"
+#include "MaterialFile.h"
 #include "OutputFile.h"
 #include "Sampling.h"
 #include "SamplingSetup.h"
@@ -90,14 +91,10 @@ int runSample(const std::vector<std::string>& args) {
     std::array<double, 3> view;
     if (std::string why = parseViewDirection("--wo", wo, view); !why.empty()) throw SampleUsageError{why};
 
-    DiagnosticEngine diags;
-    CheckedProgram program = loadProgramFile(file, diags);
-    if (diags.hasErrors()) {
-        std::fputs(diags.str().c_str(), stderr);
-        return 65;
-    }
-    const CheckedMaterial* m = program.find(material);
-    if (!m) throw SampleUsageError{fmt::format("no material named '{}' in {}", material, file)};
+    NamedMaterial named = loadNamedMaterial(file, material);
+    if (named.fileErrors) return kExitMaterialError;
+    if (!named.material) throw SampleUsageError{named.missing};
+    const CheckedMaterial* m = named.material;
     SampleUniforms uniforms(seed);
     auto uniform = [&] { return uniforms.next(); };
     std::string csv = "wi_x,wi_y,wi_z,pdf,weight_r,weight_g,weight_b\n";
@@ -119,10 +116,11 @@ int runSample(const std::vector<std::string>& args) {
         CompileOptions options;
         std::string problem = CompileOptions::parse(fmt::format("backend={};math={}", backend, math), options);
         internal_assert(problem.empty()) << problem;
+        DiagnosticEngine diags;
         std::unique_ptr<Kernel> kernel = compiler.compileMaterial(*m, options, diags);
         if (!kernel) {
             std::fputs(diags.str().c_str(), stderr);
-            return 65;
+            return kExitMaterialError;
         }
         if (kernel->samplerTier() != "jit")
             std::fprintf(stderr, "facet: note: material %s has no compiled sampler (ndf %s); sampling through the "
@@ -152,18 +150,18 @@ int runSample(const std::vector<std::string>& args) {
                                pdfs[i], weights[0][i], weights[1][i], weights[2][i]);
         }
     }
-    if (!writeOutput(out, csv)) return 1;
+    if (!writeOutput(out, csv)) return kExitFailed;
     if (invalid > 0) {
         std::fprintf(stderr, "facet: sample: %ld of %ld samples are invalid (the material's default inputs are not "
                              "finite, or a result overflowed); their rows are zero\n", invalid, count);
-        return 1;
+        return kExitFailed;
     }
     if (!out.empty() && out != "-")
         std::printf("%ld samples of material %s at wo = (%s): mean weight (%.6f, %.6f, %.6f), %ld below the "
                     "horizon; wrote %s\n",
                     count, m->name.c_str(), wo.c_str(), sum[0] / count, sum[1] / count, sum[2] / count, below,
                     out.c_str());
-    return 0;
+    return kExitOk;
 }
 
 }  // namespace
@@ -173,7 +171,7 @@ int cmdSample(const std::vector<std::string>& args) {
         return runSample(args);
     } catch (const SampleUsageError& e) {
         std::fprintf(stderr, "facet: sample: %s\n%s", e.message.c_str(), kSampleUsage);
-        return 2;
+        return kExitUsage;
     }
 }
 

@@ -18,6 +18,7 @@
 #include "HardCases.h"
 #include "Interpreter.h"
 #include "Kernel.h"
+#include "MaterialFile.h"
 #include "PhysicsChecks.h"
 #include "Verify.h"
 
@@ -32,7 +33,6 @@ namespace facet {
 
 namespace {
 
-constexpr int kOk = 0, kFailed = 1, kUsage = 2, kMaterialError = 65;
 constexpr double kQuadTolerance = 1e-12;
 constexpr double kConditionFactor = 16;  // allowed error: 16 kappa u
 constexpr double kUnitRoundoff = 0x1p-53;
@@ -226,7 +226,7 @@ int cmdVerify(const std::vector<std::string>& args) {
         if (a == "--material") {
             if (i + 1 >= args.size()) {
                 std::fputs(kVerifyUsage, stderr);
-                return kUsage;
+                return kExitUsage;
             }
             opt.material = args[++i];
         } else if (a == "--verbose") opt.verbose = true;
@@ -235,12 +235,12 @@ int cmdVerify(const std::vector<std::string>& args) {
         else if (a == "--no-quad") opt.quad = false;
         else if (!a.empty() && a[0] == '-') {
             std::fprintf(stderr, "facet verify: unknown option '%s'\n%s", a.c_str(), kVerifyUsage);
-            return kUsage;
+            return kExitUsage;
         } else opt.files.push_back(a);
     }
     if (opt.files.empty()) {
         std::fprintf(stderr, "facet verify: no files given\n%s", kVerifyUsage);
-        return kUsage;
+        return kExitUsage;
     }
     bool materialError = false, failed = false;
     int passed = 0, total = 0;
@@ -270,12 +270,12 @@ int cmdVerify(const std::vector<std::string>& args) {
         for (const std::string& n : failedNames) std::printf(" %s", n.c_str());
     }
     std::printf("\n");
-    if (materialError) return kMaterialError;
+    if (materialError) return kExitMaterialError;
     if (!opt.material.empty() && total == 0) {
         std::fprintf(stderr, "facet verify: no material named '%s'\n", opt.material.c_str());
-        return kUsage;
+        return kExitUsage;
     }
-    return failed ? kFailed : kOk;
+    return failed ? kExitFailed : kExitOk;
 }
 
 }  // namespace facet

@@ -35,7 +35,7 @@ expect 2 "unknown CPU 'pentium9' for aarch64 (CPUs: .*cortex-a72" "$gold" --targ
 expect 2 "unknown CPU 'cortex-a72' for x86_64 (CPUs: .*skylake" "$gold" --cpu cortex-a72 -o "$o"
 expect 2 "unknown feature '+avx9' for x86_64 .*avx2" "$gold" --features +avx9 -o "$o"
 expect 2 "unknown feature 'neon' for aarch64 (write +NAME or -NAME" "$gold" --target aarch64-linux-gnu --features neon -o "$o"
-expect 65 "no material named 'silver' (materials: gold)" "$gold" --material silver -o "$o" --header "$h"
+expect 65 "no material named 'silver' in .*gold.mat (materials: gold)" "$gold" --material silver -o "$o" --header "$h"
 printf 'material broken {\n    ndf = ggx(;\n}\n' >"$work/broken.mat"
 expect 65 "broken.mat:2:" "$work/broken.mat" -o "$o"
 expect 2 "backend 'interp' is not scalar or simd" "$gold" --backend interp -o "$o"

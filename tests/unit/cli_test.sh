@@ -272,7 +272,7 @@ near_row other.out 2 "16/pi" "16/pi" "16/pi"
 
 run "$FACET" eval test.mat --material nope --in dirs.csv
 expect_rc 2 "--material that does not exist"
-expect_first_line "$err" "facet: eval: no material named 'nope' in test.mat" "--material nope: message"
+expect_first_line "$err" "facet: eval: no material named 'nope' in test.mat (materials: test, other)" "--material nope: message"
 
 run "$FACET" eval bad.mat --in dirs.csv
 expect_rc 65 "eval of a bad material"
