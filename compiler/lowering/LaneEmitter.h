@@ -197,10 +197,12 @@ public:
     llvm::Value* invertIncreasing(MathEmitter& math, const CdfAndPdf& cdfAndPdf, llvm::Value* target, llvm::Value* lo,
                                   llvm::Value* hi, int steps);
     // For the samplers that invert a CDF: the root of phi, increasing in v,
-    // in [lo, hi], per lane in the type of `math`. `steps` Newton steps from
-    // v0, branch-free: each sign of phi narrows the bracket, and a step that
-    // would leave it (or is not a number: phi infinite or its slope 0)
-    // bisects it instead. `eval` emits phi(v) and phi'(v).
+    // in [lo, hi], per lane in the type of `math`. At most `steps` Newton
+    // steps from v0, leaving the loop once every lane has settled (its last
+    // step within a small relative amount of v, or v not a number): each
+    // sign of phi narrows the bracket, and a step that would leave it (or is
+    // not a number: phi infinite or its slope 0) bisects it instead. `eval`
+    // emits phi(v) and phi'(v).
     struct NewtonTerms {
         llvm::Value *phi, *slope;
     };
