@@ -7,6 +7,7 @@
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <numbers>
@@ -22,10 +23,15 @@ constexpr double kNormalizationTolerance = 1e-4;
 constexpr double kRoughness[4] = {0.01, 0.1, 0.5, 1};
 constexpr double kViewDegrees[4] = {0, 45, 80, 89.9};
 constexpr double kViewAzimuth = 0.3;  // off the principal axes of the anisotropic lobes
-// Each combination runs every kStride-th (roughness, view) pair, shifted by
-// its index, so that consecutive combinations of one NDF (its maskings and
-// diffuse variants) cover all sixteen pairs between them.
-constexpr int kStride = 4;
+// The sixteen (roughness, view) pairs are spread over the combinations of
+// each lobe (one NDF form, with or without compensation: its maskings and
+// diffuse variants, which share its sampler): every combination runs
+// kRunsPerCombination pairs, more where the lobe has too few combinations to
+// cover all sixteen, and consecutive runs step through the pairs by 5 (prime
+// to 16) so that one combination's runs differ in roughness and view.
+constexpr int kPairs = 16;
+constexpr int kRunsPerCombination = 2;
+constexpr int kPairStep = 5;
 constexpr int kSamples = 100000;
 
 V3 viewAt(double degrees) {
@@ -42,12 +48,26 @@ struct Run {
 std::vector<Run> plan() {
     std::vector<Run> runs;
     const std::vector<Combo>& all = combos();
-    for (size_t c = 0; c < all.size(); ++c) {
+    auto sameLobe = [](const Combo& a, const Combo& b) {
+        return a.ndf == b.ndf && a.anisotropic == b.anisotropic && a.compensated == b.compensated;
+    };
+    for (size_t first = 0; first < all.size();) {
+        size_t end = first;
+        while (end < all.size() && sameLobe(all[first], all[end])) ++end;
         // A tabulated Smith Lambda only changes G (the sampler is the NDF's,
         // checked with the NDF's other maskings): one run per such pair.
-        int stride = all[c].ndf->tabulatedLambda && all[c].masking->smith ? 16 : kStride;
-        for (int k = 0; k < 16; ++k)
-            if ((k + int(c)) % stride == 0) runs.push_back({&all[c], k / 4, k % 4, int(runs.size())});
+        auto tabulated = [&](size_t c) { return all[c].ndf->tabulatedLambda && all[c].masking->smith; };
+        size_t counted = 0;
+        for (size_t c = first; c < end; ++c) counted += !tabulated(c);
+        int perCombination =
+            std::max(kRunsPerCombination, counted ? int((kPairs + counted - 1) / counted) : 1);
+        int pair = 0;
+        for (size_t c = first; c < end; ++c)
+            for (int r = 0; r < (tabulated(c) ? 1 : perCombination); ++r, ++pair) {
+                int k = pair * kPairStep % kPairs;
+                runs.push_back({&all[c], k / 4, k % 4, int(runs.size())});
+            }
+        first = end;
     }
     return runs;
 }
