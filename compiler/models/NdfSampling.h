@@ -71,6 +71,32 @@ Real invertIncreasing(const Cdf& cdf, const Pdf& pdf, Real target, Real lo, Real
     return x;
 }
 
+// Legendre's continued fraction of the upper incomplete gamma function,
+// Gamma(a, y) = y^a e^-y h with h = 1/(y + 1 - a - 1 (1 - a)/(y + 3 - a -
+// 2 (2 - a)/(y + 5 - a - ...))), by the modified Lentz method to the
+// resolution of Real: h for y > 0 and any real a, converging in a few
+// dozen levels once y is a little above a + 1.
+template <typename Real>
+Real upperGammaFraction(Real a, Real y) {
+    using std::fabs;
+    const Real eps = std::numeric_limits<Real>::epsilon();
+    const Real tiny = std::numeric_limits<Real>::min() / eps;
+    Real b = y + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
+    for (int i = 1; i < 5000; ++i) {
+        Real an = -i * (i - a);
+        b += 2;
+        d = an * d + b;
+        if (fabs(d) < tiny) d = tiny;
+        c = b + an / c;
+        if (fabs(c) < tiny) c = tiny;
+        d = 1 / d;
+        Real step = d * c;
+        h *= step;
+        if (fabs(step - 1) <= eps) break;
+    }
+    return h;
+}
+
 // ---- the Student-t slope distribution ----------------------------------------
 //
 // P22(x, y) = (nu/(2 pi)) (1 + x^2 + y^2)^(-(nu + 2)/2), nu > 1, whose

@@ -67,12 +67,20 @@ struct AbcFormulas final : NdfFormulas<Real> {
     //   Q = (b - (t - 1)) ln(t) phi((1 - c) ln t) + N(t - 1, c),  t = 1 + b x
     // (Int_1^t (1 + b - s) s^-c ds split at (1 + b - t) + (t - s)), with
     // dQ/dv = (b - (t - 1)) t^(1 - c) in v = ln t; Q(ln(1 + b)) = N(b, c).
+    // Bracket: without its falling factor 1 + b - t the density is t^(1-c)
+    // dv, whose CDF G(v) = v phi((1 - c) v) / (L phi((1 - c) L)), L = ln(1 +
+    // b), inverts in closed form; the factor only moves mass to smaller v,
+    // so the root lies below G^-1(u1), and (the factor being at most b)
+    // above G^-1(u1 r), r = N(b, c) / (b L phi((1 - c) L)) <= 1.
     Vec3<Real> sampleNormal(const ModelArgs<Real>& a, Real u1, Real u2) const override {
         using std::cos; using std::exp; using std::expm1; using std::log1p; using std::sin; using std::sqrt;
-        Real b = a[kB], c = a[kC];
+        Real b = a[kB], c = a[kC], L = log1p(b), k = (1 - c) * L;
         auto cdf = [&](Real v) { return (b - expm1(v)) * v * phi((1 - c) * v) + abcMass(expm1(v), c); };
         auto pdf = [&](Real v) { return (b - expm1(v)) * exp((1 - c) * v); };
-        Real v = invertIncreasing(cdf, pdf, u1 * abcMass(b, c), Real(0), log1p(b));
+        auto inverseG = [&](Real u) { return k == 0 ? u * L : L * log1p(u * expm1(k)) / k; };
+        Real mass = abcMass(b, c), r = mass / (b * L * phi(k));
+        Real hi = inverseG(u1), lo = inverseG(u1 * r);
+        Real v = invertIncreasing(cdf, pdf, u1 * mass, lo, hi < L ? hi : L);
         Real d = expm1(v), x = d < b ? d / b : Real(1), mz = d < b ? (b - d) / b : Real(0);
         Real s = sqrt(x * (2 - x)), ph = 2 * kPi<Real> * u2;
         return {s * cos(ph), s * sin(ph), mz};

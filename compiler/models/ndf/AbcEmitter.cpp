@@ -1,22 +1,17 @@
 // abc: the ABC distribution as IR (the reference is Abc.cpp): D in log
 // form in the precise type, its normalization and the NDF sampler's CDF
 // inversion in double.
-#include "lowering/LaneEmitter.h"
+#include "ShapeNdfEmitter.h"
 
 #include <cmath>
 
 namespace facet {
-namespace {
 
 using llvm::Value;
 
-constexpr int kB = 0, kC = 1;
-constexpr int kOwnB = 0, kOwnC = 1, kOwnLogNorm = 2;  // NdfParams::own, precise type: b, c, ln A
-constexpr int kNewtonSteps = 14;
-
-// (e^y - 1)/y in double to its last bits: the Taylor series sum y^k/(k+1)!
-// to k = 14 for |y| < 1/2 (the first term left out is below 2e-18), the
-// quotient above (where e^y - 1 no longer cancels).
+// The Taylor series sum y^k/(k+1)! to k = 14 for |y| < 1/2 (the first term
+// left out is below 2e-18), the quotient above (where e^y - 1 no longer
+// cancels).
 Value* expm1OverXDouble(MathEmitter& dm, Value* y) {
     double coeff[15];
     double fact = 1;
@@ -26,6 +21,24 @@ Value* expm1OverXDouble(MathEmitter& dm, Value* y) {
     Value* direct = dm.div(dm.sub(dm.exp(y), dm.c(1.0)), y);
     return dm.select(dm.lt(dm.abs(y), dm.c(0.5)), series, direct);
 }
+
+ShapeParams shapeParams(LaneEmitter& lane, int p0, int p1) {
+    const ModelUse& use = lane.material.ndf;
+    MathEmitter& dm = lane.doubleMath();
+    ShapeParams s;
+    s.n.isotropic = true;
+    s.n.own[0] = lane.scalarParam(use, p0, false);
+    s.n.own[1] = lane.scalarParam(use, p1, false);
+    s.first = dm.convert(s.n.own[0], dm.type());
+    s.second = dm.convert(s.n.own[1], dm.type());
+    return s;
+}
+
+namespace {
+
+constexpr int kB = 0, kC = 1;
+constexpr int kOwnB = 0, kOwnC = 1, kOwnLogNorm = 2;  // NdfParams::own, precise type: b, c, ln A
+constexpr int kNewtonSteps = 14;
 
 // The mass Int_1^(1+d) (1 + d - t) t^-c dt in double, L = ln(1 + d): from
 // the integrals of t^-c and t^(1-c), ((1 + d) L phi((1 - c) L) - d) / (2 -
@@ -51,18 +64,12 @@ public:
 
     // ln A = 2 ln b - ln(2 pi N(b, c)), folded for constant b and c.
     NdfParams params(LaneEmitter& lane) const override {
-        const ModelUse& use = lane.material.ndf;
-        NdfParams n;
-        n.isotropic = true;
-        n.own[kOwnB] = lane.scalarParam(use, kB, false);
-        n.own[kOwnC] = lane.scalarParam(use, kC, false);
+        ShapeParams s = shapeParams(lane, kB, kC);  // own[kOwnB], own[kOwnC]
         MathEmitter& dm = lane.doubleMath();
-        MathEmitter& pm = lane.preciseMath();
-        Value* b = dm.convert(n.own[kOwnB], dm.type());
-        Value* c = dm.convert(n.own[kOwnC], dm.type());
-        Value* logNorm = dm.sub(dm.mul(dm.log(b), dm.c(2.0)), dm.log(dm.mul(mass(dm, b, c), dm.c(2 * kPi))));
-        n.own[kOwnLogNorm] = pm.convert(logNorm, pm.type());
-        return n;
+        Value* b = s.first;
+        Value* logNorm = dm.sub(dm.mul(dm.log(b), dm.c(2.0)), dm.log(dm.mul(mass(dm, b, s.second), dm.c(2 * kPi))));
+        s.n.own[kOwnLogNorm] = lane.preciseMath().convert(logNorm, lane.preciseMath().type());
+        return s.n;
     }
 
     // ln D = ln A - c ln(1 + b x), x = 1 - mz = (mx^2 + my^2) / (1 + mz).
@@ -84,10 +91,13 @@ public:
     // In v = ln t, t = 1 + b (1 - mz), the mass of D(m) mz below t is
     // proportional to Q(v) = (b - (t - 1)) v phi((1 - c) v) + M(t - 1), M
     // the mass above (split of (1 + b - s) = (1 + b - t) + (t - s)), with
-    // Q' = (b - (t - 1)) t^(1 - c) and Q(ln(1 + b)) = M(b). Newton from the
-    // inverse of the density t^-c dt alone (the factor 1 + b - t dropped,
-    // nearly constant where a narrow lobe has its mass): v0 = L g, g =
-    // log1p(u expm1(k)) / k, k = (1 - c) L (g = u at k = 0).
+    // Q' = (b - (t - 1)) t^(1 - c) and Q(ln(1 + b)) = M(b). The density
+    // t^-c dt alone (the factor 1 + b - t dropped, nearly constant where a
+    // narrow lobe has its mass) has the quantile ln t = L g(u), g(u) =
+    // log1p(u expm1(k)) / k, k = (1 - c) L (g = u at k = 0): dropping a
+    // falling factor moves mass up, so the root lies below L g(u), and, the
+    // factor being at most b, above L g(u M(b) / (b L phi(k))).
+    // Newton starts at the upper end, exact for a narrow lobe.
     std::array<Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, Value* u1, Value* u2) const override {
         MathEmitter& dm = lane.doubleMath();
         MathEmitter& pm = lane.preciseMath();
@@ -99,9 +109,15 @@ public:
         Value* k = dm.mul(oneMinusC, L);
         Value* kZero = dm.eq(k, dm.c(0.0));
         Value* kSafe = dm.select(kZero, dm.c(1.0), k);
-        Value* g = dm.div(dm.log1p(dm.mul(u, dm.mul(kSafe, expm1OverXDouble(dm, kSafe)))), kSafe);
-        Value* v0 = dm.mul(L, dm.select(kZero, u, g));
-        Value* target = dm.mul(u, mass(dm, b, c));
+        Value* expm1K = dm.mul(kSafe, expm1OverXDouble(dm, kSafe));
+        auto quantile = [&](Value* w) {
+            return dm.mul(L, dm.select(kZero, w, dm.div(dm.log1p(dm.mul(w, expm1K)), kSafe)));
+        };
+        Value* total = mass(dm, b, c);
+        Value* ratio = dm.div(total, dm.mul(dm.mul(b, L), expm1OverXDouble(dm, k)));
+        Value* hi = dm.minnum(quantile(u), L);
+        Value* lo = dm.minnum(quantile(dm.mul(u, ratio)), hi);
+        Value* target = dm.mul(u, total);
         auto eval = [&](Value* v) {
             Value* d = dm.mul(v, expm1OverXDouble(dm, v));  // t - 1
             Value* rest = dm.sub(b, d);
@@ -109,7 +125,7 @@ public:
             Value* slope = dm.mul(rest, dm.exp(dm.mul(oneMinusC, v)));
             return LaneEmitter::NewtonTerms{dm.sub(q, target), slope};
         };
-        Value* v = lane.bracketedNewton(dm, eval, dm.minnum(dm.maxnum(v0, dm.c(0.0)), L), dm.c(0.0), L, kNewtonSteps);
+        Value* v = lane.bracketedNewton(dm, eval, hi, lo, hi, kNewtonSteps);
         Value* d = dm.mul(v, expm1OverXDouble(dm, v));
         Value* x = dm.minnum(dm.div(d, b), dm.c(1.0));
         Value* mz = dm.maxnum(dm.div(dm.sub(b, d), b), dm.c(0.0));
