@@ -129,6 +129,25 @@ def abc_norm(b, c):
     return _abc_norm_cache[(b, c)]
 
 
+_sgd_norm_cache = {}
+
+
+def sgd_norm(alpha, q):
+    """pi alpha Int_alpha^inf w^-q e^-w dw: the normalization of the SGD NDF.
+
+    Panels doubling from w = alpha resolve the w^-q peak of a small alpha; beyond
+    alpha + 45 the integrand is below e^-45 of its scale.
+    """
+    if (alpha, q) not in _sgd_norm_cache:
+        f = lambda w: w ** -q * math.exp(-w)
+        cuts = [alpha]
+        while cuts[-1] < alpha + 45:
+            cuts.append(cuts[-1] * 2)
+        total = math.fsum(integrate(f, cuts[i], cuts[i + 1]) for i in range(len(cuts) - 1))
+        _sgd_norm_cache[(alpha, q)] = PI * alpha * total
+    return _sgd_norm_cache[(alpha, q)]
+
+
 # ---------------------------------------------------------------------------
 # Vectors
 # ---------------------------------------------------------------------------
@@ -193,6 +212,12 @@ def ndf_D(ndf, p, m):
         # 1 - mz = sin^2 / (1 + mz); A normalizes the projected area (abc_norm).
         b, c = p["b"], p["c"]
         return (1 + b * s2 / (1 + mz)) ** -c / abc_norm(b, c)
+    if ndf == "sgd":
+        # Bagher et al. 2012: exp(-w) w^-p / (N cos^4), w = alpha + tan^2/alpha
+        # (sgd_norm).
+        a, q = p["alpha"], p["p"]
+        w = a + s2 / (mz * mz) / a
+        return math.exp(-w) * w ** -q / (sgd_norm(a, q) * mz ** 4)
     if ndf == "gaussian":
         a = p["alpha"]
         theta = math.atan2(math.sqrt(s2), mz)  # = acos(mz), accurate near 0
@@ -546,6 +571,7 @@ MODELS = {
         "gaussian": [["alpha"]],
         "epd": [["alpha", "p"], ["alpha_x", "alpha_y", "p"]],
         "abc": [["b", "c"]],
+        "sgd": [["alpha", "p"]],
     },
     "masking": {name: [[]] for name in (
         "none", "implicit", "cook_torrance", "kelemen", "neumann", "smith_separable",
@@ -624,7 +650,10 @@ class Material:
             params[slot] = p
         # Canonical NDF parameters; alpha clamped to >= 1e-4 (SPEC 3).
         pn = params["ndf"]
-        if "alpha" in pn:
+        if self.models["ndf"] == "sgd":  # alpha clamped to [2e-4, 10], p to [0, 2]
+            pn["alpha"] = min(max(pn["alpha"], 2e-4), 10.0)
+            pn["p"] = min(max(pn["p"], 0.0), 2.0)
+        elif "alpha" in pn:
             pn["alpha"] = max(pn["alpha"], MIN_ALPHA)
             pn.setdefault("alpha_x", pn["alpha"])
             pn.setdefault("alpha_y", pn["alpha"])
@@ -860,7 +889,8 @@ def cmd_selftest():
              ("gtr", {"alpha": 0.4, "gamma": 1.0}), ("gtr", {"alpha": 0.4, "gamma": 2.5}),
              ("gtr", {"alpha": 1.0, "gamma": 3.0}), ("gaussian", {"alpha": 0.3}),
              ("epd", {"alpha_x": 0.3, "alpha_y": 0.3, "p": 0.6}), ("epd", {"alpha_x": 0.2, "alpha_y": 0.5, "p": 2.0}),
-             ("abc", {"b": 20.0, "c": 1.5}), ("abc", {"b": 0.5, "c": 0.0}), ("abc", {"b": 300.0, "c": 2.0})]
+             ("abc", {"b": 20.0, "c": 1.5}), ("abc", {"b": 0.5, "c": 0.0}), ("abc", {"b": 300.0, "c": 2.0}),
+             ("sgd", {"alpha": 0.1, "p": 0.6}), ("sgd", {"alpha": 0.05, "p": 1.0}), ("sgd", {"alpha": 2.0, "p": 2.0})]
     for ndf, p in cases:
         check("normalization %s %s" % (ndf, p), projected_area(ndf, p), 1.0, 1e-8)
     # Conductor with k = 0 is a dielectric (two independent formulas).

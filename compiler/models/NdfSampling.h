@@ -46,15 +46,16 @@ Vec3<Real> stretchedSlopeNormal(Real ax, Real ay, Real r2, Real u) {
 }
 
 // x in [lo, hi] with cdf(x) = target, for a cdf increasing on [lo, hi]
-// with derivative pdf: Newton steps, falling back to bisection whenever a
-// step leaves the bracket or is more than half the step before the last
-// (on a strongly curved cdf, such as a log cdf against log x, Newton's
-// steps can otherwise cycle between the two ends of the bracket); stops at
-// the resolution of Real.
+// with derivative pdf: Newton steps from `start` (by default the middle),
+// falling back to bisection whenever a step leaves the bracket or is more
+// than half the step before the last (on a strongly curved cdf, such as a
+// log cdf against log x, Newton's steps can otherwise cycle between the
+// two ends of the bracket); stops at the resolution of Real.
 template <typename Real, typename Cdf, typename Pdf>
-Real invertIncreasing(const Cdf& cdf, const Pdf& pdf, Real target, Real lo, Real hi) {
+Real invertIncreasing(const Cdf& cdf, const Pdf& pdf, Real target, Real lo, Real hi,
+                      Real start = std::numeric_limits<Real>::quiet_NaN()) {
     using std::fabs;
-    Real x = (lo + hi) / 2, step = hi - lo, stepBefore = hi - lo;
+    Real x = start >= lo && start <= hi ? start : (lo + hi) / 2, step = hi - lo, stepBefore = hi - lo;
     for (int it = 0; it < 200; ++it) {
         Real f = cdf(x) - target;
         if (f == 0) return x;

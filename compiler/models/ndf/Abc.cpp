@@ -72,6 +72,11 @@ struct AbcFormulas final : NdfFormulas<Real> {
     // b), inverts in closed form; the factor only moves mass to smaller v,
     // so the root lies below G^-1(u1), and (the factor being at most b)
     // above G^-1(u1 r), r = N(b, c) / (b L phi((1 - c) L)) <= 1.
+    // Above the median the mass beyond t, in l = ln((1 + b)/t) = L - v,
+    //   R = Int_t^(1+b) (1 + b - s) s^-c ds
+    //     = (1 + b)^(2-c) l (phi(-(1 - c) l) - phi(-(2 - c) l)),
+    // solves R(l) = (1 - u1) N(b, c) instead (dR/dl = Q'), so that mz =
+    // (1 + b) (1 - e^-l) / b keeps its relative accuracy toward the horizon.
     Vec3<Real> sampleNormal(const ModelArgs<Real>& a, Real u1, Real u2) const override {
         using std::cos; using std::exp; using std::expm1; using std::log1p; using std::sin; using std::sqrt;
         Real b = a[kB], c = a[kC], L = log1p(b), k = (1 - c) * L;
@@ -80,8 +85,18 @@ struct AbcFormulas final : NdfFormulas<Real> {
         auto inverseG = [&](Real u) { return k == 0 ? u * L : L * log1p(u * expm1(k)) / k; };
         Real mass = abcMass(b, c), r = mass / (b * L * phi(k));
         Real hi = inverseG(u1), lo = inverseG(u1 * r);
-        Real v = invertIncreasing(cdf, pdf, u1 * mass, lo, hi < L ? hi : L);
-        Real d = expm1(v), x = d < b ? d / b : Real(1), mz = d < b ? (b - d) / b : Real(0);
+        hi = hi < L ? hi : L;
+        Real x, mz;
+        if (u1 <= Real(0.5)) {
+            Real d = expm1(invertIncreasing(cdf, pdf, u1 * mass, lo, hi));
+            x = d < b ? d / b : Real(1), mz = d < b ? (b - d) / b : Real(0);
+        } else {
+            Real top = exp((2 - c) * L);
+            auto upper = [&](Real l) { return top * l * (phi(-(1 - c) * l) - phi(-(2 - c) * l)); };
+            auto upperPdf = [&](Real l) { return -(1 + b) * expm1(-l) * exp((1 - c) * (L - l)); };
+            Real l = invertIncreasing(upper, upperPdf, (1 - u1) * mass, L - hi, L - lo);
+            x = expm1(L - l) / b, mz = -(1 + b) * expm1(-l) / b;
+        }
         Real s = sqrt(x * (2 - x)), ph = 2 * kPi<Real> * u2;
         return {s * cos(ph), s * sin(ph), mz};
     }

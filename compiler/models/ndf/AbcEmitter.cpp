@@ -97,7 +97,11 @@ public:
     // log1p(u expm1(k)) / k, k = (1 - c) L (g = u at k = 0): dropping a
     // falling factor moves mass up, so the root lies below L g(u), and, the
     // factor being at most b, above L g(u M(b) / (b L phi(k))).
-    // Newton starts at the upper end, exact for a narrow lobe.
+    // Newton starts at the upper end, exact for a narrow lobe. Lanes above
+    // the median solve for the mass beyond t instead, R = (1 + b)^(2-c) l
+    // (phi(-(1 - c) l) - phi(-(2 - c) l)) = (1 - u) M(b), l = L - v (R' =
+    // -Q' in v), so that cos theta = (1 + b)(1 - e^-l)/b keeps its relative
+    // accuracy toward the horizon.
     std::array<Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, Value* u1, Value* u2) const override {
         MathEmitter& dm = lane.doubleMath();
         MathEmitter& pm = lane.preciseMath();
@@ -118,17 +122,32 @@ public:
         Value* hi = dm.minnum(quantile(u), L);
         Value* lo = dm.minnum(quantile(dm.mul(u, ratio)), hi);
         Value* target = dm.mul(u, total);
+        Value* upper = dm.gt(u, dm.c(0.5));
+        Value* T = dm.add(b, dm.c(1.0));
+        Value* twoMinusC = dm.sub(dm.c(2.0), c);
+        Value* top = dm.exp(dm.mul(twoMinusC, L));
+        Value* upperTarget = dm.mul(dm.sub(dm.c(1.0), u), total);
+        // Upper lanes start where R ~ (1 + b)^(2-c) l^2 / 2 (the density
+        // near the horizon) meets their target.
+        Value* l0 = dm.sqrt(dm.div(dm.mul(upperTarget, dm.c(2.0)), top));
+        Value* v0 = dm.select(upper, dm.minnum(dm.maxnum(dm.sub(L, l0), lo), hi), hi);
         auto eval = [&](Value* v) {
             Value* d = dm.mul(v, expm1OverXDouble(dm, v));  // t - 1
             Value* rest = dm.sub(b, d);
             Value* q = dm.add(dm.mul(dm.mul(rest, v), expm1OverXDouble(dm, dm.mul(oneMinusC, v))), mass(dm, d, c));
+            Value* l = dm.sub(L, v);
+            Value* R = dm.mul(dm.mul(top, l), dm.sub(expm1OverXDouble(dm, dm.neg(dm.mul(oneMinusC, l))),
+                                                    expm1OverXDouble(dm, dm.neg(dm.mul(twoMinusC, l)))));
             Value* slope = dm.mul(rest, dm.exp(dm.mul(oneMinusC, v)));
-            return LaneEmitter::NewtonTerms{dm.sub(q, target), slope};
+            return LaneEmitter::NewtonTerms{dm.select(upper, dm.sub(upperTarget, R), dm.sub(q, target)), slope};
         };
-        Value* v = lane.bracketedNewton(dm, eval, hi, lo, hi, kNewtonSteps);
+        Value* v = lane.bracketedNewton(dm, eval, v0, lo, hi, kNewtonSteps);
         Value* d = dm.mul(v, expm1OverXDouble(dm, v));
         Value* x = dm.minnum(dm.div(d, b), dm.c(1.0));
-        Value* mz = dm.maxnum(dm.div(dm.sub(b, d), b), dm.c(0.0));
+        // 1 + b - t = (1 + b)(1 - e^-l), l = L - v exact near the horizon.
+        Value* l = dm.sub(L, v);
+        Value* restUpper = dm.mul(dm.mul(T, l), expm1OverXDouble(dm, dm.neg(l)));
+        Value* mz = dm.maxnum(dm.div(dm.select(upper, restUpper, dm.sub(b, d)), b), dm.c(0.0));
         Value* s2 = dm.mul(x, dm.sub(dm.c(2.0), x));
         return lane.normalFromPolar(pm.convert(s2, pm.type()), u2, pm.convert(dm.mul(mz, mz), pm.type()));
     }

@@ -39,12 +39,18 @@ constexpr double kMinAlpha = 2e-4, kMaxAlpha = 10, kMaxP = 2;
 // whose first two terms (where a + n may be 0 or negative) are taken as
 // 2^k L phi(-k L), L = ln(2/x), phi(y) = expm1(y)/y.
 template <typename Real>
-Real logUpperGamma(Real a, Real x) {
+Real logGammaByFraction(Real a, Real y) {
+    using std::log;
+    return a * log(y) - y + log(upperGammaFraction(a, y));
+}
+
+// logGammaAt2 = ln Gamma(a, 2), which a caller evaluating many x keeps.
+template <typename Real>
+Real logUpperGamma(Real a, Real x, Real logGammaAt2) {
     using std::exp; using std::expm1; using std::fabs; using std::log; using std::pow;
     const Real eps = std::numeric_limits<Real>::epsilon();
-    auto fraction = [&](Real y) { return a * log(y) - y + log(upperGammaFraction(a, y)); };
     const Real x0 = 2;
-    if (x >= x0) return fraction(x);
+    if (x >= x0) return logGammaByFraction(a, x);
     Real L = log(x0 / x);
     auto phi = [](Real y) { return y == 0 ? Real(1) : expm1(y) / y; };
     Real sum = pow(x0, a) * L * phi(-a * L) - pow(x0, a + 1) * L * phi(-(a + 1) * L);
@@ -55,7 +61,7 @@ Real logUpperGamma(Real a, Real x) {
         sum += n % 2 ? -t : t;
         if (fabs(t) <= eps * fabs(sum)) break;
     }
-    return log(exp(fraction(x0)) + sum);
+    return log(exp(logGammaAt2) + sum);
 }
 
 template <typename Real>
@@ -71,7 +77,7 @@ struct SgdFormulas final : NdfFormulas<Real> {
     void derive(ModelArgs<Real>& a) const override {
         using std::log;
         Real alpha = a[kAlpha];
-        a.derived[kLogGammaA] = logUpperGamma(1 - a[kP], alpha);
+        a.derived[kLogGammaA] = logUpperGamma(1 - a[kP], alpha, logGammaByFraction(1 - a[kP], Real(2)));
         a.derived[kLogNorm] = -log(kPi<Real> * alpha) - a.derived[kLogGammaA];
     }
     // w from ln Gamma(1 - p, w) = ln(1 - u1) + ln Gamma(1 - p, alpha), by
@@ -83,19 +89,27 @@ struct SgdFormulas final : NdfFormulas<Real> {
     // Gamma(1 - p, alpha))). tan^2 theta = alpha (w - alpha).
     Vec3<Real> sampleNormal(const ModelArgs<Real>& a, Real u1, Real u2) const override {
         using std::cos; using std::exp; using std::log; using std::log1p; using std::sin; using std::sqrt;
+        if (!(u1 > 0)) return {0, 0, 1};  // w = alpha exactly, not to the resolution of ln w
         Real alpha = a[kAlpha], p = a[kP], order = 1 - p, logGammaA = a.derived[kLogGammaA];
         Real target = logGammaA + log1p(-u1);
-        auto cdf = [&](Real v) { return -logUpperGamma(order, exp(v)); };
-        auto pdf = [&](Real v) {
-            Real w = exp(v);
-            return exp(order * v - w - logUpperGamma(order, w));
+        Real logGammaAt2 = logGammaByFraction(order, Real(2));
+        // invertIncreasing asks for the pdf where it has just asked for the
+        // cdf: one incomplete gamma function for both.
+        Real lastV = std::numeric_limits<Real>::quiet_NaN(), lastLog = 0;
+        auto logGamma = [&](Real v) {
+            if (!(v == lastV)) lastLog = logUpperGamma(order, exp(v), logGammaAt2), lastV = v;
+            return lastLog;
         };
+        auto cdf = [&](Real v) { return -logGamma(v); };
+        auto pdf = [&](Real v) { return exp(order * v - exp(v) - logGamma(v)); };
         Real head = alpha + u1 * exp(logGammaA + p * log(alpha) + alpha);
         Real tail = std::max({Real(1), alpha, -target}) + 1;
-        Real w = exp(invertIncreasing(cdf, pdf, -target, log(head), log(tail)));
-        Real s2 = alpha * (w > alpha ? w - alpha : Real(0));  // tan^2 theta
-        Real r = sqrt(s2), ph = 2 * kPi<Real> * u2;
-        return normalFromSlopes(r * cos(ph), r * sin(ph));
+        // Below the median from the lower bracket, the first-order root.
+        Real lo = log(head), hi = log(tail);
+        Real w = exp(invertIncreasing(cdf, pdf, -target, lo, hi, u1 < Real(0.5) ? lo : (lo + hi) / 2));
+        Real tan2 = alpha * (w > alpha ? w - alpha : Real(0));
+        Real c = 1 / sqrt(1 + tan2), s = sqrt(tan2) * c, ph = 2 * kPi<Real> * u2;
+        return {s * cos(ph), s * sin(ph), c};
     }
 };
 

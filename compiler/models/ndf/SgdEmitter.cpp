@@ -106,6 +106,9 @@ public:
     // most alpha^-p e^-alpha, so w >= alpha + u Gamma(a, alpha) alpha^p
     // e^alpha; Gamma(a, w) <= e^-w for w >= 1, so w <= max(1, alpha, T) + 1
     // with T = -ln((1 - u) Gamma(a, alpha)). tan^2 theta = alpha (w - alpha).
+    // Below the median Newton starts at the lower bracket, the first-order
+    // root for a small u (exact at u = 0, where the normal is n and w -
+    // alpha must be 0, not a rounding of it); above, at the middle.
     std::array<Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, Value* u1, Value* u2) const override {
         MathEmitter& dm = lane.doubleMath();
         MathEmitter& pm = lane.preciseMath();
@@ -125,7 +128,8 @@ public:
             Value* slope = dm.exp(dm.sub(dm.sub(dm.mul(a, v), w), logG));
             return LaneEmitter::NewtonTerms{dm.sub(dm.neg(logG), T), slope};
         };
-        Value* v = lane.bracketedNewton(dm, eval, dm.mul(dm.add(lo, hi), dm.c(0.5)), lo, hi, kNewtonSteps);
+        Value* v0 = dm.select(dm.lt(u, dm.c(0.5)), lo, dm.mul(dm.add(lo, hi), dm.c(0.5)));
+        Value* v = lane.bracketedNewton(dm, eval, v0, lo, hi, kNewtonSteps);
         Value* tan2 = dm.mul(alpha, dm.maxnum(dm.sub(dm.exp(v), alpha), dm.c(0.0)));
         Value* cos2 = dm.div(dm.c(1.0), dm.add(tan2, dm.c(1.0)));
         return lane.normalFromPolar(pm.convert(dm.mul(tan2, cos2), pm.type()), u2, pm.convert(cos2, pm.type()));
