@@ -67,11 +67,14 @@ Real logUpperGamma(Real a, Real x, Real logGammaAt2) {
 template <typename Real>
 struct SgdFormulas final : NdfFormulas<Real> {
     // ln D = -w - p ln w - ln(pi N) - 4 ln mz: exp(-w) and cos^-4 do not
-    // overflow toward the horizon, where tan^2 grows without bound.
+    // overflow toward the horizon, where tan^2 grows without bound (beyond
+    // w = 1e30 D is 0 in every type, and p ln w would be 0 inf at p = 0
+    // once tan^2 overflows).
     Real D(const ModelArgs<Real>& a, const Vec3<Real>& m) const override {
         using std::exp; using std::log;
         Real alpha = a[kAlpha], p = a[kP];
         Real w = alpha + (m.x * m.x + m.y * m.y) / (m.z * m.z) / alpha;
+        if (!(w <= Real(1e30))) return 0;
         return exp(a.derived[kLogNorm] - w - p * log(w) - 4 * log(m.z));
     }
     void derive(ModelArgs<Real>& a) const override {
