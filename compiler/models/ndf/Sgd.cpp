@@ -107,9 +107,12 @@ struct SgdFormulas final : NdfFormulas<Real> {
         auto pdf = [&](Real v) { return exp(order * v - exp(v) - logGamma(v)); };
         Real head = alpha + u1 * exp(logGammaA + p * log(alpha) + alpha);
         Real tail = std::max({Real(1), alpha, -target}) + 1;
-        // Below the median from the lower bracket, the first-order root.
-        Real lo = log(head), hi = log(tail);
-        Real w = exp(invertIncreasing(cdf, pdf, -target, lo, hi, u1 < Real(0.5) ? lo : (lo + hi) / 2));
+        // Below the median from the lower bracket, the first-order root;
+        // above from the tail's asymptote Gamma(a, w) ~ w^-p e^-w.
+        Real lo = log(head), hi = log(tail), T = -target;
+        Real tailStart = T - p * log(T > 1 ? T : Real(1));
+        Real w = exp(invertIncreasing(cdf, pdf, -target, lo, hi,
+                                      u1 < Real(0.5) ? lo : log(tailStart > 0 ? tailStart : head)));
         Real tan2 = alpha * (w > alpha ? w - alpha : Real(0));
         Real c = 1 / sqrt(1 + tan2), s = sqrt(tan2) * c, ph = 2 * kPi<Real> * u2;
         return {s * cos(ph), s * sin(ph), c};

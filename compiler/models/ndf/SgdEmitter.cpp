@@ -108,7 +108,8 @@ public:
     // with T = -ln((1 - u) Gamma(a, alpha)). tan^2 theta = alpha (w - alpha).
     // Below the median Newton starts at the lower bracket, the first-order
     // root for a small u (exact at u = 0, where the normal is n and w -
-    // alpha must be 0, not a rounding of it); above, at the middle.
+    // alpha must be 0, not a rounding of it); above, where the tail's
+    // asymptote puts it.
     std::array<Value*, 3> sampleNormal(LaneEmitter& lane, const NdfParams& n, Value* u1, Value* u2) const override {
         MathEmitter& dm = lane.doubleMath();
         MathEmitter& pm = lane.preciseMath();
@@ -128,9 +129,15 @@ public:
             Value* slope = dm.exp(dm.sub(dm.sub(dm.mul(a, v), w), logG));
             return LaneEmitter::NewtonTerms{dm.sub(dm.neg(logG), T), slope};
         };
-        Value* v0 = dm.select(dm.lt(u, dm.c(0.5)), lo, dm.mul(dm.add(lo, hi), dm.c(0.5)));
+        // Above the median from the tail's asymptote: Gamma(a, w) ~ w^-p
+        // e^-w gives w ~ T - p ln T.
+        Value* tailStart = dm.log(dm.maxnum(dm.sub(T, dm.mul(p, dm.log(dm.maxnum(T, dm.c(1.0))))), dm.c(1e-300)));
+        Value* v0 = dm.select(dm.lt(u, dm.c(0.5)), lo, dm.minnum(dm.maxnum(tailStart, lo), hi));
         Value* v = lane.bracketedNewton(dm, eval, v0, lo, hi, kNewtonSteps);
+        // u = 0 is w = alpha, the normal n: exactly, not e^(ln alpha) - alpha
+        // (a tilt of 1e-8 moves wi far at grazing wo).
         Value* tan2 = dm.mul(alpha, dm.maxnum(dm.sub(dm.exp(v), alpha), dm.c(0.0)));
+        tan2 = dm.select(dm.gt(u, dm.c(0.0)), tan2, dm.c(0.0));
         Value* cos2 = dm.div(dm.c(1.0), dm.add(tan2, dm.c(1.0)));
         return lane.normalFromPolar(pm.convert(dm.mul(tan2, cos2), pm.type()), u2, pm.convert(cos2, pm.type()));
     }
