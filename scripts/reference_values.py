@@ -109,6 +109,45 @@ def gaussian_norm(alpha):
     return _gaussian_norm_cache[alpha]
 
 
+_abc_norm_cache = {}
+
+
+def abc_norm(b, c):
+    """2 pi Int_0^1 (1 - x) (1 + b x)^-c dx (x = 1 - cos theta): 1/A of the ABC NDF.
+
+    In s = b x the integrand (1 - s/b) (1 + s)^-c is smooth on panels that grow
+    fourfold from s = 1 up to s = b, so the peak of a large b is resolved.
+    """
+    if (b, c) not in _abc_norm_cache:
+        f = lambda s: (1 - s / b) * (1 + s) ** -c
+        cuts = [0.0]
+        while cuts[-1] * 4 + 1 < b:
+            cuts.append(cuts[-1] * 4 + 1)
+        cuts.append(b)
+        total = math.fsum(integrate(f, cuts[i], cuts[i + 1]) for i in range(len(cuts) - 1))
+        _abc_norm_cache[(b, c)] = 2 * PI * total / b
+    return _abc_norm_cache[(b, c)]
+
+
+_sgd_norm_cache = {}
+
+
+def sgd_norm(alpha, q):
+    """pi alpha Int_alpha^inf w^-q e^-w dw: the normalization of the SGD NDF.
+
+    Panels doubling from w = alpha resolve the w^-q peak of a small alpha; beyond
+    alpha + 45 the integrand is below e^-45 of its scale.
+    """
+    if (alpha, q) not in _sgd_norm_cache:
+        f = lambda w: w ** -q * math.exp(-w)
+        cuts = [alpha]
+        while cuts[-1] < alpha + 45:
+            cuts.append(cuts[-1] * 2)
+        total = math.fsum(integrate(f, cuts[i], cuts[i + 1]) for i in range(len(cuts) - 1))
+        _sgd_norm_cache[(alpha, q)] = PI * alpha * total
+    return _sgd_norm_cache[(alpha, q)]
+
+
 # ---------------------------------------------------------------------------
 # Vectors
 # ---------------------------------------------------------------------------
@@ -168,6 +207,17 @@ def ndf_D(ndf, p, m):
         ax, ay, q = p["alpha_x"], p["alpha_y"], p["p"]
         e = (mx * mx / (ax * ax) + my * my / (ay * ay)) / (mz * mz)
         return q * math.exp(-e ** q) / (PI * math.gamma(1 / q) * ax * ay * mz ** 4)
+    if ndf == "abc":
+        # Church et al. 1989 as used by Low et al. 2012: A / (1 + b (1 - mz))^c,
+        # 1 - mz = sin^2 / (1 + mz); A normalizes the projected area (abc_norm).
+        b, c = p["b"], p["c"]
+        return (1 + b * s2 / (1 + mz)) ** -c / abc_norm(b, c)
+    if ndf == "sgd":
+        # Bagher et al. 2012: exp(-w) w^-p / (N cos^4), w = alpha + tan^2/alpha
+        # (sgd_norm).
+        a, q = p["alpha"], p["p"]
+        w = a + s2 / (mz * mz) / a
+        return math.exp(-w) * w ** -q / (sgd_norm(a, q) * mz ** 4)
     if ndf == "gaussian":
         a = p["alpha"]
         theta = math.atan2(math.sqrt(s2), mz)  # = acos(mz), accurate near 0
@@ -520,6 +570,8 @@ MODELS = {
         "student_t": [["alpha", "gamma"], ["alpha_x", "alpha_y", "gamma"]],
         "gaussian": [["alpha"]],
         "epd": [["alpha", "p"], ["alpha_x", "alpha_y", "p"]],
+        "abc": [["b", "c"]],
+        "sgd": [["alpha", "p"]],
     },
     "masking": {name: [[]] for name in (
         "none", "implicit", "cook_torrance", "kelemen", "neumann", "smith_separable",
@@ -598,7 +650,10 @@ class Material:
             params[slot] = p
         # Canonical NDF parameters; alpha clamped to >= 1e-4 (SPEC 3).
         pn = params["ndf"]
-        if "alpha" in pn:
+        if self.models["ndf"] == "sgd":  # alpha clamped to [2e-4, 10], p to [0, 2]
+            pn["alpha"] = min(max(pn["alpha"], 2e-4), 10.0)
+            pn["p"] = min(max(pn["p"], 0.0), 2.0)
+        elif "alpha" in pn:
             pn["alpha"] = max(pn["alpha"], MIN_ALPHA)
             pn.setdefault("alpha_x", pn["alpha"])
             pn.setdefault("alpha_y", pn["alpha"])
@@ -609,6 +664,9 @@ class Material:
             pn["gamma"] = min(max(pn["gamma"], 1.5), 1e4)
         if self.models["ndf"] == "epd":  # p clamped to [0.25, 4]
             pn["p"] = min(max(pn["p"], 0.25), 4.0)
+        if self.models["ndf"] == "abc":  # b clamped to [1/8, 2e8], c to [0, 10]
+            pn["b"] = min(max(pn["b"], 0.125), 2e8)
+            pn["c"] = min(max(pn["c"], 0.0), 10.0)
         return params
 
     def eval(self, wi, wo, values):
@@ -830,7 +888,9 @@ def cmd_selftest():
              ("beckmann", {"alpha_x": 0.4, "alpha_y": 0.25}), ("blinn_phong", {"exponent": 30.0}),
              ("gtr", {"alpha": 0.4, "gamma": 1.0}), ("gtr", {"alpha": 0.4, "gamma": 2.5}),
              ("gtr", {"alpha": 1.0, "gamma": 3.0}), ("gaussian", {"alpha": 0.3}),
-             ("epd", {"alpha_x": 0.3, "alpha_y": 0.3, "p": 0.6}), ("epd", {"alpha_x": 0.2, "alpha_y": 0.5, "p": 2.0})]
+             ("epd", {"alpha_x": 0.3, "alpha_y": 0.3, "p": 0.6}), ("epd", {"alpha_x": 0.2, "alpha_y": 0.5, "p": 2.0}),
+             ("abc", {"b": 20.0, "c": 1.5}), ("abc", {"b": 0.5, "c": 0.0}), ("abc", {"b": 300.0, "c": 2.0}),
+             ("sgd", {"alpha": 0.1, "p": 0.6}), ("sgd", {"alpha": 0.05, "p": 1.0}), ("sgd", {"alpha": 2.0, "p": 2.0})]
     for ndf, p in cases:
         check("normalization %s %s" % (ndf, p), projected_area(ndf, p), 1.0, 1e-8)
     # Conductor with k = 0 is a dielectric (two independent formulas).

@@ -46,15 +46,16 @@ Vec3<Real> stretchedSlopeNormal(Real ax, Real ay, Real r2, Real u) {
 }
 
 // x in [lo, hi] with cdf(x) = target, for a cdf increasing on [lo, hi]
-// with derivative pdf: Newton steps, falling back to bisection whenever a
-// step leaves the bracket or is more than half the step before the last
-// (on a strongly curved cdf, such as a log cdf against log x, Newton's
-// steps can otherwise cycle between the two ends of the bracket); stops at
-// the resolution of Real.
+// with derivative pdf: Newton steps from `start` (by default the middle),
+// falling back to bisection whenever a step leaves the bracket or is more
+// than half the step before the last (on a strongly curved cdf, such as a
+// log cdf against log x, Newton's steps can otherwise cycle between the
+// two ends of the bracket); stops at the resolution of Real.
 template <typename Real, typename Cdf, typename Pdf>
-Real invertIncreasing(const Cdf& cdf, const Pdf& pdf, Real target, Real lo, Real hi) {
+Real invertIncreasing(const Cdf& cdf, const Pdf& pdf, Real target, Real lo, Real hi,
+                      Real start = std::numeric_limits<Real>::quiet_NaN()) {
     using std::fabs;
-    Real x = (lo + hi) / 2, step = hi - lo, stepBefore = hi - lo;
+    Real x = start >= lo && start <= hi ? start : (lo + hi) / 2, step = hi - lo, stepBefore = hi - lo;
     for (int it = 0; it < 200; ++it) {
         Real f = cdf(x) - target;
         if (f == 0) return x;
@@ -69,6 +70,32 @@ Real invertIncreasing(const Cdf& cdf, const Pdf& pdf, Real target, Real lo, Real
         x = next;
     }
     return x;
+}
+
+// Legendre's continued fraction of the upper incomplete gamma function,
+// Gamma(a, y) = y^a e^-y h with h = 1/(y + 1 - a - 1 (1 - a)/(y + 3 - a -
+// 2 (2 - a)/(y + 5 - a - ...))), by the modified Lentz method to the
+// resolution of Real: h for y > 0 and any real a, converging in a few
+// dozen levels once y is a little above a + 1.
+template <typename Real>
+Real upperGammaFraction(Real a, Real y) {
+    using std::fabs;
+    const Real eps = std::numeric_limits<Real>::epsilon();
+    const Real tiny = std::numeric_limits<Real>::min() / eps;
+    Real b = y + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
+    for (int i = 1; i < 5000; ++i) {
+        Real an = -i * (i - a);
+        b += 2;
+        d = an * d + b;
+        if (fabs(d) < tiny) d = tiny;
+        c = b + an / c;
+        if (fabs(c) < tiny) c = tiny;
+        d = 1 / d;
+        Real step = d * c;
+        h *= step;
+        if (fabs(step - 1) <= eps) break;
+    }
+    return h;
 }
 
 // ---- the Student-t slope distribution ----------------------------------------

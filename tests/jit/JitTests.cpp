@@ -1071,8 +1071,8 @@ TEST_CASE("tiered compile: the quick code and the optimized code give the same b
             }
         }
     }
-    CHECK(kernels == 60);
-    CHECK(samplers == 40);
+    CHECK(kernels == 66);
+    CHECK(samplers == 44);
 }
 
 // Renderer threads keep evaluating while the tier-up switches the entry

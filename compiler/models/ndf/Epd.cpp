@@ -57,22 +57,7 @@ GammaTails<Real> gammaTails(Real a, Real lgammaA, Real v) {
         t.logP = t.logPre + log(sum / a);
         t.logQ = log1p(-exp(t.logP));
     } else {
-        // Modified Lentz on 1/(y+1-a- 1(1-a)/(y+3-a- 2(2-a)/(y+5-a- ...))).
-        const Real tiny = std::numeric_limits<Real>::min() / eps;
-        Real b = y + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
-        for (int i = 1; i < 2000; ++i) {
-            Real an = -i * (i - a);
-            b += 2;
-            d = an * d + b;
-            if (fabs(d) < tiny) d = tiny;
-            c = b + an / c;
-            if (fabs(c) < tiny) c = tiny;
-            d = 1 / d;
-            Real step = d * c;
-            h *= step;
-            if (fabs(step - 1) <= eps) break;
-        }
-        t.logQ = t.logPre + log(h);
+        t.logQ = t.logPre + log(upperGammaFraction(a, y));
         t.logP = log1p(-exp(t.logQ));
     }
     return t;
