@@ -132,7 +132,10 @@ private:
 // (n.v) Lambda(v) = sqrt(proj) f(a), a = vz / sqrt(proj), from the plan's
 // table of z = log f at u = (log a - x0) / h (LambdaTable.h): 4-point
 // Lagrange up to the last node, linear in u beyond it, the first node below
-// the grid; in double (z reaches -690).
+// the grid; in double (z reaches -690). A SlopeAlpha table interpolates
+// with kAlphaOrder points along u and across its rows at v = (log alpha -
+// y0) / yStep, alpha clamped to the rows' range (proj rescaled to the
+// clamped alpha).
 Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
                           const std::array<Value*, 3>& v) {
     internal_assert(lane.plan.lambda == LambdaForm::Table && lane.plan.lambdaTable)
@@ -143,12 +146,44 @@ Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfPar
     llvm::GlobalVariable* gv = lane.doubleTable(table.z, "facet_lambda_" + table.name());  // as lambdaTableEmbedding
     Value* proj = lane.smithProjection(ndf, n, v);
     Value* projD = dm.convert(proj, dm.type());
-    Value* logRoot = dm.mul(dm.log(projD), dm.c(0.5));
+    if (table.axes == LambdaAxes::Slope) {
+        Value* logRoot = dm.mul(dm.log(projD), dm.c(0.5));
+        Value* x = dm.sub(dm.log(dm.convert(v[2], dm.type())), logRoot);
+        Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(LambdaTable::kX0)), dm.c(LambdaTable::kStep)), dm.c(0.0));
+        Value* uc = dm.minnum(u, dm.c(LambdaTable::kSize - 1.0));
+        Value* z = lane.lagrangeFetch(gv, LambdaTable::kSize, uc);
+        if (table.endSlope() != 0) z = dm.fma(dm.sub(u, uc), dm.c(table.endSlope()), z);
+        Value* cl = dm.exp(dm.add(z, logRoot));
+        return fm.select(fm.gt(proj, fm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
+    }
+    // Isotropic: proj = alpha^2 (vx^2 + vy^2); at the clamped alpha c it is
+    // proj (c / alpha)^2, so log sqrt = log sqrt(proj) + log c - log alpha.
+    internal_assert(n.isotropic) << "a Lambda table in (a, alpha) for an anisotropic lobe";
+    const int size = LambdaTable::kAlphaXSize, rows = LambdaTable::kRows;
+    Value* alpha = dm.convert(n.axD, dm.type());
+    Value* logAlpha = dm.log(alpha);
+    Value* logClamped = dm.minnum(dm.maxnum(logAlpha, dm.c(LambdaTable::kY0)),
+                                  dm.c(LambdaTable::kY0 + (rows - 1) * LambdaTable::kYStep));
+    Value* logRoot = dm.add(dm.mul(dm.log(projD), dm.c(0.5)), dm.sub(logClamped, logAlpha));
     Value* x = dm.sub(dm.log(dm.convert(v[2], dm.type())), logRoot);
-    Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(LambdaTable::kX0)), dm.c(LambdaTable::kStep)), dm.c(0.0));
-    Value* uc = dm.minnum(u, dm.c(LambdaTable::kSize - 1.0));
-    Value* z = lane.lagrangeFetch(gv, LambdaTable::kSize, uc);
-    if (table.endSlope() != 0) z = dm.fma(dm.sub(u, uc), dm.c(table.endSlope()), z);
+    Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(LambdaTable::kAlphaX0)), dm.c(LambdaTable::kAlphaXStep)), dm.c(0.0));
+    Value* uc = dm.minnum(u, dm.c(size - 1.0));
+    Value* w = dm.div(dm.sub(logClamped, dm.c(LambdaTable::kY0)), dm.c(LambdaTable::kYStep));
+    LaneEmitter::LagrangeStencil sx = lane.lagrangeStencil(size, LambdaTable::kAlphaOrder, uc);
+    LaneEmitter::LagrangeStencil sy = lane.lagrangeStencil(rows, LambdaTable::kAlphaOrder, w);
+    // Each row's slope per node past its last node (the linear tail in u).
+    std::vector<double> slopes(rows);
+    for (int j = 0; j < rows; ++j) slopes[j] = table.z[size_t(j) * size + size - 1] - table.z[size_t(j) * size + size - 2];
+    llvm::GlobalVariable* slopeTable = lane.doubleTable(slopes, "facet_lambda_" + table.name() + "_slopes");
+    Value* rowStart = dm.mul(sy.first, dm.c(double(size)));
+    Value* z = nullptr;
+    for (size_t r = 0; r < sy.w.size(); ++r) {
+        Value* zr = lane.stencilFetch(gv, sx, dm.add(rowStart, dm.c(double(r * size))));
+        z = z ? dm.fma(sy.w[r], zr, z) : dm.mul(sy.w[r], zr);
+    }
+    LaneEmitter::LagrangeStencil sSlope{dm.c(0.0), sy.w};
+    Value* slope = lane.stencilFetch(slopeTable, sSlope, sy.first);
+    z = dm.fma(dm.sub(u, uc), slope, z);
     Value* cl = dm.exp(dm.add(z, logRoot));
     return fm.select(fm.gt(proj, fm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
 }
