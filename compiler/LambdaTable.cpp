@@ -13,6 +13,7 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <thread>
 
 namespace facet {
 namespace {
@@ -43,10 +44,10 @@ double integrand(const NdfFormulas<double>& f, const ModelArgs<double>& args, do
 
 }  // namespace
 
-double quadratureCosLambda(const NdfEntry& ndf, const std::vector<double>& shape, double theta) {
+double quadratureCosLambda(const NdfEntry& ndf, const std::vector<double>& shape, double alpha, double theta) {
     if (!(theta > 0)) return 0;
     const NdfFormulas<double>& f = ndf.formulas.get<double>();
-    ModelArgs<double> args = ndf.argsAtAlpha(1.0, shape);
+    ModelArgs<double> args = ndf.argsAtAlpha(alpha, shape);
     f.derive(args);
     const quadrature::GaussLegendre<double>& gl = quadrature::gaussLegendre<double>(12);
     // Normalized coordinates: w = theta s on [0, 1/2] (graded toward the
@@ -67,49 +68,113 @@ double quadratureCosLambda(const NdfEntry& ndf, const std::vector<double>& shape
     return theta * sum;
 }
 
-double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, int i,
-                       double (*cosLambdaAt)(const NdfEntry&, const std::vector<double>&, double)) {
-    // alpha = 1: tan(theta) = 1/a, and f = a Lambda = (n.v) Lambda / sin(theta).
-    double a = std::exp(LambdaTable::kX0 + i * LambdaTable::kStep);
-    double theta = std::atan2(1.0, a);
-    double f = cosLambdaAt(ndf, shape, theta) / std::sin(theta);
+LambdaAxes lambdaAxes(const NdfEntry& ndf) {
+    return ndf.shapeInvariant ? LambdaAxes::Slope : LambdaAxes::SlopeAlpha;
+}
+
+double LambdaGrid::alphaLo() const { return std::exp(y0); }
+double LambdaGrid::alphaHi() const { return std::exp(y0 + (rows - 1) * yStep); }
+
+const LambdaGrid& lambdaGrid(LambdaAxes axes) {
+    static constexpr LambdaGrid slope{LambdaTable::kX0, LambdaTable::kStep, LambdaTable::kSize, 0, 1, 1};
+    static constexpr LambdaGrid slopeAlpha{LambdaTable::kAlphaX0, LambdaTable::kAlphaXStep, LambdaTable::kAlphaXSize,
+                                           LambdaTable::kY0, LambdaTable::kYStep, LambdaTable::kRows};
+    return axes == LambdaAxes::Slope ? slope : slopeAlpha;
+}
+
+double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, LambdaAxes axes, int k,
+                       CosLambdaSource cosLambdaAt) {
+    // tan(theta) = 1/(a alpha), and f = a Lambda = (n.v) Lambda / (alpha sin(theta)).
+    const LambdaGrid& g = lambdaGrid(axes);
+    double a = std::exp(g.x0 + (k % g.size) * g.step);
+    double alpha = std::exp(g.y0 + (k / g.size) * g.yStep);
+    double theta = std::atan2(1.0, a * alpha);
+    double f = cosLambdaAt(ndf, shape, alpha, theta) / (alpha * std::sin(theta));
     internal_assert(std::isfinite(f) && f >= 0) << "tabulated Lambda of " << lambdaTableName(ndf, shape) << ": f("
-                                                 << a << ") = " << f;
+                                                 << a << ", alpha " << alpha << ") = " << f;
     return std::max(std::log(f), LambdaTable::kLogFloor);
 }
 
 std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const std::vector<double>& shape,
-                                               double (*cosLambdaAt)(const NdfEntry&, const std::vector<double>&,
-                                                                     double)) {
-    internal_assert(ndf.shapeInvariant) << "tabulated Lambda of " << ndf.name << ", which is not shape-invariant";
+                                               CosLambdaSource cosLambdaAt, LambdaAxes axes) {
+    internal_assert(ndf.shapeInvariant || axes == LambdaAxes::SlopeAlpha)
+        << "a Lambda table in a alone of " << ndf.name << ", which is not shape-invariant";
     auto start = std::chrono::steady_clock::now();
     auto table = std::make_shared<LambdaTable>();
     table->ndf = &ndf;
     table->shape = shape;
-    table->z.resize(LambdaTable::kSize);
-    for (int i = 0; i < LambdaTable::kSize; ++i) table->z[i] = lambdaTableNode(ndf, shape, i, cosLambdaAt);
+    table->axes = axes;
+    const LambdaGrid& g = table->grid();
+    table->z.resize(size_t(g.size) * g.rows);
+    // Two threads for a SlopeAlpha table (its ~28k nodes): even and odd nodes.
+    int threads = axes == LambdaAxes::Slope ? 1 : 2;
+    auto fill = [&](int first) {
+        for (int k = first; k < int(table->z.size()); k += threads)
+            table->z[k] = lambdaTableNode(ndf, shape, axes, k, cosLambdaAt);
+    };
+    std::vector<std::thread> helpers;
+    for (int t = 1; t < threads; ++t) helpers.emplace_back(fill, t);
+    fill(0);
+    for (std::thread& h : helpers) h.join();
     table->buildMillis = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return table;
 }
 
-double LambdaTable::fAt(double u) const {
-    double uc = std::min(u, kSize - 1.0);
-    // Nodes i-1 .. i+2 around uc, kept inside the grid.
-    double fi = std::clamp(std::floor(uc), 1.0, kSize - 3.0);
-    double s = uc - fi;
-    int i = int(fi);
-    double w0 = -s * (s - 1) * (s - 2) / 6, w1 = (s + 1) * (s - 1) * (s - 2) / 2;
-    double w2 = -(s + 1) * s * (s - 2) / 2, w3 = (s + 1) * s * (s - 1) / 6;
-    double zz = w0 * z[i - 1] + w1 * z[i] + w2 * z[i + 1] + w3 * z[i + 2];
-    if (u > uc) zz += (u - uc) * endSlope();
+namespace {
+
+// n-point Lagrange weights (n even) at coordinate c of nodes [0, size - 1]
+// (size >= n): returns the stencil's first node, kept inside the grid.
+int lagrangeStencil(double c, int size, int n, double* w) {
+    int half = n / 2;
+    double fi = std::clamp(std::floor(c), half - 1.0, double(size - 1 - half));
+    double s = c - fi;
+    for (int k = 0; k < n; ++k) {
+        double wk = 1;
+        for (int m = 0; m < n; ++m)
+            if (m != k) wk *= (s - (m - half + 1)) / double(k - m);
+        w[k] = wk;
+    }
+    return int(fi) - half + 1;
+}
+
+}  // namespace
+
+double LambdaTable::endSlope(int j) const {
+    const LambdaGrid& g = grid();
+    return z[size_t(j) * g.size + g.size - 1] - z[size_t(j) * g.size + g.size - 2];
+}
+
+double LambdaTable::fAt(double u, double v) const {
+    const LambdaGrid& g = grid();
+    double uc = std::min(u, g.size - 1.0);
+    // 4 points along x for a Slope table, kAlphaOrder along both axes else.
+    int nx = g.rows == 1 ? 4 : LambdaTable::kAlphaOrder, ny = g.rows == 1 ? 1 : LambdaTable::kAlphaOrder;
+    double wx[LambdaTable::kAlphaOrder], wy[LambdaTable::kAlphaOrder] = {1};
+    int i = lagrangeStencil(uc, g.size, nx, wx);
+    int j = g.rows == 1 ? 0 : lagrangeStencil(std::clamp(v, 0.0, g.rows - 1.0), g.rows, ny, wy);
+    double zz = 0;
+    for (int r = 0; r < ny; ++r) {
+        const double* row = z.data() + size_t(j + r) * g.size;
+        double zr = 0;
+        for (int k = 0; k < nx; ++k) zr += wx[k] * row[i + k];
+        if (u > uc) zr += (u - uc) * endSlope(j + r);
+        zz += wy[r] * zr;
+    }
     return std::exp(zz);
 }
 
-double LambdaTable::cosLambda(double proj, double vz) const {
+double LambdaTable::cosLambda(double proj, double vz, double alpha) const {
     if (!(proj > 0)) return 0;  // v = n (or alpha = 0): nothing is masked
+    const LambdaGrid& g = grid();
+    double v = 0;
+    if (axes == LambdaAxes::SlopeAlpha) {
+        double clamped = std::clamp(alpha, g.alphaLo(), g.alphaHi());
+        proj *= (clamped / alpha) * (clamped / alpha);
+        v = (std::log(clamped) - g.y0) / g.yStep;
+    }
     double root = std::sqrt(proj);
-    double u = std::max((std::log(vz) - std::log(root) - kX0) / kStep, 0.0);
-    return root * fAt(u);
+    double u = std::max((std::log(vz) - std::log(root) - g.x0) / g.step, 0.0);
+    return root * fAt(u, v);
 }
 
 std::string lambdaTableName(const NdfEntry& ndf, const std::vector<double>& shape) {
@@ -151,16 +216,17 @@ std::shared_ptr<const LambdaTable> lambdaTable(const NdfEntry& ndf, const std::v
     return slot;
 }
 
-double tabulatedCosLambda(const NdfEntry& ndf, double shape, double proj, double vz) {
+double tabulatedCosLambda(const NdfEntry& ndf, const std::vector<double>& shape, double proj, double vz,
+                          double alpha) {
     thread_local const NdfEntry* memoNdf = nullptr;
-    thread_local double memoShape = 0;
+    thread_local std::vector<double> memoShape;
     thread_local std::shared_ptr<const LambdaTable> memo;
     if (!memo || memoNdf != &ndf || memoShape != shape) {
-        memo = lambdaTable(ndf, {shape});
+        memo = lambdaTable(ndf, shape);
         memoNdf = &ndf;
         memoShape = shape;
     }
-    return memo->cosLambda(proj, vz);
+    return memo->cosLambda(proj, vz, alpha);
 }
 
 std::shared_ptr<const LambdaTable> residentLambdaTable(const NdfEntry& ndf, const std::vector<double>& shape) {

@@ -41,6 +41,32 @@
 // against an independent 2D quadrature and against the closed forms of ggx
 // and beckmann put through the same tabulation.
 //
+// ---- the table in (a, alpha) -------------------------------------------------
+//
+// An isotropic NDF that is not shape-invariant (gtr: Lambda
+// depends on alpha and theta separately) gets a table in two axes (axes
+// SlopeAlpha; the catalog's shapeInvariant decides): the same z = log f(a)
+// with a = 1 / (alpha tan theta), now for the lobe of roughness alpha,
+// per constant shape value. Rows: y = log alpha uniform in [-9.25, 0]
+// (alpha from 9.6e-5 < kMinAlpha to 1), step 1/8 (75 rows); in each row x
+// uniform in [log 1e-5, log 9.9e6], step 1/16 (443 nodes): 33225 doubles,
+// 266 KB. Near shape invariance (small alpha) z barely depends on y; for
+// gtr with gamma far from 2 the dependence runs along the diagonal (a
+// uniform D has Lambda(theta) alone), which 6-point Lagrange across the rows
+// resolves (4 points left 4e-5); along x a Gaussian-like cutoff (z ~ -a^2)
+// needs 6 points too at this step (4 left 1.4e-5). Lookup:
+// 6 x 6-point Lagrange (the first node below the grid, each row's linear
+// tail beyond it, as above);
+// alpha outside [exp(y0), 1] is clamped, with proj rescaled to the clamped
+// alpha: beyond alpha = 1 Lambda is alpha = 1's at the same direction (the
+// NDFs' domains clamp alpha >= kMinAlpha already). The quadrature is the
+// one above at the row's alpha; the build runs on two threads.
+// Accuracy (LambdaTableTests): within 1e-6 relative of the independent 2D
+// quadrature for alpha in [1e-3, 1] and theta up to 89.99 deg (or 1e-11
+// absolute where Lambda is tiny); gtr's near alpha = 1 changes over log
+// alpha ~ 1/(2 gamma), resolved so up to gamma = 2.5 (the entry refuses a
+// larger gamma under a Smith masking).
+//
 // ---- sharing and caching -----------------------------------------------------
 //
 // A table is a pure function of (NDF, shape values), immutable once made.
@@ -65,7 +91,26 @@ namespace facet {
 struct CheckedMaterial;
 
 // Bumped whenever the table contents would change.
-constexpr int kLambdaTableVersion = 1;
+constexpr int kLambdaTableVersion = 2;
+
+// What a table's nodes span. Slope: the Lambda of a shape-invariant NDF, a
+// function of a alone (one row, alpha = 1). SlopeAlpha: the Lambda of an
+// isotropic NDF that is not shape-invariant (NdfEntry::shapeInvariant
+// decides), a function of a and alpha, one row of x nodes per y = log alpha.
+enum class LambdaAxes { Slope, SlopeAlpha };
+LambdaAxes lambdaAxes(const NdfEntry& ndf);
+
+// The nodes of a table: x = log a at x0 + i step (i < size), y = log alpha
+// at y0 + j yStep (j < rows); z[j size + i].
+struct LambdaGrid {
+    double x0, step;
+    int size;
+    double y0, yStep;
+    int rows;
+    double alphaLo() const;  // exp(y0)
+    double alphaHi() const;  // exp(y0 + (rows - 1) yStep)
+};
+const LambdaGrid& lambdaGrid(LambdaAxes axes);
 
 class LambdaTable {
 public:
@@ -73,20 +118,34 @@ public:
     static constexpr double kStep = 1.0 / 128;
     static constexpr int kSize = 4127 + 1;              // to log(1e7)
     static constexpr double kLogFloor = -690.7755278982137;  // log(1e-300)
+    // The SlopeAlpha grid (see above).
+    static constexpr double kAlphaX0 = -11.512925464970229;  // log(1e-5)
+    static constexpr double kAlphaXStep = 1.0 / 16;
+    static constexpr int kAlphaXSize = 442 + 1;              // to log(9.9e6)
+    static constexpr double kY0 = -9.25;                     // alpha = 9.6e-5 < kMinAlpha
+    static constexpr double kYStep = 1.0 / 8;
+    static constexpr int kRows = 74 + 1;                     // to alpha = 1
+    static constexpr int kAlphaOrder = 6;                    // Lagrange points along x and y
 
     const NdfEntry* ndf = nullptr;
     std::vector<double> shape;  // the values of the NDF's tableShapeParams
-    std::vector<double> z;      // kSize nodes, z[i] = log f(exp(kX0 + i kStep))
+    LambdaAxes axes = LambdaAxes::Slope;
+    std::vector<double> z;      // grid().rows x grid().size nodes, z = log f
     double buildMillis = 0;     // the quadrature's time (read back from a cache file)
     std::string origin = "built";  // or "disk"
 
-    // Node coordinate u = (log(a) - kX0) / kStep clamped below at 0; the
-    // slope of z per node beyond the last one.
-    double endSlope() const { return z[kSize - 1] - z[kSize - 2]; }
-    // f(a) = a Lambda(a) from the nodes as described above, for u >= 0.
-    double fAt(double u) const;
-    // (n.v) Lambda(v) for proj = (vx ax)^2 + (vy ay)^2 and vz >= 0.
-    double cosLambda(double proj, double vz) const;
+    const LambdaGrid& grid() const { return lambdaGrid(axes); }
+    // The slope of z per node beyond the last one of row j.
+    double endSlope(int j = 0) const;
+    // f = a Lambda from the nodes as described above at the node
+    // coordinates u = (log(a) - x0) / step >= 0 and v = (log(alpha) - y0) /
+    // yStep in [0, rows - 1] (0 for a Slope table).
+    double fAt(double u, double v = 0) const;
+    // (n.v) Lambda(v) for proj = (vx ax)^2 + (vy ay)^2 and vz >= 0; a
+    // SlopeAlpha table also needs the (isotropic) alpha, which it clamps
+    // to its alpha range (beyond alphaHi the Lambda of alphaHi at the
+    // same direction).
+    double cosLambda(double proj, double vz, double alpha = 1) const;
     // "student_t_g1.8".
     std::string name() const;
 };
@@ -95,35 +154,46 @@ public:
 // after its tag, printed shortest round-trip exact ("student_t_g1.8").
 std::string lambdaTableName(const NdfEntry& ndf, const std::vector<double>& shape);
 
-// (n.v) Lambda(v) of the isotropic lobe with alpha = 1 of `ndf` (shape
-// values given), by the quadrature above in double: the table's nodes.
-double quadratureCosLambda(const NdfEntry& ndf, const std::vector<double>& shape, double theta);
+// (n.v) Lambda(v) of the isotropic lobe with roughness alpha of `ndf`
+// (shape values given) at polar angle theta, by the quadrature above in
+// double: the table's nodes.
+double quadratureCosLambda(const NdfEntry& ndf, const std::vector<double>& shape, double alpha, double theta);
 
-// Node i of the table: z = log f at a = exp(kX0 + i kStep) from the given
-// (n.v) Lambda, floored at kLogFloor.
-double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, int i,
-                       double (*cosLambdaAt)(const NdfEntry&, const std::vector<double>&, double) = quadratureCosLambda);
+// A source of (n.v) Lambda(alpha, theta) for the nodes.
+using CosLambdaSource = double (*)(const NdfEntry&, const std::vector<double>&, double alpha, double theta);
+
+// Node k = j size + i of a table with `axes`: z = log f at a = exp(x0 + i
+// step), alpha = exp(y0 + j yStep), from the given (n.v) Lambda, floored
+// at kLogFloor.
+double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, LambdaAxes axes, int k,
+                       CosLambdaSource cosLambdaAt = quadratureCosLambda);
 
 // The table of `ndf` for the given shape values from the process's memory
 // layer (built there on first use, then shared; thread-safe). `ndf` must be
 // shapeInvariant.
 std::shared_ptr<const LambdaTable> lambdaTable(const NdfEntry& ndf, const std::vector<double>& shape);
-// (n.v) Lambda(v) of `ndf` with the one shape value `shape`, from its
-// table, for the entries' reference cosLambda. The last table per thread is
+// (n.v) Lambda(v) of `ndf` with the shape values `shape` (one or none),
+// from its table, for the entries' reference cosLambda (alpha: the
+// isotropic roughness, for a SlopeAlpha table). The last table per thread is
 // kept: lambdaTable() locks a shared map, and an evaluation asks for the
 // same shape value lane after lane.
-double tabulatedCosLambda(const NdfEntry& ndf, double shape, double proj, double vz);
+double tabulatedCosLambda(const NdfEntry& ndf, const std::vector<double>& shape, double proj, double vz,
+                          double alpha = 1);
 // The memory layer's table of (ndf, shape), or null (nothing is built).
 std::shared_ptr<const LambdaTable> residentLambdaTable(const NdfEntry& ndf, const std::vector<double>& shape);
 // Puts `table` (e.g. loaded from a cache file) into the memory layer unless
 // that already holds its key; returns the memory layer's table.
 std::shared_ptr<const LambdaTable> adoptLambdaTable(std::shared_ptr<const LambdaTable> table);
 
-// The table built for another D: `build` gives the nodes' (n.v) Lambda at
-// theta (tests put closed-form Lambdas through the same tabulation).
+// The table built from another source of Lambda, or on other axes than
+// the entry's (tests put closed-form Lambdas, and shape-invariant NDFs,
+// through the same tabulation).
 std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const std::vector<double>& shape,
-                                               double (*cosLambdaAt)(const NdfEntry&, const std::vector<double>&,
-                                                                     double));
+                                               CosLambdaSource cosLambdaAt, LambdaAxes axes);
+inline std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const std::vector<double>& shape,
+                                                      CosLambdaSource cosLambdaAt) {
+    return tabulateCosLambda(ndf, shape, cosLambdaAt, lambdaAxes(ndf));
+}
 
 // A Smith masking with an NDF whose Lambda is tabulated: why the material
 // cannot have it (its shape parameters must be finite constants within the

@@ -219,6 +219,16 @@ public:
     // 4-point Lagrange interpolation in a double table of `size` nodes at the
     // node coordinate u in [0, size - 1], all in double.
     llvm::Value* lagrangeFetch(llvm::GlobalVariable* table, int size, llvm::Value* u);
+    // n-point Lagrange interpolation (n even) in a double table, all in
+    // double: the stencil at node coordinate u in [0, size - 1] (its first
+    // node, integer-valued, and the n weights), and the sum of weight k times
+    // table[base + first + k] for an integer-valued base.
+    struct LagrangeStencil {
+        llvm::Value* first;
+        std::vector<llvm::Value*> w;
+    };
+    LagrangeStencil lagrangeStencil(int size, int n, llvm::Value* u);
+    llvm::Value* stencilFetch(llvm::GlobalVariable* table, const LagrangeStencil& st, llvm::Value* base);
     // table[index] + t (table[index + 1] - table[index]).
     llvm::Value* lerpFetch(llvm::GlobalVariable* table, llvm::Value* index, llvm::Value* t);
     // Bilinear interpolation in a row-major table with `stride` entries per row.

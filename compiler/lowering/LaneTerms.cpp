@@ -163,6 +163,44 @@ Value* LaneEmitter::lerpFetch(llvm::GlobalVariable* table, Value* index, Value* 
     return pm.fma(t, pm.sub(fetch(table, pm.add(index, pm.c(1.0))), a), a);
 }
 
+LaneEmitter::LagrangeStencil LaneEmitter::lagrangeStencil(int size, int n, Value* u) {
+    MathEmitter& dm = doubleMath_;
+    // Nodes first .. first + n - 1 around u, kept inside [0, size - 1]; the
+    // weight of node first + k at s = u - first is prod_{m != k} (s - m) / (k - m).
+    int half = n / 2;
+    Value* fi = dm.minnum(dm.maxnum(intrinsic(llvm::Intrinsic::floor, u), dm.c(half - 1.0)), dm.c(size - 1.0 - half));
+    LagrangeStencil st{dm.sub(fi, dm.c(half - 1.0)), {}};
+    Value* s = dm.sub(u, st.first);
+    std::vector<Value*> diff(n);
+    for (int m = 0; m < n; ++m) diff[m] = dm.sub(s, dm.c(double(m)));
+    for (int k = 0; k < n; ++k) {
+        double denom = 1;
+        Value* w = nullptr;
+        for (int m = 0; m < n; ++m) {
+            if (m == k) continue;
+            denom *= k - m;
+            w = w ? dm.mul(w, diff[m]) : diff[m];
+        }
+        st.w.push_back(dm.mul(w, dm.c(1.0 / denom)));
+    }
+    return st;
+}
+
+Value* LaneEmitter::stencilFetch(llvm::GlobalVariable* table, const LagrangeStencil& st, Value* base) {
+    MathEmitter& dm = doubleMath_;
+    llvm::Type* i32 = builder.getInt32Ty();
+    llvm::Type* idxTy = dm.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, dm.width()) : i32;
+    Value* idx = builder.CreateFPToSI(dm.add(base, st.first), idxTy);
+    Value* sum = nullptr;
+    for (size_t k = 0; k < st.w.size(); ++k) {
+        Value* ptr = builder.CreateGEP(builder.getDoubleTy(), table, builder.CreateAdd(idx, llvm::ConstantInt::get(idxTy, k)));
+        Value* node = dm.width() == 1 ? (Value*)builder.CreateLoad(builder.getDoubleTy(), ptr)
+                                      : (Value*)builder.CreateMaskedGather(dm.type(), ptr, llvm::Align(8));
+        sum = sum ? dm.fma(st.w[k], node, sum) : dm.mul(st.w[k], node);
+    }
+    return sum;
+}
+
 Value* LaneEmitter::bilerpFetch(llvm::GlobalVariable* table, int stride, Value* row, Value* col, Value* tRow,
                                 Value* tCol) {
     MathEmitter& pm = preciseMath_;

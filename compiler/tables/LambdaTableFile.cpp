@@ -20,13 +20,19 @@ namespace {
 
 constexpr const char* kMagic = "facet lambda table";
 constexpr const char* kKind = "smith_lambda";
-constexpr const char* kAxis = "z[i] = log(a Lambda(a)) at a = exp(x0 + i step), alpha = 1";
+// The nodes' meaning per table axes (LambdaAxes).
+const char* axisText(LambdaAxes axes) {
+    return axes == LambdaAxes::Slope ? "z[i] = log(a Lambda(a)) at a = exp(x0 + i step), alpha = 1"
+                                     : "z[j count + i] = log(a Lambda(a, alpha)) at a = exp(x0 + i step), "
+                                       "alpha = exp(y0 + j ystep)";
+}
 constexpr const char* kEncoding = "float64 little-endian";
 constexpr size_t kMaxHeaderBytes = 4096;
 // Nodes recomputed by quadrature when a file is read (a few ms): a file
 // whose checksum is right but whose contents are not this build's table
 // (e.g. from a build whose quadrature differed without a version bump).
-constexpr int kSpotChecks[] = {0, LambdaTable::kSize / 3, 2 * LambdaTable::kSize / 3, LambdaTable::kSize - 1};
+// Nodes k of a table of n nodes in all.
+std::vector<int> spotChecks(int n) { return {0, n / 3, 2 * n / 3, n - 1}; }
 constexpr double kSpotTolerance = 1e-12;  // relative, in z: the same build reproduces it exactly
 
 std::string exact(double x) { return fmt::format("{:.17g}", x); }
@@ -79,11 +85,15 @@ std::string encodeLambdaTable(const LambdaTable& t) {
     line("key", t.name());
     line("ndf", t.ndf->name);
     line("shape", shapeText(t.shape));
-    line("x0", exact(LambdaTable::kX0));
-    line("step", exact(LambdaTable::kStep));
-    line("count", std::to_string(t.z.size()));
+    const LambdaGrid& g = t.grid();
+    line("x0", exact(g.x0));
+    line("step", exact(g.step));
+    line("count", std::to_string(g.size));
+    line("y0", exact(g.y0));
+    line("ystep", exact(g.yStep));
+    line("rows", std::to_string(g.rows));
     line("floor", exact(LambdaTable::kLogFloor));
-    line("axis", kAxis);
+    line("axis", axisText(t.axes));
     line("encoding", kEncoding);
     line("build_ms", exact(t.buildMillis));
     line("checksum", fmt::format("{:016x}", checksum(nodes)));
@@ -138,25 +148,30 @@ LambdaTableFileResult decodeLambdaTable(const std::string& bytes, const std::str
     if (ndf && (t->ndf != ndf || !shape || t->shape != *shape))
         return fail(TableFileStatus::Stale, fmt::format("{} holds table {}, expected {}", path, t->name(),
                                                         lambdaTableName(*ndf, shape ? *shape : t->shape)));
-    if (field("x0") != exact(LambdaTable::kX0) || field("step") != exact(LambdaTable::kStep) ||
-        field("count") != std::to_string(LambdaTable::kSize) || field("floor") != exact(LambdaTable::kLogFloor) ||
-        field("axis") != kAxis || field("encoding") != kEncoding)
-        return fail(TableFileStatus::Stale, fmt::format("{} has another grid or encoding (x0 {}, step {}, count {})",
-                                                        path, field("x0"), field("step"), field("count")));
+    t->axes = lambdaAxes(*t->ndf);
+    const LambdaGrid& g = t->grid();
+    size_t count = size_t(g.size) * g.rows;
+    if (field("x0") != exact(g.x0) || field("step") != exact(g.step) || field("count") != std::to_string(g.size) ||
+        field("y0") != exact(g.y0) || field("ystep") != exact(g.yStep) || field("rows") != std::to_string(g.rows) ||
+        field("floor") != exact(LambdaTable::kLogFloor) || field("axis") != axisText(t->axes) ||
+        field("encoding") != kEncoding)
+        return fail(TableFileStatus::Stale,
+                    fmt::format("{} has another grid or encoding (x0 {}, step {}, count {}, rows {})", path,
+                                field("x0"), field("step"), field("count"), field("rows")));
     std::string_view nodes = std::string_view(bytes).substr(end + 2);
-    if (nodes.size() != size_t(LambdaTable::kSize) * 8)
-        return fail(TableFileStatus::Corrupt, fmt::format("{}: {} bytes of nodes, expected {}", path, nodes.size(),
-                                                          size_t(LambdaTable::kSize) * 8));
+    if (nodes.size() != count * 8)
+        return fail(TableFileStatus::Corrupt,
+                    fmt::format("{}: {} bytes of nodes, expected {}", path, nodes.size(), count * 8));
     if (field("checksum") != fmt::format("{:016x}", checksum(nodes)))
         return fail(TableFileStatus::Corrupt, fmt::format("{}: the nodes do not match their checksum", path));
-    t->z.resize(LambdaTable::kSize);
-    for (int i = 0; i < LambdaTable::kSize; ++i) {
+    t->z.resize(count);
+    for (size_t i = 0; i < count; ++i) {
         t->z[i] = decodeNode(nodes, i);
         if (!std::isfinite(t->z[i]) || t->z[i] < LambdaTable::kLogFloor)
             return fail(TableFileStatus::Corrupt, fmt::format("{}: node {} is {}", path, i, t->z[i]));
     }
-    for (int i : kSpotChecks) {
-        double z = lambdaTableNode(*t->ndf, t->shape, i);
+    for (int i : spotChecks(int(count))) {
+        double z = lambdaTableNode(*t->ndf, t->shape, t->axes, i);
         if (!(std::abs(t->z[i] - z) <= kSpotTolerance * std::max(1.0, std::abs(z))))
             return fail(TableFileStatus::Corrupt,
                         fmt::format("{}: node {} is {}, the quadrature gives {}", path, i, t->z[i], z));

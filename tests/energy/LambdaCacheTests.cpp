@@ -56,7 +56,7 @@ TEST_SUITE("lambda cache") {
 TEST_CASE("Lambda table file: the nodes round-trip bit for bit, the header names the table") {
     auto table = facet::lambdaTable(studentT(), kShape);
     std::string bytes = facet::encodeLambdaTable(*table);
-    CHECK(bytes.rfind("facet lambda table\nkind smith_lambda\nversion 1\nkey student_t_g2.5\n", 0) == 0);
+    CHECK(bytes.rfind("facet lambda table\nkind smith_lambda\nversion 2\nkey student_t_g2.5\n", 0) == 0);
     CHECK(bytes.find("\nshape 2.5\n") != std::string::npos);
     CHECK(bytes.find("\ncount 4128\n") != std::string::npos);
     CHECK(facet::lambdaTableFileName(studentT(), kShape) == "lambda_student_t_g2.5.bin");
@@ -75,37 +75,44 @@ TEST_CASE("Lambda table file: the nodes round-trip bit for bit, the header names
     CHECK(s.message.find("expected student_t_g3") != std::string::npos);
 }
 
-TEST_CASE("Lambda cache: a cold cache writes the file, a second loads it; bad files are rebuilt with the reason") {
+}  // TEST_SUITE
+
+namespace {
+
+// The disk layer's round trip and recovery for the table of (ndf, shape),
+// named `key`; `other` is another shape value whose table is stale here.
+void checkCacheRecovery(const facet::NdfEntry& ndf, const std::vector<double>& shape, const std::string& key,
+                        const std::vector<double>& other, const std::string& otherKey) {
     ScratchDir dir("lambda");
-    auto reference = facet::lambdaTable(studentT(), kShape);
+    auto reference = facet::lambdaTable(ndf, shape);
     std::string path;
     {
         TableCache c(dir.path.string());
-        path = c.lambdaPathFor(studentT(), kShape);
-        CHECK(fs::path(path).filename() == "lambda_student_t_g2.5.bin");
-        auto t = c.getLambda(studentT(), kShape);
+        path = c.lambdaPathFor(ndf, shape);
+        CHECK(fs::path(path).filename() == "lambda_" + key + ".bin");
+        auto t = c.getLambda(ndf, shape);
         TableCache::Event e = lastEvent(c);
-        CHECK(e.key == "lambda_student_t_g2.5");
+        CHECK(e.key == "lambda_" + key);
         CHECK(e.action == "built");
         CHECK(e.reason.rfind("missing", 0) == 0);
         CHECK(e.writeError == "");
         CHECK(fs::exists(path));
         CHECK(sameBits(t->z, reference->z));
-        CHECK(c.getLambda(studentT(), kShape) == t);  // once per cache
+        CHECK(c.getLambda(ndf, shape) == t);  // once per cache
         CHECK(c.events().size() == 1);
     }
     {
         TableCache c(dir.path.string());
-        auto t = c.getLambda(studentT(), kShape);
+        auto t = c.getLambda(ndf, shape);
         TableCache::Event e = lastEvent(c);
         CHECK(e.action == "disk");
         CHECK(sameBits(t->z, reference->z));
-        MESSAGE("Lambda table loaded from disk in ", e.millis, " ms (built in ", reference->buildMillis, " ms)");
+        MESSAGE(key, ": Lambda table loaded from disk in ", e.millis, " ms (built in ", reference->buildMillis, " ms)");
     }
     const std::string good = readAll(path);
     auto rebuiltBecause = [&](const char* status, const char* detail) {
         TableCache c(dir.path.string());
-        auto t = c.getLambda(studentT(), kShape);
+        auto t = c.getLambda(ndf, shape);
         TableCache::Event e = lastEvent(c);
         INFO("event: ", e.action, " / ", e.reason);
         CHECK(e.action == "rebuilt");
@@ -124,7 +131,7 @@ TEST_CASE("Lambda cache: a cold cache writes the file, a second loads it; bad fi
     };
     SUBCASE("corrupt: truncated") {
         writeAll(path, good.substr(0, good.size() - 100));
-        rebuiltBecause("corrupt", "bytes of nodes, expected 33024");
+        rebuiltBecause("corrupt", ("bytes of nodes, expected " + std::to_string(reference->z.size() * 8)).c_str());
     }
     SUBCASE("corrupt: a damaged byte") {
         std::string bad = good;
@@ -137,25 +144,42 @@ TEST_CASE("Lambda cache: a cold cache writes the file, a second loads it; bad fi
         rebuiltBecause("corrupt", "node 77 is nan");
     }
     SUBCASE("corrupt: a node off by 1e-9 where a spot check looks") {
-        patchNode(LambdaTable::kSize / 3, reference->z[LambdaTable::kSize / 3] + 1e-9);
+        int spot = int(reference->z.size()) / 3;
+        patchNode(spot, reference->z[spot] + 1e-9);
         rebuiltBecause("corrupt", "the quadrature gives");
     }
     SUBCASE("stale: another table version") {
         std::string bad = good;
-        bad.replace(bad.find("version 1\n"), 10, "version 0\n");
+        bad.replace(bad.find("version 2\n"), 10, "version 0\n");
         writeAll(path, bad);
         rebuiltBecause("stale", "version '0'");
     }
-    SUBCASE("stale: another gamma's table under this name") {
+    SUBCASE("stale: another shape value's table under this name") {
         LambdaTable copy = *reference;
-        copy.shape = {3.0};
+        copy.shape = other;
         writeAll(path, facet::encodeLambdaTable(copy));
-        rebuiltBecause("stale", "holds table student_t_g3");
+        rebuiltBecause("stale", ("holds table " + otherKey).c_str());
     }
     SUBCASE("unreadable: not a table file") {
         writeAll(path, "this is not a Lambda table");
         rebuiltBecause("unreadable", "not a Facet Lambda table file");
     }
+}
+
+}  // namespace
+
+TEST_SUITE("lambda cache") {
+
+TEST_CASE("Lambda cache: a cold cache writes the file, a second loads it; bad files are rebuilt with the reason") {
+    checkCacheRecovery(studentT(), kShape, "student_t_g2.5", {3.0}, "student_t_g3");
+}
+
+// A table in (a, alpha): its rows and grid in the header, the same recovery.
+TEST_CASE("Lambda cache: a gtr table in (a, alpha) round-trips and recovers alike") {
+    const facet::NdfEntry& gtr = facet::ndfEntry(facet::modelNamed(facet::ModelSlot::Ndf, "gtr"));
+    std::string bytes = facet::encodeLambdaTable(*facet::lambdaTable(gtr, {1.5}));
+    CHECK(bytes.find("\ncount 443\ny0 -9.25\nystep 0.125\nrows 75\n") != std::string::npos);
+    checkCacheRecovery(gtr, {1.5}, "gtr_g1.5", {2.0}, "gtr_g2");
 }
 
 TEST_CASE("Lambda cache: memory only, and a group-writable directory refused with the warning") {

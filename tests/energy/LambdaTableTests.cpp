@@ -9,6 +9,7 @@
 #include "Interpreter.h"
 
 #include <doctest/doctest.h>
+#include <fmt/format.h>
 
 #include <cmath>
 #include <string>
@@ -139,6 +140,44 @@ void checkTablesAgainstQuadrature(const char* name, const char* tag, std::initia
             " comparisons");
 }
 
+// The tables in (a, alpha) of NDFs that are not shape-invariant, against
+// the 2D quadrature at alpha in [1e-3, 1] (log-spaced, off the table's
+// rows) and kThetas: within 1e-6 relative, or 1e-11 absolute where Lambda
+// is tiny (G1 = 1/(1 + Lambda) within 1e-11).
+void checkAlphaTablesAgainstQuadrature(const char* name, std::initializer_list<std::vector<double>> shapes) {
+    const NdfEntry& ndf = ndfNamed(name);
+    double worst = 0;
+    std::string where;
+    int checked = 0;
+    for (const std::vector<double>& shape : shapes) {
+        auto table = facet::lambdaTable(ndf, shape);
+        CHECK(table->axes == facet::LambdaAxes::SlopeAlpha);
+        MESSAGE(std::string(name), " ", shape.empty() ? -1.0 : shape[0], ": table of ", table->z.size(),
+                " nodes built in ", table->buildMillis, " ms");
+        for (double alpha : {1e-3, 0.0037, 0.021, 0.13, 0.47, 0.83, 0.97, 1.0}) {
+            ModelArgs<LD> args = facet::convertArgs<LD>(ndf.argsAtAlpha(alpha, shape));
+            ndf.formulas.get<LD>().derive(args);
+            for (double deg : kThetas) {
+                LD theta = toRad(deg);
+                double lambdaRef = double(referenceCosLambda(ndf, args, theta) / std::cos(theta));
+                if (!(lambdaRef > 1e-280)) continue;
+                double s = double(std::sin(theta)), c = double(std::cos(theta));
+                double lambdaTab = table->cosLambda(alpha * alpha * s * s, c, alpha) / c;
+                double rel = std::fabs(lambdaTab / lambdaRef - 1);
+                INFO(name, " ", shape.empty() ? -1.0 : shape[0], " alpha ", alpha, " theta ", deg, ": table ",
+                     lambdaTab, " reference ", lambdaRef);
+                if (std::fabs(lambdaTab - lambdaRef) < 1e-11) rel = std::min(rel, 0.0);
+                CHECK(rel < 1e-6);
+                ++checked;
+                if (rel > worst)
+                    worst = rel, where = fmt::format("{} alpha {} theta {}", shape.empty() ? -1.0 : shape[0], alpha, deg);
+            }
+        }
+    }
+    MESSAGE("max relative error of the tabulated ", std::string(name), " Lambda: ", worst, " (", where, "), ", checked,
+            " comparisons");
+}
+
 }  // namespace
 
 TEST_SUITE("lambda") {
@@ -198,6 +237,61 @@ TEST_CASE("the tabulation reproduces the closed-form Lambdas of ggx and beckmann
     MESSAGE("max relative error of ggx/beckmann Lambda through the tabulation: ", worst);
 }
 
+TEST_CASE("gtr: the Lambda table in (a, alpha) within 1e-6 of an independent 2D quadrature") {
+    checkAlphaTablesAgainstQuadrature("gtr", {{0.0}, {0.5}, {1.0}, {1.5}, {2.5}});
+}
+
+// gtr with gamma = 2 is GGX: its table in (a, alpha) must reproduce GGX's
+// closed form, and so must GGX's own quadrature put on those axes.
+TEST_CASE("the (a, alpha) tabulation reproduces GGX's closed-form Lambda within 1e-6") {
+    const NdfEntry& ggx = ndfNamed("ggx");
+    auto viaGtr = facet::lambdaTable(ndfNamed("gtr"), {2.0});
+    auto viaGgx = facet::tabulateCosLambda(ggx, {}, facet::quadratureCosLambda, facet::LambdaAxes::SlopeAlpha);
+    double worst = 0;
+    for (double alpha : {1e-4, 1e-3, 0.05, 0.3, 0.77, 1.0})
+        for (double deg : kThetas) {
+            double th = double(toRad(deg));
+            Vec3<double> v{std::sin(th), 0, std::cos(th)};
+            double exact = ggx.formulas.get<double>().cosLambda(ggx.argsAtAlpha(alpha, {}), v);
+            double proj = alpha * alpha * v.x * v.x;
+            for (const auto& table : {viaGtr, std::shared_ptr<const LambdaTable>(viaGgx)}) {
+                double rel = std::fabs(table->cosLambda(proj, v.z, alpha) / exact - 1);
+                INFO(table->name(), " alpha ", alpha, " theta ", deg, ": ggx ", exact);
+                CHECK(rel < 1e-6);
+                worst = std::max(worst, rel);
+            }
+        }
+    MESSAGE("max relative error of GGX's Lambda through the (a, alpha) tables: ", worst);
+}
+
+// Beyond the rows (alpha > 1) the table holds alpha = 1's Lambda at the
+// same direction; below them (alpha < kMinAlpha, which the NDFs' domain
+// clamps away) the first row's.
+TEST_CASE("a Lambda table in (a, alpha) outside its alpha range") {
+    const NdfEntry& gtr = ndfNamed("gtr");
+    auto table = facet::lambdaTable(gtr, {1.5});
+    const facet::LambdaGrid& g = table->grid();
+    CHECK(g.alphaHi() == doctest::Approx(1.0).epsilon(1e-15));
+    CHECK(g.alphaLo() < facet::kMinAlpha);
+    for (double deg : {10.0, 60.0, 89.0}) {
+        double th = double(toRad(deg)), s = std::sin(th), c = std::cos(th);
+        double atOne = table->cosLambda(s * s, c, 1.0);
+        CHECK(atOne > 0);
+        for (double alpha : {1.5, 4.0, 1e6}) CHECK(table->cosLambda(alpha * alpha * s * s, c, alpha) == doctest::Approx(atOne).epsilon(1e-14));
+        double atLo = table->cosLambda(g.alphaLo() * g.alphaLo() * s * s, c, g.alphaLo());
+        double below = 1e-3 * g.alphaLo();
+        CHECK(table->cosLambda(below * below * s * s, c, below) == doctest::Approx(atLo).epsilon(1e-12));
+    }
+    // The interpreter's reference formula goes through the same clamp.
+    for (double alpha : {2.0, 7.0}) {
+        ModelArgs<double> args = gtr.argsAtAlpha(alpha, {1.5});
+        gtr.formulas.get<double>().derive(args);
+        Vec3<double> v{std::sin(0.9), 0, std::cos(0.9)};
+        CHECK(gtr.formulas.get<double>().cosLambda(args, v) ==
+              doctest::Approx(table->cosLambda(v.x * v.x, v.z, 1.0)).epsilon(1e-14));
+    }
+}
+
 static std::string materialErrors(const std::string& body) {
     facet::DiagnosticEngine diags;
     facet::loadProgramText("material t {\n" + body + "\n}\n", "lambda.mat", diags);
@@ -228,4 +322,15 @@ TEST_CASE("epd with a Smith masking: a constant p") {
     CHECK(materialErrors("input p = 1; ndf = epd(0.3, p); masking = neumann;") == "");
 }
 
+TEST_CASE("gtr with a Smith masking: a constant gamma <= 2.5") {
+    CHECK(materialErrors("input a = 0.3; ndf = gtr(a, 1); masking = smith_height_correlated;") == "");
+    CHECK(materialErrors("ndf = gtr(0.3, 2.5); masking = smith_direction_correlated;") == "");
+    std::string input = materialErrors("input g = 1; ndf = gtr(0.3, g); masking = smith_separable;");
+    CHECK(input.find("needs a constant gamma") != std::string::npos);
+    std::string high = materialErrors("ndf = gtr(0.3, 3); masking = smith_height_direction_correlated;");
+    CHECK(high.find("gamma <= 2.5 only, got 3") != std::string::npos);
+    CHECK(materialErrors("input g = 4; ndf = gtr(0.3, g); masking = cook_torrance;") == "");
+}
+
 }  // TEST_SUITE
+

@@ -85,7 +85,7 @@ struct EpdFormulas final : NdfFormulas<Real> {
     // depends on alpha(v) only through proj).
     Real cosLambda(const ModelArgs<Real>& a, const Vec3<Real>& v) const override {
         static const NdfEntry& self = ndfEntry(modelNamed(ModelSlot::Ndf, "epd"));
-        return Real(tabulatedCosLambda(self, double(a[kP]), double(smithProjection(a[kAlphaX], a[kAlphaY], v)),
+        return Real(tabulatedCosLambda(self, {double(a[kP])}, double(smithProjection(a[kAlphaX], a[kAlphaY], v)),
                                        double(v.z)));
     }
     // The squared standard slope is u = y^(1/p), y ~ Gamma(1/p): y from

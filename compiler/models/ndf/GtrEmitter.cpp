@@ -1,5 +1,6 @@
 // gtr: Burley's generalized Trowbridge-Reitz NDF as IR (the reference is
 // Gtr.cpp), in log form in the precise type.
+#include "TabulatedLambdaEmitter.h"
 #include "lowering/LaneEmitter.h"
 
 namespace facet {
@@ -45,6 +46,11 @@ public:
         return pm.mul(pm.exp(logD), pm.c(1.0 / kPi));
     }
 
+    // Its Smith Lambda from the plan's table in (a, alpha) (TabulatedLambdaEmitter.h).
+    Value* cosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
+        return tabulatedCosLambda(lane, *this, n, v);
+    }
+
     // In s = sin^2 theta, D(m) (n.m) is proportional to (1 + b s)^-gamma with
     // b = 1/a^2 - 1. Its CDF inverts to s = expm1(-L g) / expm1(-L), L = ln
     // a^2, where g = log1p(u expm1(k)) / k, k = (gamma - 1) L (g = u at k =
@@ -84,7 +90,7 @@ public:
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_GtrEmitter() {
     static const GtrEmitter emitter;
-    return {{ModelSlot::Ndf, "gtr", &emitter}};
+    return {{ModelSlot::Ndf, "gtr", &emitter, lambdaTableEmbedding}};
 }
 
 }  // namespace facet

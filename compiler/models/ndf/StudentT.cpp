@@ -45,7 +45,7 @@ struct StudentTFormulas final : NdfFormulas<Real> {
     // depends on alpha(v) only through proj).
     Real cosLambda(const ModelArgs<Real>& a, const Vec3<Real>& v) const override {
         static const NdfEntry& self = ndfEntry(modelNamed(ModelSlot::Ndf, "student_t"));
-        return Real(tabulatedCosLambda(self, double(a[kGamma]), double(smithProjection(a[kAlphaX], a[kAlphaY], v)),
+        return Real(tabulatedCosLambda(self, {double(a[kGamma])}, double(smithProjection(a[kAlphaX], a[kAlphaY], v)),
                                        double(v.z)));
     }
     // The standard slopes have the radial CDF 1 - (1 + r^2/(gamma - 1))^(1 - gamma):

@@ -132,7 +132,10 @@ private:
 // (n.v) Lambda(v) = sqrt(proj) f(a), a = vz / sqrt(proj), from the plan's
 // table of z = log f at u = (log a - x0) / h (LambdaTable.h): 4-point
 // Lagrange up to the last node, linear in u beyond it, the first node below
-// the grid; in double (z reaches -690).
+// the grid; in double (z reaches -690). A SlopeAlpha table interpolates
+// with kAlphaOrder points along u and across its rows at v = (log alpha -
+// y0) / yStep, alpha clamped to the rows' range (proj rescaled to the
+// clamped alpha).
 Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
                           const std::array<Value*, 3>& v) {
     internal_assert(lane.plan.lambda == LambdaForm::Table && lane.plan.lambdaTable)
@@ -141,16 +144,49 @@ Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfPar
     MathEmitter& fm = lane.floatMath();
     MathEmitter& dm = lane.doubleMath();
     llvm::GlobalVariable* gv = lane.doubleTable(table.z, "facet_lambda_" + table.name());  // as lambdaTableEmbedding
-    Value* proj = lane.smithProjection(ndf, n, v);
-    Value* projD = dm.convert(proj, dm.type());
-    Value* logRoot = dm.mul(dm.log(projD), dm.c(0.5));
+    if (table.axes == LambdaAxes::Slope) {
+        Value* proj = lane.smithProjection(ndf, n, v);
+        Value* projD = dm.convert(proj, dm.type());
+        Value* logRoot = dm.mul(dm.log(projD), dm.c(0.5));
+        Value* x = dm.sub(dm.log(dm.convert(v[2], dm.type())), logRoot);
+        Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(LambdaTable::kX0)), dm.c(LambdaTable::kStep)), dm.c(0.0));
+        Value* uc = dm.minnum(u, dm.c(LambdaTable::kSize - 1.0));
+        Value* z = lane.lagrangeFetch(gv, LambdaTable::kSize, uc);
+        if (table.endSlope() != 0) z = dm.fma(dm.sub(u, uc), dm.c(table.endSlope()), z);
+        Value* cl = dm.exp(dm.add(z, logRoot));
+        return fm.select(fm.gt(proj, fm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
+    }
+    // Isotropic: at the clamped alpha c the projection is c^2 (vx^2 + vy^2),
+    // formed in double from v (alpha^2 in float overflows for a huge alpha).
+    internal_assert(n.isotropic) << "a Lambda table in (a, alpha) for an anisotropic lobe";
+    const int size = LambdaTable::kAlphaXSize, rows = LambdaTable::kRows;
+    Value* logClamped = dm.minnum(dm.maxnum(dm.log(dm.convert(n.axD, dm.type())), dm.c(LambdaTable::kY0)),
+                                  dm.c(LambdaTable::kY0 + (rows - 1) * LambdaTable::kYStep));
+    Value* vx = dm.convert(v[0], dm.type());
+    Value* vy = dm.convert(v[1], dm.type());
+    Value* side2 = dm.fma(vx, vx, dm.mul(vy, vy));
+    Value* logRoot = dm.add(dm.mul(dm.log(side2), dm.c(0.5)), logClamped);
     Value* x = dm.sub(dm.log(dm.convert(v[2], dm.type())), logRoot);
-    Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(LambdaTable::kX0)), dm.c(LambdaTable::kStep)), dm.c(0.0));
-    Value* uc = dm.minnum(u, dm.c(LambdaTable::kSize - 1.0));
-    Value* z = lane.lagrangeFetch(gv, LambdaTable::kSize, uc);
-    if (table.endSlope() != 0) z = dm.fma(dm.sub(u, uc), dm.c(table.endSlope()), z);
+    Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(LambdaTable::kAlphaX0)), dm.c(LambdaTable::kAlphaXStep)), dm.c(0.0));
+    Value* uc = dm.minnum(u, dm.c(size - 1.0));
+    Value* w = dm.div(dm.sub(logClamped, dm.c(LambdaTable::kY0)), dm.c(LambdaTable::kYStep));
+    LaneEmitter::LagrangeStencil sx = lane.lagrangeStencil(size, LambdaTable::kAlphaOrder, uc);
+    LaneEmitter::LagrangeStencil sy = lane.lagrangeStencil(rows, LambdaTable::kAlphaOrder, w);
+    // Each row's slope per node past its last node (the linear tail in u):
+    // its last node minus the one before.
+    LaneEmitter::LagrangeStencil lastTwo{dm.c(size - 2.0), {dm.c(-1.0), dm.c(1.0)}};
+    Value* rowStart = dm.mul(sy.first, dm.c(double(size)));
+    Value *z = nullptr, *slope = nullptr;
+    for (size_t r = 0; r < sy.w.size(); ++r) {
+        Value* base = dm.add(rowStart, dm.c(double(r * size)));
+        Value* zr = lane.stencilFetch(gv, sx, base);
+        Value* sr = lane.stencilFetch(gv, lastTwo, base);
+        z = z ? dm.fma(sy.w[r], zr, z) : dm.mul(sy.w[r], zr);
+        slope = slope ? dm.fma(sy.w[r], sr, slope) : dm.mul(sy.w[r], sr);
+    }
+    z = dm.fma(dm.sub(u, uc), slope, z);
     Value* cl = dm.exp(dm.add(z, logRoot));
-    return fm.select(fm.gt(proj, fm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
+    return fm.select(dm.gt(side2, dm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
 }
 
 std::vector<EmbeddedTable> lambdaTableEmbedding(const CheckedMaterial& material) {

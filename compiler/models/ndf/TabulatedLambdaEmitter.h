@@ -1,7 +1,8 @@
-// TabulatedLambdaEmitter: the Smith Lambda of a shape-invariant NDF from
-// the plan's LambdaTable (LambdaTable.h) as IR, and the hook that embeds
-// that table in the kernel. Shared by the emitters of the NDFs whose entry
-// has tabulatedLambda (student_t, epd); written in StudentTEmitter.cpp.
+// TabulatedLambdaEmitter: the Smith Lambda of an NDF from the plan's
+// LambdaTable (LambdaTable.h) as IR, on either of its axes (a alone, or a
+// and alpha), and the hook that embeds that table in the kernel. Shared by
+// the emitters of the NDFs whose entry has tabulatedLambda (student_t, epd,
+// gtr, gaussian); written in StudentTEmitter.cpp.
 #pragma once
 
 #include "lowering/LaneEmitter.h"
