@@ -15,7 +15,7 @@ for m in materials/*.mat; do
   name=$(basename "$m" .mat)
   $facet render "$m" -o "$out/$name.png" --size 256 --samples 64 | grep -E "^rendered"
 done
-$facet render --plot ndf --compare gtr:gamma=1,beckmann,blinn_phong,ggx,gtr:gamma=1.5,student_t:gamma=3,gaussian,epd:p=0.5 \
+$facet render --plot ndf --compare gtr:gamma=1,beckmann,blinn_phong,ggx,gtr:gamma=1.5,student_t:gamma=3,gaussian,epd:p=0.5,abc:c=1.5,sgd:p=1 \
   --alpha 0.3 -o "$out/ndf_compare.png"
 $facet render materials/plastic.mat --plot lobe -o "$out/lobe_plastic.png"
 $facet render materials/gold.mat --plot lobe -o "$out/lobe_gold.png"

@@ -1071,8 +1071,8 @@ TEST_CASE("tiered compile: the quick code and the optimized code give the same b
             }
         }
     }
-    CHECK(kernels == 66);
-    CHECK(samplers == 44);
+    CHECK(kernels == 69);
+    CHECK(samplers == 46);
 }
 
 // Renderer threads keep evaluating while the tier-up switches the entry
