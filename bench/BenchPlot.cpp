@@ -136,9 +136,14 @@ void drawLabels(PlotCanvas& canvas, const std::vector<LabelGroup>& groups, std::
 }
 
 // Legend right of the plot area: materials (colour), backends (shape), the
-// two error markers, the label abbreviations.
+// two error markers, the label abbreviations. The material rows close up
+// (down to the colour box's height) when many materials would run the legend
+// off the canvas.
 void drawLegend(PlotCanvas& canvas, const BenchReport& report, double lx, double ly) {
     const double row = 1.45 * kFont, gap = 0.9 * kFont;
+    const double otherRows = 4 * (row + 2) + 9 * row + 4 * gap + 10;
+    const double materials = double(std::max<size_t>(report.materials.size(), 1));
+    const double materialRow = std::clamp((canvas.height() - ly - otherRows) / materials, 15.0, row);
     auto heading = [&](const std::string& s) {
         canvas.text({lx, ly}, s, kFont, kBlack, HAlign::Left, VAlign::Top);
         ly += row + 2;
@@ -152,7 +157,8 @@ void drawLegend(PlotCanvas& canvas, const BenchReport& report, double lx, double
         canvas.box({lx, ly}, {lx + 16, ly + 14}, materialColor(mi), true);
         std::string name = report.materials[mi].material;
         if (name.size() > 26) name = name.substr(0, 25) + "~";
-        entry(name);
+        canvas.text({lx + 26, ly}, name, kFont, kText, HAlign::Left, VAlign::Top);
+        ly += materialRow;
     }
     ly += gap;
     heading("backends");

@@ -257,6 +257,9 @@ void PlotCanvas::arc(Point center, double radius, double a0, double a1, const St
 
 bool PlotCanvas::text(Point at, std::string_view text, double size, Rgb color, HAlign h, VAlign v) {
     if (font_.empty() || text.empty()) return false;
+    // OIIO 2.4's render_text aborts (an assertion on an empty region) when the
+    // text falls wholly outside the image: an anchor off the canvas draws nothing.
+    if (!(at.x >= 0 && at.x <= width_ && at.y >= 0 && at.y <= height_)) return false;
     const float c[3] = {color.r, color.g, color.b};
     auto ax = h == HAlign::Left ? IBA::TextAlignX::Left
               : h == HAlign::Center ? IBA::TextAlignX::Center : IBA::TextAlignX::Right;
