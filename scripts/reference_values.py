@@ -10,8 +10,10 @@ spec agree; where they disagree, one of them has a bug.
 
 Independence is deliberate in the formulas too: the dielectric Fresnel uses
 Walter et al.'s g-form, the conductor Fresnel the real-arithmetic form (not a
-complex sqrt), and the Gaussian normalization its own adaptive Gauss-Legendre
-quadrature with nodes computed here by Newton iteration.
+complex sqrt), the Gaussian normalization its own adaptive Gauss-Legendre
+quadrature with nodes computed here by Newton iteration, and the Smith Lambda
+of the NDFs without a closed form a 2-D quadrature of a different integral
+than the one Facet tabulates.
 
 Usage:
   reference_values.py --eval FILE [--material NAME] [tol=T] wi=(x,y,z) wo=(x,y,z) [NAME=V | NAME=(r,g,b)]...
@@ -75,19 +77,23 @@ def _gl(f, a, b):
     return half * math.fsum(w * f(mid + half * x) for x, w in zip(*_GL))
 
 
-def integrate(f, a, b, rel=1e-13, depth=0):
+def integrate(f, a, b, rel=1e-13, depth=0, floor=0.0):
     """Adaptive 20-point Gauss-Legendre: split until both halves agree with the whole.
 
     The 20-point rule's error falls like h^40, so once the whole and the two
     halves agree to `rel` the halves are accurate to far better than that;
-    asking for much less than 1e-13 would only chase rounding noise.
+    asking for much less than 1e-13 would only chase rounding noise. `floor`:
+    an absolute difference that counts as agreement too (a panel whose share
+    of a larger integral is below what matters; without it a panel where the
+    integrand is rounding noise would split to the depth limit).
     """
     whole = _gl(f, a, b)
     m = (a + b) / 2
     left, right = _gl(f, a, m), _gl(f, m, b)
-    if abs(left + right - whole) <= rel * abs(left + right) or depth > 30 or left + right == 0:
+    diff = abs(left + right - whole)
+    if diff <= rel * abs(left + right) or diff <= floor or depth > 30 or left + right == 0:
         return left + right
-    return integrate(f, a, m, rel, depth + 1) + integrate(f, m, b, rel, depth + 1)
+    return integrate(f, a, m, rel, depth + 1, floor) + integrate(f, m, b, rel, depth + 1, floor)
 
 
 _gaussian_norm_cache = {}
@@ -230,8 +236,62 @@ def beckmann_lambda_of_a(a):
     return -math.erfc(a) / 2 + math.exp(-a * a) / (2 * a * math.sqrt(PI))
 
 
+_lambda_cache = {}
+
+
+def lambda_by_quadrature(ndf, p, v):
+    """Smith Lambda(v) of any NDF whose D(m) = D(-m_t, m_z), by 2-D quadrature.
+
+    Int (v.m) D(m) dm = n.v for such a D, so the projected area of the visible
+    microsurface, Int (v.m)+ D dm = (n.v)(1 + Lambda), gives
+      (n.v) Lambda(v) = Int_{v.m < 0} -(v.m) D(m) dm,
+    the back-facing facets' projected area: a positive integrand, no
+    cancellation against n.v where Lambda is tiny. (Facet's tables integrate
+    the other form with the azimuth in closed form; this one integrates the
+    azimuth numerically.) With u = m_z (dm = du dphi) and psi the azimuth of m
+    measured from the one opposite v, the region is u < sin(theta_v),
+    |psi| < acos(cot(theta_v) u / sqrt(1 - u^2)), where
+    -(v.m) = sin(theta_v) sqrt(1 - u^2) cos(psi) - v_z u. The substitution
+    u = sin(theta_v) t^4 grades the panels toward the horizon, where a heavy
+    tail's D may grow like a negative power of u.
+    """
+    key = (ndf, tuple(sorted(p.items())), v)
+    if key in _lambda_cache:
+        return _lambda_cache[key]
+    vx, vy, vz = v
+    sv = math.hypot(vx, vy)
+    if sv == 0:
+        return 0.0
+    phi_v = math.atan2(vy, vx)
+
+    floor = 0.0  # set from a first, fixed-rule estimate of the whole integral
+
+    def over_t(t):
+        u = sv * t ** 4
+        s = math.sqrt(1 - u * u)
+        psi0 = math.acos(min(1.0, vz * u / (sv * s)))
+        if psi0 == 0:
+            return 0.0
+
+        def over_psi(psi):
+            phi = phi_v + PI + psi
+            m = (s * math.cos(phi), s * math.sin(phi), u)
+            return (sv * s * math.cos(psi) - vz * u) * ndf_D(ndf, p, m)
+
+        return integrate(over_psi, -psi0, psi0, 1e-12, floor=floor) * 4 * sv * t ** 3
+
+    cuts = [0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99, 1.0]
+    estimate = math.fsum(_gl(over_t, cuts[i], cuts[i + 1]) for i in range(len(cuts) - 1))
+    floor = 1e-15 * abs(estimate)
+    lam = math.fsum(integrate(over_t, cuts[i], cuts[i + 1], 1e-12, floor=floor) for i in range(len(cuts) - 1)) / vz
+    _lambda_cache[key] = lam
+    return lam
+
+
 def smith_lambda(ndf, p, v):
     vx, vy, vz = v
+    if ndf not in ("ggx", "beckmann", "blinn_phong"):
+        return lambda_by_quadrature(ndf, p, v)
     if ndf == "blinn_phong":
         ax = ay = math.sqrt(2 / (p["exponent"] + 2))
     else:
@@ -893,6 +953,14 @@ def cmd_selftest():
              ("sgd", {"alpha": 0.1, "p": 0.6}), ("sgd", {"alpha": 0.05, "p": 1.0}), ("sgd", {"alpha": 2.0, "p": 2.0})]
     for ndf, p in cases:
         check("normalization %s %s" % (ndf, p), projected_area(ndf, p), 1.0, 1e-8)
+    # The Smith Lambda by quadrature (used for the NDFs without a closed form)
+    # reproduces the closed forms of ggx and beckmann, isotropic and not.
+    for ndf, p in (("ggx", {"alpha_x": 0.3, "alpha_y": 0.3}), ("beckmann", {"alpha_x": 0.2, "alpha_y": 0.5})):
+        for theta, phi in ((0.5, 0.0), (1.2, 0.7), (1.5706, 2.0)):
+            v = (math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta))
+            closed = smith_lambda(ndf, p, v)
+            check("Lambda by quadrature = closed form, %s theta=%g" % (ndf, theta),
+                  lambda_by_quadrature(ndf, p, v), closed, 1e-11)
     # Conductor with k = 0 is a dielectric (two independent formulas).
     for c in (0.05, 0.4, 0.9, 1.0):
         check("conductor(k=0) = dielectric at c=%g" % c, fresnel_conductor(c, 1.7, 0.0), fresnel_dielectric(c, 1.7))
