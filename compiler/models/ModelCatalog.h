@@ -67,7 +67,10 @@ constexpr int kMaxModelParams = 4;
 // declarations its arguments use, the statement's right-hand side, and any
 // other statement it needs.
 struct ModelExample {
-    std::string key, inputs, stmt, extra;
+    std::string key, inputs, stmt;
+    // More statements of the example's material (most examples need none:
+    // the default initializer lets their braced lists leave it out).
+    std::string extra = {};
     // Combined only with the representative models of the other slots (a
     // variant that differs from another example only in how a parameter is
     // computed, independently of the other terms).
