@@ -188,6 +188,8 @@ const char* facet_sampler(const facet_kernel* k) {
     return k->kernel->samplerTier() == "jit" ? names[0] : names[1];
 }
 
+const char* facet_sampler_error(const facet_kernel* k) { return k ? k->kernel->samplerError().c_str() : ""; }
+
 const char* facet_last_error(void) { return lastError().c_str(); }
 
 void facet_release(facet_kernel* k) { delete k; }

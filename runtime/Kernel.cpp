@@ -354,6 +354,7 @@ struct KernelCode {
     std::atomic<PdfBatchFn> pdfBatch{nullptr};
     std::once_flag samplerOnce;
     std::string samplerOrigin;  // set once, inside samplerOnce (Kernel::samplerOrigin)
+    std::string samplerError;   // set once, inside samplerOnce (Kernel::samplerError)
 
     mutable std::mutex mutex;  // guards the members below
     mutable std::condition_variable settled;
@@ -521,7 +522,19 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
 void Kernel::ensureSampler() const {
     if (!code_ || !memoryCache_) return;  // (a tolerance search's probe kernels only evaluate)
     std::call_once(code_->samplerOnce, [this] {
-        // A failure leaves the entry points null: the reference samples.
+        // A failure leaves the entry points null, so the reference samples,
+        // and says why in samplerError.
+        KernelCode& code = *code_;
+        std::string origin;
+        auto fail = [&code, &origin](const std::string& why) {
+            code.sampleScalar.store(nullptr, std::memory_order_release);
+            code.pdfScalar.store(nullptr, std::memory_order_release);
+            code.sampleBatch.store(nullptr, std::memory_order_release);
+            code.pdfBatch.store(nullptr, std::memory_order_release);
+            code.samplerError = origin.empty() || origin == "compiled"
+                                    ? "the compiled sampler failed: " + why
+                                    : fmt::format("the sampler from the {} failed: {}", origin, why);
+        };
         try {
             LoweringOptions lowering = samplerLowering_;
             lowering.emitEval = false;
@@ -529,8 +542,6 @@ void Kernel::ensureSampler() const {
             if (planLowering(material_, lowering.variant, lowering.x86Target).sampling.specular ==
                 SpecularSampling::None)
                 return;
-            KernelCode& code = *code_;
-            std::string origin;
             std::optional<CachedKernel> cached =
                 lookUpCaches(*memoryCache_, *diskCache_, samplerKey_, samplerCachePath_, samplerCache_, origin);
             if (!cached) {
@@ -544,7 +555,12 @@ void Kernel::ensureSampler() const {
                 target.naturalWidth = code.jit->hostVectorWidth();
                 TableCache tables("");  // unused: the run starts specialized, with its table
                 DiagnosticEngine diags;
-                if (!runKernelPipeline(run, control, target, tables, diags)) return;
+                if (!runKernelPipeline(run, control, target, tables, diags)) {
+                    std::string text = diags.str();
+                    while (!text.empty() && text.back() == '\n') text.pop_back();
+                    fail(text.empty() ? "its pipeline stopped without a diagnostic" : text);
+                    return;
+                }
                 cached = CachedKernel{std::move(run.object), lowering.variant.name(), -1.0};
                 origin = "compiled";
                 storeInCaches(*memoryCache_, *diskCache_, samplerKey_, samplerCachePath_, samplerCache_, *cached);
@@ -569,9 +585,16 @@ void Kernel::ensureSampler() const {
                                     std::memory_order_release);
             }
             code.samplerOrigin = origin;  // read only after the call_once
-        } catch (const std::exception&) {
+        } catch (const std::exception& e) {
+            fail(e.what());
         }
     });
+}
+
+const std::string& Kernel::samplerError() const {
+    static const std::string none;
+    ensureSampler();
+    return code_ ? code_->samplerError : none;
 }
 
 std::string Kernel::samplerOrigin() const {

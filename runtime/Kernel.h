@@ -173,9 +173,10 @@ public:
                      float* pdf) const;
     // Which code samples: "jit" (the kernel's own sample/pdf entry points,
     // scalar or SIMD as eval), or "reference" (the interpreter's sampler in
-    // double, lane by lane: interp kernels, and materials whose NDF has no
+    // double, lane by lane: interp kernels, materials whose NDF has no
     // sampler in IR, which `facet ir --plan` shows as sampling:
-    // specular=none). A JIT kernel gets its sampler (optimized, with the
+    // specular=none, and JIT kernels whose sampler failed, see
+    // samplerError). A JIT kernel gets its sampler (optimized, with the
     // lowering options of its eval code: math variant, a tolerance search's
     // choice included, and width) on the first call of any sampling
     // function, this one included, so that eval-only hosts never pay for
@@ -186,6 +187,11 @@ public:
     // How the sampler's code was obtained: "compiled", "memory cache" or
     // "disk cache"; "" where the reference samples. Gets the sampler first.
     std::string samplerOrigin() const;
+    // Why a JIT kernel samples through the reference: its sampler did not
+    // compile, link or resolve (an internal error, or a cached object that
+    // is not what its key says); "" otherwise. Gets the sampler first; the
+    // text lives as long as the kernel.
+    const std::string& samplerError() const;
 
 private:
     friend class Compiler;

@@ -122,7 +122,10 @@ int runSample(const std::vector<std::string>& args) {
             std::fputs(diags.str().c_str(), stderr);
             return kExitMaterialError;
         }
-        if (kernel->samplerTier() != "jit")
+        if (!kernel->samplerError().empty())
+            std::fprintf(stderr, "facet: warning: material %s: %s; sampling through the reference\n",
+                         m->name.c_str(), kernel->samplerError().c_str());
+        else if (kernel->samplerTier() != "jit" && options.backend != Backend::Interp)
             std::fprintf(stderr, "facet: note: material %s has no compiled sampler (ndf %s); sampling through the "
                                  "reference\n", m->name.c_str(), m->ndf.model->name);
         const float wo3[3] = {float(view[0]), float(view[1]), float(view[2])};

@@ -442,6 +442,73 @@ TEST_CASE("disk cache: the compiled sampler is cached, and a damaged sampler fil
     std::filesystem::remove_all(dir);
 }
 
+// Where the cache's object passes every check of its file (owner, mode, key,
+// checksum) but is not a sampler -- here eval's object under the sampler's
+// key, as a buggy writer could leave it -- the kernel samples through the
+// reference and says why, instead of switching silently.
+TEST_CASE("disk cache: a sampler that does not link is reported, and the reference samples") {
+    std::string dir = tempDir("sampler-broken");
+    Batch lanes(500, 5);
+    std::set<std::filesystem::path> evalFiles;
+    {
+        Compiler c;
+        c.setCacheDir(dir);
+        auto k = compile(c, kGold, "backend=simd;codegen=optimized");
+        for (auto& e : std::filesystem::directory_iterator(dir)) evalFiles.insert(e.path());
+        REQUIRE(k->samplerTier() == "jit");
+        CHECK(k->samplerError() == "");
+    }
+    REQUIRE(evalFiles.size() == 1);
+    std::filesystem::path samplerFile;
+    for (auto& e : std::filesystem::directory_iterator(dir))
+        if (!evalFiles.count(e.path())) samplerFile = e.path();
+    REQUIRE(!samplerFile.empty());
+    auto readAll = [](const std::filesystem::path& path) {
+        std::ifstream f(path, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(f), {});
+    };
+    // A cache file: 8-byte magic, key and variant (each a 64-bit length and
+    // its bytes), the measured error (8 bytes), then the object's checksum
+    // and the object. Splice eval's checksum and object after the sampler's
+    // key and variant.
+    auto objectOffset = [](const std::string& bytes) {
+        size_t at = 8;
+        for (int field = 0; field < 2; ++field) {
+            uint64_t len = 0;
+            std::memcpy(&len, bytes.data() + at, 8);
+            at += 8 + len;
+        }
+        return at + 8;
+    };
+    std::string sampler = readAll(samplerFile), eval = readAll(*evalFiles.begin());
+    std::string spliced = sampler.substr(0, objectOffset(sampler)) + eval.substr(objectOffset(eval));
+    {
+        std::ofstream f(samplerFile, std::ios::binary | std::ios::trunc);
+        f.write(spliced.data(), std::streamsize(spliced.size()));
+        REQUIRE(f.good());
+    }
+    Compiler c;
+    c.setCacheDir(dir);
+    auto k = compile(c, kGold, "backend=simd;codegen=optimized");
+    CHECK(k->origin() == "disk cache");
+    CHECK(k->samplerTier() == "reference");
+    CHECK(k->samplerOrigin() == "");
+    const std::string& why = k->samplerError();
+    CHECK_MESSAGE(why.find("the sampler from the disk cache failed") != std::string::npos, why);
+    CHECK_MESSAGE(why.find("_sample_") != std::string::npos, why);
+    // The reference still samples every lane.
+    std::vector<float> out = sampleOutputs(*k, lanes);
+    const size_t n = lanes.size();
+    size_t positive = 0;
+    for (size_t i = 0; i < n; ++i) {
+        float pdf = out[3 * n + i];
+        CHECK(std::isfinite(pdf));
+        positive += pdf > 0;
+    }
+    CHECK(positive > n / 2);
+    std::filesystem::remove_all(dir);
+}
+
 // A tolerance build loaded from a cache samples with the variant its search
 // chose, as the kernel that ran the search does: the sampler of the math
 // mode it chose, bit for bit, not the base variant's.

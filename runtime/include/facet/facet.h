@@ -94,15 +94,21 @@ int64_t facet_pdf_batch(const facet_kernel* k, int64_t n, const float* const wi[
                         const float* const* inputs, float* pdf);
 /* Which code samples: "jit" (the kernel's own compiled sampler, scalar or
    SIMD as its eval), or "reference" (the interpreter's sampler in double,
-   one lane at a time: backend=interp, and the materials whose NDF has no
-   compiled sampler: gaussian, and beckmann under a Smith masking); "" for
-   a NULL kernel. A kernel gets its sampler on the first call of any
+   one lane at a time: backend=interp, or a compiled sampler that failed,
+   see facet_sampler_error); "" for a NULL kernel. A kernel gets its sampler on the first call of any
    sampling function (this one included), once, thread-safely: from the
    kernel caches (memory and disk, as its eval code, option cache=), else
    compiled and stored there. Objects of `facet build` carry the same
    sampler as PREFIX_sample / PREFIX_sample_batch / PREFIX_pdf /
    PREFIX_pdf_batch, where their header says PREFIX_HAS_SAMPLER 1. */
 const char* facet_sampler(const facet_kernel* k);
+
+/* Why a JIT kernel samples through the reference: its compiled sampler did
+   not compile, link or resolve (e.g. "the sampler from the disk cache
+   failed: looking up ..."); "" when it did, for an interp kernel and for a
+   NULL kernel. Gets the sampler first, as facet_sampler. Valid while the
+   kernel lives. */
+const char* facet_sampler_error(const facet_kernel* k);
 
 /* The message of the last batch call that returned -1 in this thread
    ("facet_eval_batch: error: wi[2] is NULL"); "" before any. Valid until

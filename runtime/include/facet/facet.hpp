@@ -108,6 +108,8 @@ public:
     }
     // "jit" or "reference" (facet_sampler).
     std::string sampler() const { return facet_sampler(k_.get()); }
+    // Why a JIT kernel samples through the reference, or "" (facet_sampler_error).
+    std::string samplerError() const { return facet_sampler_error(k_.get()); }
 
     facet_kernel* get() const { return k_.get(); }  // for the C API
 
