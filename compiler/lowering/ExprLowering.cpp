@@ -17,7 +17,8 @@ namespace facet {
 using llvm::Value;
 
 
-// Inputs: non-finite values are invalid; in-range clamping. Inputs, lets
+// Inputs: non-finite values are invalid; in-range clamping (neither where
+// the plan trusts the inputs: the clamp is then an identity). Inputs, lets
 // and model parameters are evaluated in the expression type: a parameter
 // such as alpha enters exp() multiplied by tens in the NDF tails, and the
 // user's arithmetic must not lose accuracy the reference keeps.
@@ -30,9 +31,9 @@ void LaneEmitter::lowerInputsAndLets(const std::vector<Value*>& slots) {
         v.rgb = in.type == ValueType::Rgb;
         for (int ch = 0; ch < in.slotCount(); ++ch) {
             Value* x = slots.at(in.firstSlot + ch);
-            markInvalid(builder.CreateNot(fm.isFinite(x)));
+            rejectInput([&] { return builder.CreateNot(fm.isFinite(x)); });
             x = em.convert(x, em.type());
-            if (in.hasRange) x = em.maxnum(em.minnum(x, em.c(in.hi)), em.c(in.lo));
+            if (in.hasRange && !plan.trustInputs) x = em.maxnum(em.minnum(x, em.c(in.hi)), em.c(in.lo));
             v.c[ch] = x;
         }
         if (!v.rgb) v.c[1] = v.c[2] = v.c[0];
