@@ -89,8 +89,7 @@ struct CompileOptions {
     // tiered: a quick kernel first and the optimized one in the background.
     enum class Codegen { Tiered, Quick, Optimized } codegen = Codegen::Tiered;
     // assume=unit: the host promises finite directions with |w| within 1e-3
-    // of 1, finite inputs inside their declared ranges (and u in [0, 1) for
-    // the sampler). Compiled kernels then skip the work that only detects
+    // of 1 and finite inputs (and u in [0, 1) for the sampler). Compiled kernels then skip the work that only detects
     // invalid lanes (LoweringPlan::trustInputs): on such inputs the outputs
     // are bit-identical to the default's; batch calls return 0 and the
     // status array is all 0; other inputs give undefined values, but never

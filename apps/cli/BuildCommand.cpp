@@ -193,8 +193,8 @@ std::string headerText(const BuildOptions& opt, const AotKernel& aot, const AotT
     h += " * length is not 1 within 1e-3 gives 0 and counts as an invalid lane.\n";
     if (opt.assume == "unit") {
         h += " * Built with --assume unit: the caller promises finite unit directions\n";
-        h += " * (within 1e-3) and finite inputs inside their ranges; on those the\n";
-        h += " * outputs are the default build's, and the batch functions return 0.\n";
+        h += " * (within 1e-3) and finite inputs; on those the outputs are the\n";
+        h += " * default build's, and the batch functions return 0.\n";
         h += " * Other inputs give undefined values (never a crash).\n";
     }
     h += " *\n";

@@ -6,14 +6,14 @@
 // x masking x Fresnel combination, and every model's own hard cases), those
 // that bring a model not seen before: every NDF, masking and Fresnel term,
 // every NDF under a Smith masking (the tabulated Lambdas of gtr, student_t
-// and epd among them) and under energy compensation (the Kulla-Conty
-// tables); all 534 took 100 s, these a few. Each is compiled in one of the
+// and epd among them), and energy compensation (the Kulla-Conty tables)
+// with and without one; all 534 took 100 s, these a few. Each is compiled in one of the
 // eight kernel kinds (scalar, SIMD 4/8/16, exact and fast) in turn, with and
 // without the promise. Lanes: the material's hard-case sample and random
 // pairs with random in-range inputs; the valid ones are compared bit for
 // bit, every lane (NaN, infinite, huge, zero and non-unit directions,
-// inputs outside their ranges) is evaluated. The sampler (sample and pdf
-// batches), where the material has one in IR, is compared the same way.
+// non-finite inputs) is evaluated. The sampler (sample and pdf batches) of
+// every other material, where it has one in IR, is compared the same way.
 #include "Checker.h"
 #include "HardCases.h"
 #include "Kernel.h"
@@ -61,23 +61,16 @@ struct Lanes {
     }
 };
 
-// Whether a case keeps the promise: finite unit directions (away from the
-// 1e-3 bound, where a float body and a double body may decide either way)
-// and finite inputs inside their declared ranges (a -0 at a bound of 0
-// counts as outside: the promise keeps it, the default's clamp may not).
-bool promised(const CheckedMaterial& m, const HardCase& c) {
+// Whether a case keeps the promise: finite unit directions, away from the
+// 1e-3 bound (where a float body and a double body may decide either way),
+// and finite inputs. Inputs outside their ranges are kept: the kernels still
+// clamp them.
+bool promised(const HardCase& c) {
     if (c.invalidInput) return false;
     for (const auto* w : {&c.wi, &c.wo}) {
         double len = std::sqrt((*w)[0] * (*w)[0] + (*w)[1] * (*w)[1] + (*w)[2] * (*w)[2]);
         if (!(std::fabs(len - 1) <= 0.9e-3)) return false;
     }
-    for (const CheckedInput& in : m.inputs)
-        for (int ch = 0; ch < in.slotCount(); ++ch) {
-            double x = float(c.slots[in.firstSlot + ch]);
-            if (!std::isfinite(x)) return false;
-            if (in.hasRange && (x < in.lo || x > in.hi || (x == 0 && std::signbit(x) && (in.lo == 0 || in.hi == 0))))
-                return false;
-        }
     return true;
 }
 
@@ -85,7 +78,7 @@ Lanes lanesFor(const CheckedMaterial& m, size_t seed) {
     Lanes l;
     l.slots.resize(size_t(m.slotCount));
     std::mt19937 rng{unsigned(seed)};
-    for (const HardCase& c : hardCases(m)) l.add(c.wi, c.wo, c.slots, promised(m, c), rng);
+    for (const HardCase& c : hardCases(m)) l.add(c.wi, c.wo, c.slots, promised(c), rng);
     // Random pairs over the sphere (below the horizon too), inputs uniform
     // in their ranges (unranged ones at their defaults).
     std::normal_distribution<double> gauss;
@@ -165,7 +158,7 @@ void compareBits(const char* what, const std::vector<float>& a, const std::vecto
 }
 
 // The materials that bring a model (or an NDF under a Smith masking, or
-// under energy compensation) that the ones before did not.
+// energy compensation) that the ones before did not.
 std::vector<HardCaseMaterial> coveringMaterials(const std::vector<HardCaseMaterial>& all) {
     std::set<std::string> seen;
     std::vector<HardCaseMaterial> out;
@@ -176,7 +169,7 @@ std::vector<HardCaseMaterial> coveringMaterials(const std::vector<HardCaseMateri
         const CheckedMaterial& m = program.materials.front();
         std::vector<std::string> keys = {"ndf " + hm.ndf, "masking " + hm.masking, "fresnel " + hm.fresnel};
         if (m.masking.model->smith) keys.push_back("smith " + hm.ndf);
-        if (m.compensatesEnergy()) keys.push_back("energy " + hm.ndf);
+        if (m.compensatesEnergy()) keys.push_back(m.masking.model->smith ? "energy smith" : "energy");
         bool adds = false;
         for (const std::string& k : keys) adds |= seen.insert(k).second;
         if (adds) out.push_back(hm);
@@ -206,7 +199,7 @@ MaterialRun runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& comp
     Lanes l = lanesFor(m, index);
     r.lanes = l.size();
     r.valid = size_t(std::count(l.valid.begin(), l.valid.end(), 1));
-    r.sampled = plain->samplerTier() == "jit";
+    r.sampled = index % 2 == 0 && plain->samplerTier() == "jit";
     Outputs a = run(*plain, l, r.sampled), b = run(*trusting, l, r.sampled);
     for (int c = 0; c < 3; ++c) compareBits("rgb", a.rgb[c], b.rgb[c], l, where, r);
     if (b.evalReturned != 0) r.failures.push_back(fmt::format("{}: eval batch returned {}", where, b.evalReturned));
@@ -252,7 +245,7 @@ TEST_CASE("assume=unit: the default kernels' bits on valid inputs, and no crash 
     CHECK(materials.size() >= 20);
     CHECK(valid > materials.size() * 200);
     CHECK(lanes - valid > materials.size() * 50);
-    CHECK(sampled * 2 > materials.size());
+    CHECK(sampled * 3 > materials.size());
     MESSAGE(fmt::format("assume=unit: {} of {} materials, {} lanes ({} valid), {} samplers compared, {:.1f} s",
                         materials.size(), all.size(), lanes, valid, sampled,
                         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()));
