@@ -51,6 +51,7 @@ LoweringOptions loweringOptionsFor(const CompileOptions& options, const EnergyTa
     lowering.math = options.math;
     lowering.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
     lowering.variant.floatFirst = options.floatFirst;
+    lowering.trustInputs = options.assumeUnit;
     lowering.width = simd ? width : 4;
     lowering.emitScalar = !simd;
     lowering.emitBatch = simd;
@@ -295,6 +296,10 @@ std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) 
             if (value == "on") out.floatFirst = true;
             else if (value == "off") out.floatFirst = false;
             else return fmt::format("float_first '{}' is not on or off", value);
+        } else if (key == "assume") {
+            if (value == "unit") out.assumeUnit = true;
+            else if (value == "none") out.assumeUnit = false;
+            else return fmt::format("assume '{}' is not unit or none", value);
         } else if (key == "codegen") {
             if (value == "tiered") out.codegen = Codegen::Tiered;
             else if (value == "quick") out.codegen = Codegen::Quick;
@@ -320,7 +325,7 @@ std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) 
                 return fmt::format("{}: expected one value or three (r,g,b)", key);
             out.bindings[key.substr(4)] = values;
         } else {
-            return fmt::format("unknown option '{}' (known: backend, math, tolerance, width, cache, float_first, codegen, set.NAME)", key);
+            return fmt::format("unknown option '{}' (known: backend, math, tolerance, width, cache, float_first, codegen, assume, set.NAME)", key);
         }
     }
     return "";
@@ -330,6 +335,7 @@ std::string CompileOptions::canonical() const {
     std::string s = fmt::format("backend={};math={};width={}", backendName(backend), mathModeName(math), width);
     if (tolerance) s += fmt::format(";tolerance={}", *tolerance);
     if (!floatFirst) s += ";float_first=off";
+    if (assumeUnit) s += ";assume=unit";
     if (codegen == Codegen::Quick) s += ";codegen=quick";
     for (const auto& [name, values] : bindings) {
         s += ";set." + name + "=";

@@ -11,7 +11,7 @@
 //   backend=scalar|simd|interp   math=exact|fast   tolerance=X
 //   width=4|8|16                 set.NAME=VALUE (rgb: set.NAME=r,g,b)
 //   cache=on|off|memory          float_first=on|off
-//   codegen=tiered|quick|optimized
+//   codegen=tiered|quick|optimized   assume=unit|none
 //
 // Tiered compilation (the default): a compile returns a kernel whose code was
 // emitted quickly (FacetJit::Level::Quick, about half the emission time, the
@@ -88,6 +88,13 @@ struct CompileOptions {
     // How the object code is emitted (FacetJit::Level): quick, optimized, or
     // tiered: a quick kernel first and the optimized one in the background.
     enum class Codegen { Tiered, Quick, Optimized } codegen = Codegen::Tiered;
+    // assume=unit: the host promises finite directions with |w| within 1e-3
+    // of 1 and finite inputs (and u in [0, 1) for the sampler). Compiled kernels then skip the work that only detects
+    // invalid lanes (LoweringPlan::trustInputs): on such inputs the outputs
+    // are bit-identical to the default's; batch calls return 0 and the
+    // status array is all 0; other inputs give undefined values, but never
+    // a crash or an out-of-bounds read. The interpreter always validates.
+    bool assumeUnit = false;
 
     // Parses the ';'-separated option string; returns an error message or "".
     static std::string parse(const std::string& spec, CompileOptions& out);
@@ -149,7 +156,8 @@ public:
     // is 0), 0 for n = 0 and -1 for n < 0. `status`, when not null, receives
     // one byte per lane: 0 valid, 1 invalid (a non-finite or non-unit
     // direction, a non-finite input, a model parameter not finite in float,
-    // or a result float cannot hold) -- on every backend alike.
+    // or a result float cannot hold) -- on every backend alike; compiled
+    // kernels under assume=unit return 0 and a status of 0s.
     int64_t evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
                       float* const rgb[3], uint8_t* status = nullptr) const;
 

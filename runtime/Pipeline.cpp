@@ -112,7 +112,7 @@ void plan(PipelineRun& run, const PipelineControl& control, const PipelineTarget
     if (!target.jit) run.lowering.x86Target = target.machine->getTargetTriple().isX86();
     internal_assert(!run.specialized.compensatesEnergy() || run.lowering.energyTable)
         << "energy compensation planned without its table";
-    run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.x86Target);
+    run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.x86Target, run.lowering.trustInputs);
 }
 
 void lower(PipelineRun& run, const PipelineControl& control) {

@@ -43,7 +43,7 @@ struct BuildUsageError {
 };
 
 struct BuildOptions {
-    std::string file, material, backend = "simd", math = "exact", width, prefix, out, header, emit = "obj";
+    std::string file, material, backend = "simd", math = "exact", width, prefix, out, header, emit = "obj", assume;
     std::vector<std::string> sets;  // NAME=VALUE
     AotTargetRequest target;
 };
@@ -191,6 +191,12 @@ std::string headerText(const BuildOptions& opt, const AotKernel& aot, const AotT
     h += " * n = +z, wi (towards the light) and wo (towards the viewer) unit vectors\n";
     h += " * pointing away from the surface. A non-finite input or a direction whose\n";
     h += " * length is not 1 within 1e-3 gives 0 and counts as an invalid lane.\n";
+    if (opt.assume == "unit") {
+        h += " * Built with --assume unit: the caller promises finite unit directions\n";
+        h += " * (within 1e-3) and finite inputs; on those the outputs are the\n";
+        h += " * default build's, and the batch functions return 0.\n";
+        h += " * Other inputs give undefined values (never a crash).\n";
+    }
     h += " *\n";
     h += fmt::format(" * Input slots ({}_INPUT_COUNT floats; an rgb input takes three, r g b).\n", macro);
     h += " * Values outside a range are clamped to it.\n";
@@ -234,6 +240,7 @@ BuildOptions parseBuildArgs(const std::vector<std::string>& args) {
         else if (a == "--backend") opt.backend = value();
         else if (a == "--math") opt.math = value();
         else if (a == "--width") opt.width = value();
+        else if (a == "--assume") opt.assume = value();
         else if (a == "--set") opt.sets.push_back(value());
         else if (a == "--target") opt.target.triple = value();
         else if (a == "--cpu") opt.target.cpu = value();
@@ -267,6 +274,7 @@ int runBuild(const std::vector<std::string>& args) {
     if (opt.math.rfind("tolerance=", 0) == 0) spec += ";" + opt.math;
     else spec += ";math=" + opt.math;
     if (!opt.width.empty()) spec += ";width=" + opt.width;
+    if (!opt.assume.empty()) spec += ";assume=" + opt.assume;
     for (const std::string& s : opt.sets) {
         if (s.find('=') == std::string::npos || s[0] == '=')
             throw BuildUsageError{fmt::format("--set expects NAME=VALUE, got '{}'", s)};

@@ -32,9 +32,10 @@ const char* kUsage =
     "usage: facet <command> [options]\n"
     "  check FILE...                       check material files, print diagnostics\n"
     "  eval FILE --in IN.csv [--out OUT.csv] [--material NAME] [--backend interp|scalar|simd]\n"
-    "       [--math exact|fast] [--width 4|8|16] [--set NAME=VALUE]...\n"
+    "       [--math exact|fast] [--width 4|8|16] [--assume unit] [--set NAME=VALUE]...\n"
     "                                      evaluate the BRDF for each CSV row\n"
-    "  ir FILE [--material NAME] [--simd] [--stages|--plan] [--math exact|fast] [--width N] [--set NAME=VALUE]...\n"
+    "  ir FILE [--material NAME] [--simd] [--stages|--plan] [--math exact|fast] [--width N] [--assume unit]\n"
+    "       [--set NAME=VALUE]...\n"
     "                                      print the optimized LLVM IR (--stages: every stage;\n"
     "                                      --plan: only the lowering plan)\n"
     "  lut FILE [--material NAME] -o TABLES.exr   write the Kulla-Conty E/E_avg tables (EXR)\n"
@@ -43,8 +44,8 @@ const char* kUsage =
     "  render FILE -o OUT.png|.exr [--plot lobe|ndf] [--size N] [--light T,P] ...\n"
     "                                      lit-sphere preview, lobe or NDF plot ('facet render' for all options)\n"
     "  build FILE -o OUT.o [--header OUT.h] [--material NAME] [--backend scalar|simd]\n"
-    "       [--math exact|fast|tolerance=X] [--width N] [--set NAME=VALUE]... [--target TRIPLE] [--cpu CPU]\n"
-    "       [--features +a,-b] [--prefix SYMBOL] [--emit obj|asm|llvm-ir|bitcode]\n"
+    "       [--math exact|fast|tolerance=X] [--width N] [--assume unit] [--set NAME=VALUE]... [--target TRIPLE]\n"
+    "       [--cpu CPU] [--features +a,-b] [--prefix SYMBOL] [--emit obj|asm|llvm-ir|bitcode]\n"
     "                                      a self-contained object + C header, for the host or another target\n"
     "  sample FILE --wo X,Y,Z [-n N] [--out OUT.csv] [--seed S] [--material NAME]\n"
     "                                      importance-sample wi (reference sampler): wi, pdf, weight per row\n"
@@ -101,7 +102,7 @@ void checkBindings(const CheckedMaterial& material, const Bindings& bindings) {
 }
 
 struct EvalOptions {
-    std::string file, material, backend = "interp", in, out, math = "exact", width;
+    std::string file, material, backend = "interp", in, out, math = "exact", width, assume;
     Bindings bindings;
 };
 
@@ -109,6 +110,7 @@ struct EvalOptions {
 CompileOptions compileOptionsFor(const EvalOptions& opt) {
     std::string spec = fmt::format("backend={};math={}", opt.backend, opt.math);
     if (!opt.width.empty()) spec += ";width=" + opt.width;
+    if (!opt.assume.empty()) spec += ";assume=" + opt.assume;
     CompileOptions options;
     std::string error = CompileOptions::parse(spec, options);
     if (!error.empty()) throw UsageError{error};
@@ -117,7 +119,7 @@ CompileOptions compileOptionsFor(const EvalOptions& opt) {
 
 int cmdEval(const std::vector<std::string>& args) {
     EvalOptions opt;
-    bool mathGiven = false, widthGiven = false;
+    bool mathGiven = false, widthGiven = false, assumeGiven = false;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         auto value = [&]() -> const std::string& {
@@ -131,16 +133,17 @@ int cmdEval(const std::vector<std::string>& args) {
         else if (a == "--set") parseSet(value(), opt.bindings);
         else if (a == "--math") opt.math = value(), mathGiven = true;
         else if (a == "--width") opt.width = value(), widthGiven = true;
+        else if (a == "--assume") opt.assume = value(), assumeGiven = true;
         else if (!a.empty() && a[0] == '-') throw UsageError{fmt::format("eval: unknown option '{}'", a)};
         else if (opt.file.empty()) opt.file = a;
         else throw UsageError{fmt::format("eval: more than one material file ('{}' and '{}')", opt.file, a)};
     }
     if (opt.file.empty()) throw UsageError{"eval: no material file given"};
     if (opt.in.empty()) throw UsageError{"eval: --in IN.csv is required"};
-    if (opt.backend == "interp" && (mathGiven || widthGiven))
+    if (opt.backend == "interp" && (mathGiven || widthGiven || assumeGiven))
         throw UsageError{fmt::format("eval: {} applies to the scalar and simd backends; the interp backend "
                                      "computes in double (add --backend scalar or simd)",
-                                     mathGiven ? "--math" : "--width")};
+                                     mathGiven ? "--math" : widthGiven ? "--width" : "--assume")};
     CompileOptions compileOptions = compileOptionsFor(opt);
     const bool jitBackend = compileOptions.backend != Backend::Interp;
 
@@ -354,6 +357,7 @@ int cmdIr(const std::vector<std::string>& args) {
         else if (a == "--set") parseSet(value(), opt.bindings);
         else if (a == "--math") opt.math = value();
         else if (a == "--width") opt.width = value();
+        else if (a == "--assume") opt.assume = value();
         else if (!a.empty() && a[0] == '-') throw UsageError{fmt::format("ir: unknown option '{}'", a)};
         else if (opt.file.empty()) opt.file = a;
         else throw UsageError{"ir: more than one material file"};

@@ -17,7 +17,9 @@ namespace facet {
 using llvm::Value;
 
 
-// Inputs: non-finite values are invalid; in-range clamping. Inputs, lets
+// Inputs: non-finite values are invalid (a test the plan drops where it
+// trusts the inputs); in-range clamping (kept there too: measured within
+// noise, and a -0 at a bound of 0 would otherwise keep its sign). Inputs, lets
 // and model parameters are evaluated in the expression type: a parameter
 // such as alpha enters exp() multiplied by tens in the NDF tails, and the
 // user's arithmetic must not lose accuracy the reference keeps.
@@ -30,7 +32,7 @@ void LaneEmitter::lowerInputsAndLets(const std::vector<Value*>& slots) {
         v.rgb = in.type == ValueType::Rgb;
         for (int ch = 0; ch < in.slotCount(); ++ch) {
             Value* x = slots.at(in.firstSlot + ch);
-            markInvalid(builder.CreateNot(fm.isFinite(x)));
+            rejectInput([&] { return builder.CreateNot(fm.isFinite(x)); });
             x = em.convert(x, em.type());
             if (in.hasRange) x = em.maxnum(em.minnum(x, em.c(in.hi)), em.c(in.lo));
             v.c[ch] = x;

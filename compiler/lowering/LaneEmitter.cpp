@@ -90,9 +90,10 @@ LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value
 Value* LaneEmitter::checkedLength2(MathEmitter& math, const std::array<Value*, 3>& w, std::array<Value*, 3>& widened) {
     llvm::IRBuilder<>& b = builder;
     Value* len2 = length2(math, w, widened);
-    Value* unit = b.CreateAnd(math.ge(len2, math.c((1 - kUnitTolerance) * (1 - kUnitTolerance))),
-                              math.le(len2, math.c((1 + kUnitTolerance) * (1 + kUnitTolerance))));
-    markInvalid(b.CreateNot(unit));
+    rejectInput([&] {
+        return b.CreateNot(b.CreateAnd(math.ge(len2, math.c((1 - kUnitTolerance) * (1 - kUnitTolerance))),
+                                       math.le(len2, math.c((1 + kUnitTolerance) * (1 + kUnitTolerance)))));
+    });
     return len2;
 }
 
@@ -142,8 +143,12 @@ Value* LaneEmitter::unitCorrection(const std::array<Value*, 3>& w) {
     // is recomputed by the precise body, which decides. (NaN fails the
     // ordered test.) Float compares keep the lane masks in float-sized
     // lanes, where double ones make the backend pack every mask.
+    // Under the host's promise the test goes, and a lane whose delta equals
+    // a rounded bound stays in this body.
     const double lo = (1 - kUnitTolerance) * (1 - kUnitTolerance) - 1.0, hi = (1 + kUnitTolerance) * (1 + kUnitTolerance) - 1.0;
-    markInvalid(builder.CreateNot(builder.CreateAnd(fm.lt(fm.c(double(float(lo))), delta), fm.lt(delta, fm.c(double(float(hi)))))));
+    rejectInput([&] {
+        return builder.CreateNot(builder.CreateAnd(fm.lt(fm.c(double(float(lo))), delta), fm.lt(delta, fm.c(double(float(hi))))));
+    });
     // (1 + delta)^(-1/2) - 1, the series of unitDirection() to delta^3:
     // the rest, 0.28 delta^4 <= 5e-12 for |delta| <= 2e-3, is far below
     // the float rounding of the corrected values.

@@ -112,6 +112,14 @@ public:
 
     // Lane validity: `cond` lanes are invalid (value 0, counted).
     void markInvalid(llvm::Value* cond);
+    // The lanes `cond()` emits break the host's promise of valid inputs (a
+    // direction not finite or not unit, a non-finite input, u outside [0,
+    // 1)): invalid lanes; where the plan trusts the inputs the test is not
+    // emitted at all.
+    template <typename Cond>
+    void rejectInput(Cond&& cond) {
+        if (!plan.trustInputs) markInvalid(cond());
+    }
     // Guarded body only: `cond` lanes are recomputed in the kernel's other body.
     void distrust(llvm::Value* cond);
 

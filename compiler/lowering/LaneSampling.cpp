@@ -252,7 +252,8 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
         Vec woF{};
         wo = unitDirection(woIn, woF);
     }
-    for (Value* x : u) markInvalid(b.CreateNot(b.CreateAnd(fm.ge(x, fm.c(0.0)), fm.lt(x, fm.c(1.0)))));
+    for (Value* x : u)
+        rejectInput([&] { return b.CreateNot(b.CreateAnd(fm.ge(x, fm.c(0.0)), fm.lt(x, fm.c(1.0)))); });
     lowerInputsAndLets(slots);
 
     SamplingTerms t = samplingTerms(wo);

@@ -49,6 +49,8 @@ struct LoweringOptions {
     // hosts do not pay for it.
     bool emitEval = true;
     bool emitSampling = false;
+    // The host's promise of valid inputs (assume=unit; LoweringPlan::trustInputs).
+    bool trustInputs = false;
     // Whether the target is x86, whose MXCSR fast kernels set to flush
     // subnormals (LoweringPlan::flushDenormals). The host's by default; an
     // ahead-of-time build for another target sets its own.

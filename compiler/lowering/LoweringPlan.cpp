@@ -206,10 +206,12 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
 
 }  // namespace
 
-LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool x86Target) {
+LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool x86Target,
+                          bool trustInputs) {
     const MaterialEmitters em = termEmitters(material);
     LoweringPlan plan;
     plan.variant = variant;
+    plan.trustInputs = trustInputs;
     plan.ndfIsotropic = ndfIsIsotropic(material.ndf);
     plan.compensatesEnergy = material.compensatesEnergy();
     // Fast kernels run with subnormals flushed (MXCSR FTZ/DAZ), as
@@ -310,6 +312,7 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
        << " at-most-one=" << yesNo(plan.fresnel.atMostOne) << " can-vanish=" << yesNo(plan.fresnel.canVanish) << "\n";
     os << "energy-compensation: " << yesNo(plan.compensatesEnergy) << "\n";
     os << "flush-denormals: " << yesNo(plan.flushDenormals) << "\n";
+    os << "trust-inputs: " << yesNo(plan.trustInputs) << "\n";
     os << "sampling: specular=" << specularSamplingName(plan.sampling.specular)
        << " cosine-lobe=" << yesNo(plan.sampling.cosineLobe)
        << " compensation-albedo=" << yesNo(plan.sampling.compensationAlbedo) << "\n";

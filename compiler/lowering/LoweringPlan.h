@@ -169,12 +169,24 @@ struct LoweringPlan {
     FresnelPlan fresnel;
     bool compensatesEnergy = false;
     bool flushDenormals = false;  // fast kernels on x86: MXCSR FTZ/DAZ for the call
+    // The host's promise (assume=unit): finite directions with |w| within
+    // 1e-3 of 1, finite inputs, u in [0, 1). The kernel then drops the work
+    // whose only purpose is to find lanes that break it: the direction,
+    // input and u tests, the invalid count and the status (0). It keeps
+    // everything that can change a value on such inputs: the normalization,
+    // the input range clamps, the clamps of model parameters to their
+    // domains and their NaN/overflow tests, the output check, the guards of
+    // two-body kernels; so its outputs are bit-identical to the default's
+    // there.
+    bool trustInputs = false;
     SamplingPlan sampling;
 };
 
 // `material` checked (and usually specialized). `x86Target`: the kernel's
-// target can flush subnormals through MXCSR.
-LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool x86Target);
+// target can flush subnormals through MXCSR. `trustInputs`: the host's
+// promise of valid inputs (LoweringPlan::trustInputs).
+LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool x86Target,
+                          bool trustInputs = false);
 
 // The plan as text, one decision per line (`facet ir --plan`).
 std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan);

@@ -386,6 +386,11 @@ expect_eq "$(printf '%s\n' "$out" | grep -E '^(batch-bodies|smith-lambda|flush-d
     "batch-bodies: float-first"$'\n'"smith-lambda: none"$'\n'"flush-denormals: no" "ir --plan: the decisions"
 run "$FACET" ir test.mat --simd --plan --math fast
 expect_eq "$(printf '%s\n' "$out" | grep -E '^batch-bodies:')" "batch-bodies: guarded-fast" "ir --plan --math fast"
+run "$FACET" ir test.mat --simd --plan --assume unit
+expect_eq "$(printf '%s\n' "$out" | grep -E '^trust-inputs:')" "trust-inputs: yes" "ir --plan --assume unit"
+run "$FACET" ir test.mat --plan --assume nothing
+expect_rc 2 "ir --assume with an unknown promise"
+expect_first_line "$err" "facet: assume 'nothing' is not unit or none" "ir --assume nothing: message"
 run "$FACET" ir test.mat --plan --stages
 expect_rc 2 "ir --plan with --stages"
 expect_first_line "$err" "facet: ir: --stages and --plan exclude each other" "ir --plan --stages: message"

@@ -24,7 +24,13 @@ typedef struct facet_kernel facet_kernel;
    codegen=tiered|quick|optimized (default tiered: the kernel returned runs
    quickly emitted code, and a background thread of the library swaps in
    the optimized code, which computes the same values, about 5-15 ms
-   later; optimized: compile returns only once that code is linked).
+   later; optimized: compile returns only once that code is linked),
+   assume=unit|none (unit: the host promises finite directions with |w|
+   within 1e-3 of 1, finite inputs and u in [0, 1);
+   compiled kernels then skip the work that only detects invalid lanes,
+   give the default's bits on such inputs, return 0 from the batch calls
+   and report every lane valid; other inputs give undefined values, never a
+   crash. default none).
    NULL or "" = defaults (simd, exact,
    the host's width). NULL material = the first in the file. On failure
    returns NULL and writes the diagnostic ("file:line:col: error: ...") into
