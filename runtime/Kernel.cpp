@@ -545,7 +545,7 @@ void Kernel::ensureSampler() const {
             LoweringOptions lowering = samplerLowering_;
             lowering.emitEval = false;
             lowering.emitSampling = true;
-            if (planLowering(material_, lowering.variant, lowering.x86Target).sampling.specular ==
+            if (planLowering(material_, lowering.variant, lowering.x86Target, lowering.trustInputs).sampling.specular ==
                 SpecularSampling::None)
                 return;
             std::optional<CachedKernel> cached =
