@@ -224,12 +224,16 @@ std::array<Real, 3> ResolvedMaterial<Real>::brdf(const Vec3<Real>& wi, const Vec
         Real lobe = ndf->formulas.template get<Real>().wholeLobe(ndfArgs, h, ci, co);
         for (int ch = 0; ch < 3; ++ch) out[ch] = fresnelAt(c, s2, ch) * lobe;
     } else {
-        // D G / (4 ci co) as D (G / (ci co)) / 4: no 0 * Inf or 0/0 at grazing.
-        Real dg = GOverCosines(wi, wo, h, c, D(h)) / 4;
-        for (int ch = 0; ch < 3; ++ch) {
-            Real f = fresnelAt(c, s2, ch);
-            out[ch] = f == 0 ? Real(0) : f * dg;  // F = 0 (eta = 1): no 0 * Inf
-        }
+        // D F G / (4 ci co) as (D F_max / 4) (G / (ci co)) (F / F_max): no 0 *
+        // Inf or 0/0 at grazing, and G / (ci co), which grows like 1/(n.w),
+        // scaled by the whole rest of the largest channel before it can
+        // overflow where that channel does not.
+        std::array<Real, 3> f;
+        Real fMax = 0;
+        for (int ch = 0; ch < 3; ++ch) f[ch] = fresnelAt(c, s2, ch), fMax = f[ch] > fMax ? f[ch] : fMax;
+        Real dg = fMax > 0 ? GOverCosines(wi, wo, h, c, D(h) * fMax / 4) : Real(0);
+        // F = 0 (eta = 1): no 0 * Inf; a NaN F stays NaN.
+        for (int ch = 0; ch < 3; ++ch) out[ch] = f[ch] == 0 ? Real(0) : f[ch] == fMax ? dg : f[ch] / fMax * dg;
     }
     if (energy->compensates) {
         std::array<Real, 3> ms = kullaContyBrdf(*this, ci, co);

@@ -72,22 +72,47 @@ LambdaAxes lambdaAxes(const NdfEntry& ndf) {
     return ndf.shapeInvariant ? LambdaAxes::Slope : LambdaAxes::SlopeAlpha;
 }
 
-double LambdaGrid::alphaLo() const { return std::exp(y0); }
-double LambdaGrid::alphaHi() const { return std::exp(y0 + (rows - 1) * yStep); }
+namespace {
 
-const LambdaGrid& lambdaGrid(LambdaAxes axes) {
-    static constexpr LambdaGrid slope{LambdaTable::kX0, LambdaTable::kStep, LambdaTable::kSize, 0, 1, 1};
-    static constexpr LambdaGrid slopeAlpha{LambdaTable::kAlphaX0, LambdaTable::kAlphaXStep, LambdaTable::kAlphaXSize,
-                                           LambdaTable::kY0, LambdaTable::kYStep, LambdaTable::kRows};
-    return axes == LambdaAxes::Slope ? slope : slopeAlpha;
+// asinh(s b), b = 1/alpha^2 - 1 formed as (1 - alpha)(1 + alpha) / alpha^2,
+// which keeps its relative accuracy near alpha = 1.
+double rowCoordinate(double s, double alpha) {
+    return std::asinh(s * (1 - alpha) * (1 + alpha) / (alpha * alpha));
 }
 
-double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, LambdaAxes axes, int k,
+}  // namespace
+
+double LambdaGrid::rowOf(double alpha) const { return (rowCoordinate(rowScale, alpha) - y0) / yStep; }
+
+double LambdaGrid::alphaAt(double row) const {
+    double b = std::sinh(y0 + row * yStep) / rowScale;
+    return 1 / std::sqrt(1 + b);
+}
+
+LambdaGrid lambdaGrid(const NdfEntry& ndf, const std::vector<double>& shape, LambdaAxes axes) {
+    if (axes == LambdaAxes::Slope)
+        return {LambdaTable::kX0, LambdaTable::kStep, LambdaTable::kSize, 0, 1, 1, 1};
+    LambdaRows spec = ndf.lambdaRows ? ndf.lambdaRows(shape) : LambdaRows{};
+    internal_assert(spec.scale > 0 && spec.step > 0 && spec.alphaLo > 0 && spec.alphaLo < spec.alphaHi)
+        << "Lambda rows of " << lambdaTableName(ndf, shape);
+    LambdaGrid g{LambdaTable::kAlphaX0, LambdaTable::kAlphaXStep, LambdaTable::kAlphaXSize, 0, spec.step, 1,
+                 spec.scale};
+    // From alphaHi down to alphaLo, in whole steps of at most spec.step (a
+    // row beyond either end would hold the Lambda of clamped parameters).
+    double yHi = rowCoordinate(spec.scale, spec.alphaHi), yLo = rowCoordinate(spec.scale, spec.alphaLo);
+    g.rows = int(std::ceil((yLo - yHi) / spec.step)) + 1;
+    g.y0 = yHi;
+    g.yStep = (yLo - yHi) / (g.rows - 1);
+    g.alphaLo = g.alphaAt(g.rows - 1);
+    g.alphaHi = g.alphaAt(0);
+    return g;
+}
+
+double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, const LambdaGrid& g, int k,
                        CosLambdaSource cosLambdaAt) {
     // tan(theta) = 1/(a alpha), and f = a Lambda = (n.v) Lambda / (alpha sin(theta)).
-    const LambdaGrid& g = lambdaGrid(axes);
     double a = std::exp(g.x0 + (k % g.size) * g.step);
-    double alpha = std::exp(g.y0 + (k / g.size) * g.yStep);
+    double alpha = g.alphaAt(k / g.size);
     double theta = std::atan2(1.0, a * alpha);
     double f = cosLambdaAt(ndf, shape, alpha, theta) / (alpha * std::sin(theta));
     internal_assert(std::isfinite(f) && f >= 0) << "tabulated Lambda of " << lambdaTableName(ndf, shape) << ": f("
@@ -104,13 +129,14 @@ std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const std::v
     table->ndf = &ndf;
     table->shape = shape;
     table->axes = axes;
-    const LambdaGrid& g = table->grid();
+    table->grid = lambdaGrid(ndf, shape, axes);
+    const LambdaGrid& g = table->grid;
     table->z.resize(size_t(g.size) * g.rows);
     // Two threads for a SlopeAlpha table (its ~28k nodes): even and odd nodes.
     int threads = axes == LambdaAxes::Slope ? 1 : 2;
     auto fill = [&](int first) {
         for (int k = first; k < int(table->z.size()); k += threads)
-            table->z[k] = lambdaTableNode(ndf, shape, axes, k, cosLambdaAt);
+            table->z[k] = lambdaTableNode(ndf, shape, g, k, cosLambdaAt);
     };
     std::vector<std::thread> helpers;
     for (int t = 1; t < threads; ++t) helpers.emplace_back(fill, t);
@@ -140,12 +166,12 @@ int lagrangeStencil(double c, int size, int n, double* w) {
 }  // namespace
 
 double LambdaTable::endSlope(int j) const {
-    const LambdaGrid& g = grid();
+    const LambdaGrid& g = grid;
     return z[size_t(j) * g.size + g.size - 1] - z[size_t(j) * g.size + g.size - 2];
 }
 
 double LambdaTable::fAt(double u, double v) const {
-    const LambdaGrid& g = grid();
+    const LambdaGrid& g = grid;
     double uc = std::min(u, g.size - 1.0);
     // 4 points along x for a Slope table, kAlphaOrder along both axes else.
     int nx = g.rows == 1 ? 4 : LambdaTable::kAlphaOrder, ny = g.rows == 1 ? 1 : LambdaTable::kAlphaOrder;
@@ -165,12 +191,12 @@ double LambdaTable::fAt(double u, double v) const {
 
 double LambdaTable::cosLambda(double proj, double vz, double alpha) const {
     if (!(proj > 0)) return 0;  // v = n (or alpha = 0): nothing is masked
-    const LambdaGrid& g = grid();
+    const LambdaGrid& g = grid;
     double v = 0;
     if (axes == LambdaAxes::SlopeAlpha) {
-        double clamped = std::clamp(alpha, g.alphaLo(), g.alphaHi());
+        double clamped = std::clamp(alpha, g.alphaLo, g.alphaHi);
         proj *= (clamped / alpha) * (clamped / alpha);
-        v = (std::log(clamped) - g.y0) / g.yStep;
+        v = std::clamp(g.rowOf(clamped), 0.0, g.rows - 1.0);
     }
     double root = std::sqrt(proj);
     double u = std::max((std::log(vz) - std::log(root) - g.x0) / g.step, 0.0);

@@ -43,29 +43,33 @@
 //
 // ---- the table in (a, alpha) -------------------------------------------------
 //
-// An isotropic NDF that is not shape-invariant (gtr: Lambda
-// depends on alpha and theta separately) gets a table in two axes (axes
-// SlopeAlpha; the catalog's shapeInvariant decides): the same z = log f(a)
-// with a = 1 / (alpha tan theta), now for the lobe of roughness alpha,
-// per constant shape value. Rows: y = log alpha uniform in [-9.25, 0]
-// (alpha from 9.6e-5 < kMinAlpha to 1), step 1/8 (75 rows); in each row x
-// uniform in [log 1e-5, log 9.9e6], step 1/16 (443 nodes): 33225 doubles,
-// 266 KB. Near shape invariance (small alpha) z barely depends on y; for
-// gtr with gamma far from 2 the dependence runs along the diagonal (a
-// uniform D has Lambda(theta) alone), which 6-point Lagrange across the rows
-// resolves (4 points left 4e-5); along x a Gaussian-like cutoff (z ~ -a^2)
-// needs 6 points too at this step (4 left 1.4e-5). Lookup:
-// 6 x 6-point Lagrange (the first node below the grid, each row's linear
-// tail beyond it, as above);
-// alpha outside [exp(y0), 1] is clamped, with proj rescaled to the clamped
-// alpha: beyond alpha = 1 Lambda is alpha = 1's at the same direction (the
-// NDFs' domains clamp alpha >= kMinAlpha already). The quadrature is the
-// one above at the row's alpha; the build runs on two threads.
+// An isotropic NDF that is not shape-invariant (gtr, gaussian, abc, sgd:
+// Lambda depends on alpha and theta separately) gets a table in two axes
+// (axes SlopeAlpha; the catalog's shapeInvariant decides): the same z = log
+// f(a) with a = 1 / (alpha tan theta), now for the lobe of roughness alpha
+// (the entry's equivalentAlphas), per constant shape value.
+// Rows: y = asinh(s b), b = 1/alpha^2 - 1, uniform with step 1/8 from the
+// entry's lambdaAlphaHi down to alpha = 9e-5 < kMinAlpha. Toward alpha -> 0
+// y ~ log(2 s) - 2 log(alpha), so the rows are uniform in log alpha (where
+// the lobe is nearly shape-invariant and z barely depends on y); near
+// alpha = 1 they are uniform in b, in which the lobes change: gtr's (1 + b
+// sin^2)^-gamma falls over b ~ 1/gamma, so s (the entry's lambdaRowScale,
+// ~ the exponent) keeps rows per unit of change the same for every gamma;
+// past alpha = 1 (b < 0, sgd's equivalent roughness reaches 3) y stays
+// finite. In each row x is uniform in [log 1e-5, log 9.9e6], step 1/16
+// (443 nodes). Near shape invariance z barely depends on y; for gtr with
+// gamma far from 2 the dependence runs along the diagonal (a uniform D has
+// Lambda(theta) alone), which 6-point Lagrange across the rows resolves;
+// along x a Gaussian-like cutoff (z ~ -a^2) needs 6 points too at this
+// step. Lookup: 6 x 6-point Lagrange (the first node below the grid, each
+// row's linear tail beyond it, as above); alpha outside the rows' range is
+// clamped, with proj rescaled to the clamped alpha (beyond lambdaAlphaHi,
+// Lambda is that of lambdaAlphaHi at the same direction). The quadrature
+// is the one above at the row's alpha; the build runs on two threads.
 // Accuracy (LambdaTableTests): within 1e-6 relative of the independent 2D
 // quadrature for alpha in [1e-3, 1] and theta up to 89.99 deg (or 1e-11
-// absolute where Lambda is tiny); gtr's near alpha = 1 changes over log
-// alpha ~ 1/(2 gamma), resolved so up to gamma = 2.5 (the entry refuses a
-// larger gamma under a Smith masking).
+// absolute where Lambda is tiny), for every tabulated NDF at the extremes
+// of its shape parameter.
 //
 // ---- sharing and caching -----------------------------------------------------
 //
@@ -91,7 +95,7 @@ namespace facet {
 struct CheckedMaterial;
 
 // Bumped whenever the table contents would change.
-constexpr int kLambdaTableVersion = 2;
+constexpr int kLambdaTableVersion = 3;
 
 // What a table's nodes span. Slope: the Lambda of a shape-invariant NDF, a
 // function of a alone (one row, alpha = 1). SlopeAlpha: the Lambda of an
@@ -100,17 +104,21 @@ constexpr int kLambdaTableVersion = 2;
 enum class LambdaAxes { Slope, SlopeAlpha };
 LambdaAxes lambdaAxes(const NdfEntry& ndf);
 
-// The nodes of a table: x = log a at x0 + i step (i < size), y = log alpha
-// at y0 + j yStep (j < rows); z[j size + i].
+// The nodes of a table: x = log a at x0 + i step (i < size), row
+// coordinate y = asinh(rowScale (1/alpha^2 - 1)) at y0 + j yStep (j <
+// rows); z[j size + i]. A Slope table has one row (alpha = 1).
 struct LambdaGrid {
     double x0, step;
     int size;
     double y0, yStep;
     int rows;
-    double alphaLo() const;  // exp(y0)
-    double alphaHi() const;  // exp(y0 + (rows - 1) yStep)
+    double rowScale;
+    double alphaLo = 1, alphaHi = 1;   // of the last and the first row
+    double rowOf(double alpha) const;  // (y(alpha) - y0) / yStep, unclamped
+    double alphaAt(double row) const;  // the inverse
 };
-const LambdaGrid& lambdaGrid(LambdaAxes axes);
+// The grid of the table of `ndf` with `shape` on `axes`.
+LambdaGrid lambdaGrid(const NdfEntry& ndf, const std::vector<double>& shape, LambdaAxes axes);
 
 class LambdaTable {
 public:
@@ -122,24 +130,21 @@ public:
     static constexpr double kAlphaX0 = -11.512925464970229;  // log(1e-5)
     static constexpr double kAlphaXStep = 1.0 / 16;
     static constexpr int kAlphaXSize = 442 + 1;              // to log(9.9e6)
-    static constexpr double kY0 = -9.25;                     // alpha = 9.6e-5 < kMinAlpha
-    static constexpr double kYStep = 1.0 / 8;
-    static constexpr int kRows = 74 + 1;                     // to alpha = 1
     static constexpr int kAlphaOrder = 6;                    // Lagrange points along x and y
 
     const NdfEntry* ndf = nullptr;
     std::vector<double> shape;  // the values of the NDF's tableShapeParams
     LambdaAxes axes = LambdaAxes::Slope;
-    std::vector<double> z;      // grid().rows x grid().size nodes, z = log f
+    LambdaGrid grid{};          // lambdaGrid(*ndf, shape, axes)
+    std::vector<double> z;      // grid.rows x grid.size nodes, z = log f
     double buildMillis = 0;     // the quadrature's time (read back from a cache file)
     std::string origin = "built";  // or "disk"
 
-    const LambdaGrid& grid() const { return lambdaGrid(axes); }
     // The slope of z per node beyond the last one of row j.
     double endSlope(int j = 0) const;
     // f = a Lambda from the nodes as described above at the node
-    // coordinates u = (log(a) - x0) / step >= 0 and v = (log(alpha) - y0) /
-    // yStep in [0, rows - 1] (0 for a Slope table).
+    // coordinates u = (log(a) - x0) / step >= 0 and v = grid.rowOf(alpha)
+    // in [0, rows - 1] (0 for a Slope table).
     double fAt(double u, double v = 0) const;
     // (n.v) Lambda(v) for proj = (vx ax)^2 + (vy ay)^2 and vz >= 0; a
     // SlopeAlpha table also needs the (isotropic) alpha, which it clamps
@@ -162,10 +167,10 @@ double quadratureCosLambda(const NdfEntry& ndf, const std::vector<double>& shape
 // A source of (n.v) Lambda(alpha, theta) for the nodes.
 using CosLambdaSource = double (*)(const NdfEntry&, const std::vector<double>&, double alpha, double theta);
 
-// Node k = j size + i of a table with `axes`: z = log f at a = exp(x0 + i
-// step), alpha = exp(y0 + j yStep), from the given (n.v) Lambda, floored
+// Node k = j size + i of a table on `grid`: z = log f at a = exp(x0 + i
+// step), alpha = grid.alphaAt(j), from the given (n.v) Lambda, floored
 // at kLogFloor.
-double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, LambdaAxes axes, int k,
+double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, const LambdaGrid& grid, int k,
                        CosLambdaSource cosLambdaAt = quadratureCosLambda);
 
 // The table of `ndf` for the given shape values from the process's memory

@@ -247,6 +247,25 @@ FormulaSet<Base> makeFormulas() {
 
 // ---- entries -----------------------------------------------------------------
 
+// Domain limits shared by the entries.
+constexpr double kMinAlpha = 1e-4;        // SPEC 3: smaller alpha is a delta lobe
+constexpr double kMaxPhongExponent = 2e8; // = beckmann_to_phong(kMinAlpha)
+constexpr double kMinEta = 1e-4;
+
+
+// The rows of a Lambda table in (a, alpha): the range of alpha (in the
+// equivalentAlphas sense) that the NDF's domain reaches with the shape
+// values (beyond it Lambda is that of the nearest end: its parameters clamp
+// there, and a row beyond a clamp would put a kink into the interpolation),
+// and s, about the exponent with which the lobe falls in b = 1/alpha^2 - 1
+// near alpha = 1 (so that the rows resolve its change there), and the
+// rows' step in asinh(s b) (1/16 in log alpha toward alpha = 0).
+struct LambdaRows {
+    double alphaLo = kMinAlpha, alphaHi = 1;
+    double scale = 1;
+    double step = 1.0 / 8;
+};
+
 struct NdfEntry : ModelInfo {
     // A whole BRDF lobe with its own normalization (ward): no D(m), no
     // masking term, no microfacet energy bound.
@@ -261,6 +280,11 @@ struct NdfEntry : ModelInfo {
     // For a tabulated Lambda: why these shape values have none (e.g. an
     // infinite Lambda), or "".
     std::string (*lambdaShapeError)(const std::vector<double>& shape) = nullptr;
+    // A tabulated Lambda that is not shape-invariant has a table in (a,
+    // alpha) whose rows are uniform in asinh(s (1/alpha^2 - 1))
+    // (LambdaTable.h), laid out for the shape values by this (null: the
+    // defaults of LambdaRows).
+    LambdaRows (*lambdaRows)(const std::vector<double>& shape) = nullptr;
     // Why its Smith Lambda is only an approximation ("" when exact).
     const char* lambdaNote = "";
     // Why its F = 1 albedo is not bounded by 1 whatever the masking ("" when
@@ -359,9 +383,5 @@ const FresnelEntry& fresnelEntry(const ModelInfo& m);
 const EnergyEntry& energyEntry(const ModelInfo& m);
 const DiffuseEntry& diffuseEntry(const ModelInfo& m);
 
-// Domain limits shared by the entries.
-constexpr double kMinAlpha = 1e-4;        // SPEC 3: smaller alpha is a delta lobe
-constexpr double kMaxPhongExponent = 2e8; // = beckmann_to_phong(kMinAlpha)
-constexpr double kMinEta = 1e-4;
 
 }  // namespace facet

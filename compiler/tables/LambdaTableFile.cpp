@@ -85,13 +85,14 @@ std::string encodeLambdaTable(const LambdaTable& t) {
     line("key", t.name());
     line("ndf", t.ndf->name);
     line("shape", shapeText(t.shape));
-    const LambdaGrid& g = t.grid();
+    const LambdaGrid& g = t.grid;
     line("x0", exact(g.x0));
     line("step", exact(g.step));
     line("count", std::to_string(g.size));
     line("y0", exact(g.y0));
     line("ystep", exact(g.yStep));
     line("rows", std::to_string(g.rows));
+    line("rowscale", exact(g.rowScale));
     line("floor", exact(LambdaTable::kLogFloor));
     line("axis", axisText(t.axes));
     line("encoding", kEncoding);
@@ -149,10 +150,12 @@ LambdaTableFileResult decodeLambdaTable(const std::string& bytes, const std::str
         return fail(TableFileStatus::Stale, fmt::format("{} holds table {}, expected {}", path, t->name(),
                                                         lambdaTableName(*ndf, shape ? *shape : t->shape)));
     t->axes = lambdaAxes(*t->ndf);
-    const LambdaGrid& g = t->grid();
+    t->grid = lambdaGrid(*t->ndf, t->shape, t->axes);
+    const LambdaGrid& g = t->grid;
     size_t count = size_t(g.size) * g.rows;
     if (field("x0") != exact(g.x0) || field("step") != exact(g.step) || field("count") != std::to_string(g.size) ||
         field("y0") != exact(g.y0) || field("ystep") != exact(g.yStep) || field("rows") != std::to_string(g.rows) ||
+        field("rowscale") != exact(g.rowScale) ||
         field("floor") != exact(LambdaTable::kLogFloor) || field("axis") != axisText(t->axes) ||
         field("encoding") != kEncoding)
         return fail(TableFileStatus::Stale,
@@ -171,7 +174,7 @@ LambdaTableFileResult decodeLambdaTable(const std::string& bytes, const std::str
             return fail(TableFileStatus::Corrupt, fmt::format("{}: node {} is {}", path, i, t->z[i]));
     }
     for (int i : spotChecks(int(count))) {
-        double z = lambdaTableNode(*t->ndf, t->shape, t->axes, i);
+        double z = lambdaTableNode(*t->ndf, t->shape, t->grid, i);
         if (!(std::abs(t->z[i] - z) <= kSpotTolerance * std::max(1.0, std::abs(z))))
             return fail(TableFileStatus::Corrupt,
                         fmt::format("{}: node {} is {}, the quadrature gives {}", path, i, t->z[i], z));

@@ -8,6 +8,7 @@
 #include "../ScratchDir.h"
 
 #include <doctest/doctest.h>
+#include <fmt/format.h>
 
 #include <atomic>
 #include <cmath>
@@ -56,7 +57,7 @@ TEST_SUITE("lambda cache") {
 TEST_CASE("Lambda table file: the nodes round-trip bit for bit, the header names the table") {
     auto table = facet::lambdaTable(studentT(), kShape);
     std::string bytes = facet::encodeLambdaTable(*table);
-    CHECK(bytes.rfind("facet lambda table\nkind smith_lambda\nversion 2\nkey student_t_g2.5\n", 0) == 0);
+    CHECK(bytes.rfind("facet lambda table\nkind smith_lambda\nversion 3\nkey student_t_g2.5\n", 0) == 0);
     CHECK(bytes.find("\nshape 2.5\n") != std::string::npos);
     CHECK(bytes.find("\ncount 4128\n") != std::string::npos);
     CHECK(facet::lambdaTableFileName(studentT(), kShape) == "lambda_student_t_g2.5.bin");
@@ -150,7 +151,8 @@ void checkCacheRecovery(const facet::NdfEntry& ndf, const std::vector<double>& s
     }
     SUBCASE("stale: another table version") {
         std::string bad = good;
-        bad.replace(bad.find("version 2\n"), 10, "version 0\n");
+        std::string version = "version " + std::to_string(facet::kLambdaTableVersion) + "\n";
+        bad.replace(bad.find(version), version.size(), "version 0\n");
         writeAll(path, bad);
         rebuiltBecause("stale", "version '0'");
     }
@@ -177,8 +179,13 @@ TEST_CASE("Lambda cache: a cold cache writes the file, a second loads it; bad fi
 // A table in (a, alpha): its rows and grid in the header, the same recovery.
 TEST_CASE("Lambda cache: a gtr table in (a, alpha) round-trips and recovers alike") {
     const facet::NdfEntry& gtr = facet::ndfEntry(facet::modelNamed(facet::ModelSlot::Ndf, "gtr"));
-    std::string bytes = facet::encodeLambdaTable(*facet::lambdaTable(gtr, {1.5}));
-    CHECK(bytes.find("\ncount 443\ny0 -9.25\nystep 0.125\nrows 75\n") != std::string::npos);
+    auto table = facet::lambdaTable(gtr, {1.5});
+    std::string bytes = facet::encodeLambdaTable(*table);
+    // Rows from alpha = 1 (y = asinh(4 b) = 0 with s = max(4, 2 gamma) = 4)
+    // down to kMinAlpha, at most 1/8 apart.
+    CHECK(table->grid.rows == int(std::ceil(std::asinh(4 * (1 / (facet::kMinAlpha * facet::kMinAlpha) - 1)) * 8)) + 1);
+    CHECK(bytes.find(fmt::format("\ncount 443\ny0 0\nystep {}\nrows {}\nrowscale 4\n", table->grid.yStep,
+                                 table->grid.rows)) != std::string::npos);
     checkCacheRecovery(gtr, {1.5}, "gtr_g1.5", {2.0}, "gtr_g2");
 }
 

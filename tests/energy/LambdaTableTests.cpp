@@ -1,5 +1,5 @@
-// Tabulated Smith Lambdas (compiler/LambdaTable.h): the student_t and epd
-// tables against an independent 2D quadrature in long double (Gauss-Legendre over
+// Tabulated Smith Lambdas (compiler/LambdaTable.h): the student_t, epd,
+// gtr, gaussian, abc and sgd tables against an independent 2D quadrature in long double (Gauss-Legendre over
 // the polar angle and the azimuth, written here, not the table's closed-form
 // azimuth integral), and the tabulation method against the closed-form
 // Lambdas of ggx and beckmann (iso- and anisotropic).
@@ -11,8 +11,11 @@
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
+#include <atomic>
 #include <cmath>
+#include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -142,38 +145,55 @@ void checkTablesAgainstQuadrature(const char* name, const char* tag, std::initia
 
 // The tables in (a, alpha) of NDFs that are not shape-invariant, against
 // the 2D quadrature at alpha in [1e-3, 1] (log-spaced, off the table's
-// rows) and kThetas: within 1e-6 relative, or 1e-11 absolute where Lambda
-// is tiny (G1 = 1/(1 + Lambda) within 1e-11).
+// rows; alphas beyond the NDF's reach clamp both sides to its edge) and
+// kThetas: within 1e-6 relative, or 1e-11 absolute where Lambda is tiny (G1
+// = 1/(1 + Lambda) within 1e-11). The quadratures run on two threads.
 void checkAlphaTablesAgainstQuadrature(const char* name, std::initializer_list<std::vector<double>> shapes) {
     const NdfEntry& ndf = ndfNamed(name);
-    double worst = 0;
-    std::string where;
-    int checked = 0;
+    struct Comparison {
+        std::vector<double> shape;
+        std::shared_ptr<const LambdaTable> table;
+        double alpha, deg, lambdaRef = 0, lambdaTab = 0;
+    };
+    std::vector<Comparison> jobs;
     for (const std::vector<double>& shape : shapes) {
         auto table = facet::lambdaTable(ndf, shape);
         CHECK(table->axes == facet::LambdaAxes::SlopeAlpha);
         MESSAGE(std::string(name), " ", shape.empty() ? -1.0 : shape[0], ": table of ", table->z.size(),
                 " nodes built in ", table->buildMillis, " ms");
-        for (double alpha : {1e-3, 0.0037, 0.021, 0.13, 0.47, 0.83, 0.97, 1.0}) {
-            ModelArgs<LD> args = facet::convertArgs<LD>(ndf.argsAtAlpha(alpha, shape));
-            ndf.formulas.get<LD>().derive(args);
-            for (double deg : kThetas) {
-                LD theta = toRad(deg);
-                double lambdaRef = double(referenceCosLambda(ndf, args, theta) / std::cos(theta));
-                if (!(lambdaRef > 1e-280)) continue;
-                double s = double(std::sin(theta)), c = double(std::cos(theta));
-                double lambdaTab = table->cosLambda(alpha * alpha * s * s, c, alpha) / c;
-                double rel = std::fabs(lambdaTab / lambdaRef - 1);
-                INFO(name, " ", shape.empty() ? -1.0 : shape[0], " alpha ", alpha, " theta ", deg, ": table ",
-                     lambdaTab, " reference ", lambdaRef);
-                if (std::fabs(lambdaTab - lambdaRef) < 1e-11) rel = std::min(rel, 0.0);
-                CHECK(rel < 1e-6);
-                ++checked;
-                if (rel > worst)
-                    worst = rel, where = fmt::format("{} alpha {} theta {}", shape.empty() ? -1.0 : shape[0], alpha, deg);
-            }
-        }
+        for (double alpha : {1e-3, 0.0037, 0.021, 0.13, 0.47, 0.83, 0.97, 1.0})
+            for (double deg : kThetas) jobs.push_back({shape, table, alpha, deg});
     }
+    std::atomic<size_t> next{0};
+    auto work = [&] {
+        for (size_t i; (i = next++) < jobs.size();) {
+            Comparison& j = jobs[i];
+            ModelArgs<LD> args = facet::convertArgs<LD>(ndf.argsAtAlpha(j.alpha, j.shape));
+            ndf.formulas.get<LD>().derive(args);
+            LD theta = toRad(j.deg);
+            j.lambdaRef = double(referenceCosLambda(ndf, args, theta) / std::cos(theta));
+            double s = double(std::sin(theta)), c = double(std::cos(theta));
+            j.lambdaTab = j.table->cosLambda(j.alpha * j.alpha * s * s, c, j.alpha) / c;
+        }
+    };
+    std::thread helper(work);
+    work();
+    helper.join();
+    double worst = 0;
+    std::string where;
+    int checked = 0;
+    for (const Comparison& j : jobs) {
+        if (!(j.lambdaRef > 1e-280)) continue;
+        double rel = std::fabs(j.lambdaTab / j.lambdaRef - 1);
+        double shape0 = j.shape.empty() ? -1.0 : j.shape[0];
+        INFO(name, " ", shape0, " alpha ", j.alpha, " theta ", j.deg, ": table ", j.lambdaTab, " reference ",
+             j.lambdaRef);
+        if (std::fabs(j.lambdaTab - j.lambdaRef) < 1e-11) rel = std::min(rel, 0.0);
+        CHECK(rel < 1e-6);
+        ++checked;
+        if (rel > worst) worst = rel, where = fmt::format("{} alpha {} theta {}", shape0, j.alpha, j.deg);
+    }
+    CHECK(checked >= int(jobs.size()) / 2);
     MESSAGE("max relative error of the tabulated ", std::string(name), " Lambda: ", worst, " (", where, "), ", checked,
             " comparisons");
 }
@@ -238,7 +258,19 @@ TEST_CASE("the tabulation reproduces the closed-form Lambdas of ggx and beckmann
 }
 
 TEST_CASE("gtr: the Lambda table in (a, alpha) within 1e-6 of an independent 2D quadrature") {
-    checkAlphaTablesAgainstQuadrature("gtr", {{0.0}, {0.5}, {1.0}, {1.5}, {2.5}});
+    checkAlphaTablesAgainstQuadrature("gtr", {{0.0}, {0.5}, {1.0}, {2.5}, {5.0}});
+}
+
+TEST_CASE("gaussian: the Lambda table in (a, alpha) within 1e-6 of an independent 2D quadrature") {
+    checkAlphaTablesAgainstQuadrature("gaussian", {{}});
+}
+
+// c and p at both ends of their domains and in between; sgd with p = 0 is
+// Beckmann with alpha_B = sqrt(alpha), whose rows reach down to alpha =
+// 0.014 only.
+TEST_CASE("abc and sgd: the Lambda tables in (a, alpha) within 1e-6 of an independent 2D quadrature") {
+    checkAlphaTablesAgainstQuadrature("abc", {{0.0}, {2.0}, {10.0}});
+    checkAlphaTablesAgainstQuadrature("sgd", {{0.0}, {0.6}, {2.0}});
 }
 
 // gtr with gamma = 2 is GGX: its table in (a, alpha) must reproduce GGX's
@@ -266,20 +298,22 @@ TEST_CASE("the (a, alpha) tabulation reproduces GGX's closed-form Lambda within 
 
 // Beyond the rows (alpha > 1) the table holds alpha = 1's Lambda at the
 // same direction; below them (alpha < kMinAlpha, which the NDFs' domain
-// clamps away) the first row's.
+// clamps away) the last row's.
 TEST_CASE("a Lambda table in (a, alpha) outside its alpha range") {
     const NdfEntry& gtr = ndfNamed("gtr");
     auto table = facet::lambdaTable(gtr, {1.5});
-    const facet::LambdaGrid& g = table->grid();
-    CHECK(g.alphaHi() == doctest::Approx(1.0).epsilon(1e-15));
-    CHECK(g.alphaLo() < facet::kMinAlpha);
+    const facet::LambdaGrid& g = table->grid;
+    CHECK(g.alphaHi == doctest::Approx(1.0).epsilon(1e-15));
+    CHECK(g.alphaLo == doctest::Approx(facet::kMinAlpha).epsilon(1e-12));
+    CHECK(g.rowOf(g.alphaHi) == doctest::Approx(0.0).epsilon(1e-12));
+    CHECK(g.rowOf(g.alphaLo) == doctest::Approx(g.rows - 1.0).epsilon(1e-12));
     for (double deg : {10.0, 60.0, 89.0}) {
         double th = double(toRad(deg)), s = std::sin(th), c = std::cos(th);
         double atOne = table->cosLambda(s * s, c, 1.0);
         CHECK(atOne > 0);
         for (double alpha : {1.5, 4.0, 1e6}) CHECK(table->cosLambda(alpha * alpha * s * s, c, alpha) == doctest::Approx(atOne).epsilon(1e-14));
-        double atLo = table->cosLambda(g.alphaLo() * g.alphaLo() * s * s, c, g.alphaLo());
-        double below = 1e-3 * g.alphaLo();
+        double atLo = table->cosLambda(g.alphaLo * g.alphaLo * s * s, c, g.alphaLo);
+        double below = 1e-3 * g.alphaLo;
         CHECK(table->cosLambda(below * below * s * s, c, below) == doctest::Approx(atLo).epsilon(1e-12));
     }
     // The interpreter's reference formula goes through the same clamp.
@@ -322,14 +356,24 @@ TEST_CASE("epd with a Smith masking: a constant p") {
     CHECK(materialErrors("input p = 1; ndf = epd(0.3, p); masking = neumann;") == "");
 }
 
-TEST_CASE("gtr with a Smith masking: a constant gamma <= 2.5") {
+TEST_CASE("gtr with a Smith masking: a constant gamma <= 5") {
     CHECK(materialErrors("input a = 0.3; ndf = gtr(a, 1); masking = smith_height_correlated;") == "");
-    CHECK(materialErrors("ndf = gtr(0.3, 2.5); masking = smith_direction_correlated;") == "");
+    CHECK(materialErrors("ndf = gtr(0.3, 5); masking = smith_direction_correlated;") == "");
     std::string input = materialErrors("input g = 1; ndf = gtr(0.3, g); masking = smith_separable;");
     CHECK(input.find("needs a constant gamma") != std::string::npos);
-    std::string high = materialErrors("ndf = gtr(0.3, 3); masking = smith_height_direction_correlated;");
-    CHECK(high.find("gamma <= 2.5 only, got 3") != std::string::npos);
+    std::string high = materialErrors("ndf = gtr(0.3, 5.5); masking = smith_height_direction_correlated;");
+    CHECK(high.find("gamma <= 5 only, got 5.5") != std::string::npos);
     CHECK(materialErrors("input g = 4; ndf = gtr(0.3, g); masking = cook_torrance;") == "");
+}
+
+TEST_CASE("gaussian, abc and sgd with a Smith masking: constant shape parameters") {
+    CHECK(materialErrors("input a = 0.3; ndf = gaussian(a); masking = smith_height_correlated;") == "");
+    CHECK(materialErrors("input b = 20; ndf = abc(b, 10); masking = smith_separable;") == "");
+    CHECK(materialErrors("input a = 0.1; ndf = sgd(a, 0.6); masking = smith_direction_correlated;") == "");
+    std::string abc = materialErrors("input c = 2; ndf = abc(20, c); masking = smith_separable;");
+    CHECK(abc.find("needs a constant c") != std::string::npos);
+    std::string sgd = materialErrors("input p = 1; ndf = sgd(0.1, p); masking = smith_height_correlated;");
+    CHECK(sgd.find("needs a constant p") != std::string::npos);
 }
 
 }  // TEST_SUITE

@@ -1138,8 +1138,8 @@ TEST_CASE("tiered compile: the quick code and the optimized code give the same b
             }
         }
     }
-    CHECK(kernels == 69);
-    CHECK(samplers == 46);
+    CHECK(kernels == 72);
+    CHECK(samplers == 48);
 }
 
 // Renderer threads keep evaluating while the tier-up switches the entry

@@ -6,8 +6,29 @@
 #include "Interpreter.h"
 #include "models/ModelMath.h"
 
+#include <limits>
+
 namespace facet::models {
 namespace {
+
+// The cosines for the products with (n.v) Lambda below: at grazing a
+// subnormal cosine times a small (n.v) Lambda underflows to 0 (1e-320 x
+// 1e-5 in double, where gaussian's and abc's Lambdas are that small), which
+// would make G / (ci co) Inf where it is finite. Cosines below the square
+// root of the smallest normal number (2^-511 in double) are multiplied by
+// its inverse `up`, an exact power of two, and the result by up again.
+template <typename Real>
+struct ScaledCosines {
+    Real ci, co, up;
+};
+
+template <typename Real>
+ScaledCosines<Real> scaledCosines(const MaskingGeometry<Real>& g) {
+    using std::sqrt;
+    const Real tiny = sqrt(std::numeric_limits<Real>::min());
+    if (g.wi.z >= tiny || g.wo.z >= tiny) return {g.wi.z, g.wo.z, Real(1)};
+    return {g.wi.z / tiny, g.wo.z / tiny, 1 / tiny};
+}
 
 // lambda(phi) of Heitz 2014 / Ashikhmin et al., phi the azimuth between wi and wo.
 template <typename Real>
@@ -34,10 +55,11 @@ struct HeightCorrelatedSmith final : MaskingFormulas<Real> {
     Real G(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g) const override {
         return 1 / (1 + r.lambda(g.wi) + r.lambda(g.wo));
     }
-    // 1 / (ci co (1 + Li + Lo))
+    // 1 / (ci co (1 + Li + Lo)), ci co (1 + Li + Lo) = (ci' co' / up + co'
+    // (n.wi) Li + ci' (n.wo) Lo) / up for the scaled cosines.
     Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const override {
-        Real ci = g.wi.z, co = g.wo.z;
-        return scale / (ci * co + co * r.cosLambda(g.wi) + ci * r.cosLambda(g.wo));
+        auto [ci, co, up] = scaledCosines(g);
+        return scale / (ci * co / up + co * r.cosLambda(g.wi) + ci * r.cosLambda(g.wo)) * up;
     }
 };
 
@@ -50,12 +72,13 @@ struct DirectionCorrelatedSmith final : MaskingFormulas<Real> {
         return w * g1i * g1o + (1 - w) * min(g1i, g1o);
     }
     // ai = ci (1 + Li): G1i G1o / (ci co) = 1 / (ai ao), min(G1i, G1o) / (ci co) = 1 / max(ai co, ao ci)
+    // (the products with the scaled cosines, then times up).
     Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const override {
         using std::max;
-        Real ci = g.wi.z, co = g.wo.z;
-        Real ai = ci + r.cosLambda(g.wi), ao = co + r.cosLambda(g.wo);
+        auto [ci, co, up] = scaledCosines(g);
+        Real ai = g.wi.z + r.cosLambda(g.wi), ao = g.wo.z + r.cosLambda(g.wo);
         Real w = azimuthWeight(g);
-        return w * scale / ai / ao + (1 - w) * scale / max(ai * co, ao * ci);
+        return w * scale / ai / ao + (1 - w) * (scale / max(ai * co, ao * ci) * up);
     }
 };
 
@@ -68,9 +91,9 @@ struct HeightDirectionCorrelatedSmith final : MaskingFormulas<Real> {
     }
     Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const override {
         using std::max; using std::min;
-        Real ci = g.wi.z, co = g.wo.z;
-        Real li = co * r.cosLambda(g.wi), lo = ci * r.cosLambda(g.wo);  // ci co Li, ci co Lo
-        return scale / (ci * co + max(li, lo) + azimuthWeight(g) * min(li, lo));
+        auto [ci, co, up] = scaledCosines(g);
+        Real li = co * r.cosLambda(g.wi), lo = ci * r.cosLambda(g.wo);  // ci co Li, ci co Lo (times up)
+        return scale / (ci * co / up + max(li, lo) + azimuthWeight(g) * min(li, lo)) * up;
     }
 };
 

@@ -2,6 +2,7 @@
 // form in the precise type, its normalization and the NDF sampler's CDF
 // inversion in double.
 #include "ShapeNdfEmitter.h"
+#include "TabulatedLambdaEmitter.h"
 
 #include <cmath>
 
@@ -81,6 +82,12 @@ public:
         return pm.exp(logD);
     }
 
+    // Its Smith Lambda from the plan's table in (a, alpha), at energyAlpha
+    // (TabulatedLambdaEmitter.h).
+    Value* cosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
+        return tabulatedCosLambda(lane, *this, n, v);
+    }
+
     // The Kulla-Conty table's roughness: 1 / sqrt(1 + b/2), where c = 2 has
     // GGX's peak (the catalog entry's equivalentAlphas).
     Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const override {
@@ -157,7 +164,7 @@ public:
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_AbcEmitter() {
     static const AbcEmitter emitter;
-    return {{ModelSlot::Ndf, "abc", &emitter}};
+    return {{ModelSlot::Ndf, "abc", &emitter, lambdaTableEmbedding}};
 }
 
 }  // namespace facet

@@ -4,6 +4,7 @@
 // ln N over ln alpha embedded in the kernel (both from the neutral
 // numeric/GaussianNormalization.h). Its NDF sampler inverts the polar CDF
 // by Newton's method on Gauss-Legendre quadratures of the density.
+#include "TabulatedLambdaEmitter.h"
 #include "lowering/LaneEmitter.h"
 
 #include "GaussianNormalization.h"
@@ -63,6 +64,12 @@ public:
         }
         lane.roundAlphas(n);
         return n;
+    }
+
+    // Its Smith Lambda from the plan's table in (a, alpha)
+    // (TabulatedLambdaEmitter.h).
+    Value* cosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
+        return tabulatedCosLambda(lane, *this, n, v);
     }
 
     // theta^2/alpha^2 is an exponent too: precise type.
@@ -162,11 +169,14 @@ public:
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_GaussianEmitter() {
     static const GaussianEmitter emitter;
-    // The normalization table only where alpha is known per lane (params()).
+    // The normalization table only where alpha is known per lane
+    // (params()), and the Lambda table under a Smith masking.
     auto tables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {
-        if (isConstantExpr(*material.ndf.args[kAlpha])) return {};
+        std::vector<EmbeddedTable> out = lambdaTableEmbedding(material);
+        if (isConstantExpr(*material.ndf.args[kAlpha])) return out;
         const std::vector<double>& q = gaussianNormTable().q;
-        return {{"facet_gaussian_norm_table", q.data(), q.size() * sizeof(double)}};
+        out.push_back({"facet_gaussian_norm_table", q.data(), q.size() * sizeof(double)});
+        return out;
     };
     return {{ModelSlot::Ndf, "gaussian", &emitter, tables}};
 }

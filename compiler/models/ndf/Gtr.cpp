@@ -9,11 +9,13 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 namespace facet::models {
 namespace {
 
 constexpr int kAlpha = 0, kGamma = 1;
-constexpr double kMaxTabulatedGamma = 2.5;  // with a Smith masking (lambdaShapeError)
+constexpr double kMaxTabulatedGamma = 5;  // with a Smith masking (lambdaShapeError)
 
 // expm1(y)/y, continuous through y = 0 (where it is 1).
 template <typename Real>
@@ -91,8 +93,12 @@ std::vector<const ModelInfo*> facetModels_ndf_Gtr() {
         e.forms = {ModelForm{{{"alpha", ValueType::Float, {kAlpha}}, {"gamma", ValueType::Float, {kGamma}}}}};
         e.tabulatedLambda = true;
         // Near alpha = 1 the lobe (1 + b sin^2)^-gamma, b = 1/alpha^2 - 1,
-        // changes over log alpha ~ 1/(2 gamma): the table's alpha rows
-        // (LambdaTable.h) resolve it within 1e-6 up to gamma = 2.5.
+        // changes over b ~ 1/gamma: rows with s = 2 gamma (at least 4, which
+        // small gammas need too) keep the table within 1e-6 up to gamma = 5;
+        // beyond, mid-roughness rows drift past it (2e-7 at 5, 1e-6 at 8).
+        e.lambdaRows = [](const std::vector<double>& shape) {
+            return LambdaRows{kMinAlpha, 1, std::max(4.0, 2 * shape.at(0))};
+        };
         e.lambdaShapeError = [](const std::vector<double>& shape) -> std::string {
             if (shape.at(0) <= kMaxTabulatedGamma) return "";
             return fmt::format("its Smith Lambda is tabulated for gamma <= {} only, got {}", kMaxTabulatedGamma,
@@ -122,8 +128,8 @@ std::vector<const ModelInfo*> facetModels_ndf_Gtr() {
             {"hcc_gtr_ranged", "input alpha = 0.5 in 0 .. 2; input gamma = 1 in 0 .. 10; ndf = gtr(alpha, gamma); "
                                "masking = cook_torrance;"},
             {"hcc_gtr_smith_g0", "input alpha = 0.5 in 0 .. 2; ndf = gtr(alpha, 0); masking = smith_height_correlated;"},
-            {"hcc_gtr_smith_g2p5", "input alpha = 0.5 in 0 .. 3; ndf = gtr(alpha, 2.5); "
-                                   "masking = smith_direction_correlated;"},
+            {"hcc_gtr_smith_g5", "input alpha = 0.5 in 0 .. 3; ndf = gtr(alpha, 5); "
+                                 "masking = smith_direction_correlated;"},
         };
         e.formulas = makeFormulas<NdfFormulas, GtrFormulas>();
         return e;

@@ -2,6 +2,7 @@
 // in log form in the precise type; the normalization, an upper incomplete
 // gamma function, and the NDF sampler's inversion of it in double.
 #include "ShapeNdfEmitter.h"
+#include "TabulatedLambdaEmitter.h"
 
 #include <cmath>
 
@@ -93,6 +94,12 @@ public:
         return pm.exp(logD);
     }
 
+    // Its Smith Lambda from the plan's table in (a, alpha), at energyAlpha
+    // (TabulatedLambdaEmitter.h).
+    Value* cosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
+        return tabulatedCosLambda(lane, *this, n, v);
+    }
+
     // The Kulla-Conty table's roughness alpha / sqrt(alpha + p) (the
     // catalog entry's equivalentAlphas).
     Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const override {
@@ -147,7 +154,7 @@ public:
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_SgdEmitter() {
     static const SgdEmitter emitter;
-    return {{ModelSlot::Ndf, "sgd", &emitter}};
+    return {{ModelSlot::Ndf, "sgd", &emitter, lambdaTableEmbedding}};
 }
 
 }  // namespace facet

@@ -133,9 +133,9 @@ private:
 // table of z = log f at u = (log a - x0) / h (LambdaTable.h): 4-point
 // Lagrange up to the last node, linear in u beyond it, the first node below
 // the grid; in double (z reaches -690). A SlopeAlpha table interpolates
-// with kAlphaOrder points along u and across its rows at v = (log alpha -
-// y0) / yStep, alpha clamped to the rows' range (proj rescaled to the
-// clamped alpha).
+// with kAlphaOrder points along u and across its rows at v =
+// LambdaGrid::rowOf(alpha), alpha clamped to the rows' range (proj rescaled
+// to the clamped alpha).
 Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
                           const std::array<Value*, 3>& v) {
     internal_assert(lane.plan.lambda == LambdaForm::Table && lane.plan.lambdaTable)
@@ -158,18 +158,30 @@ Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfPar
     }
     // Isotropic: at the clamped alpha c the projection is c^2 (vx^2 + vy^2),
     // formed in double from v (alpha^2 in float overflows for a huge alpha).
+    // alpha is the NDF's equivalent roughness (energyAlpha, the catalog's
+    // equivalentAlphas), the one the rows are laid out in.
     internal_assert(n.isotropic) << "a Lambda table in (a, alpha) for an anisotropic lobe";
-    const int size = LambdaTable::kAlphaXSize, rows = LambdaTable::kRows;
-    Value* logClamped = dm.minnum(dm.maxnum(dm.log(dm.convert(n.axD, dm.type())), dm.c(LambdaTable::kY0)),
-                                  dm.c(LambdaTable::kY0 + (rows - 1) * LambdaTable::kYStep));
+    const LambdaGrid& g = table.grid;
+    const int size = g.size, rows = g.rows;
+    Value* clamped = dm.minnum(dm.maxnum(dm.convert(ndf.energyAlpha(lane, n), dm.type()), dm.c(g.alphaLo)),
+                               dm.c(g.alphaHi));
+    Value* logClamped = dm.log(clamped);
     Value* vx = dm.convert(v[0], dm.type());
     Value* vy = dm.convert(v[1], dm.type());
     Value* side2 = dm.fma(vx, vx, dm.mul(vy, vy));
     Value* logRoot = dm.add(dm.mul(dm.log(side2), dm.c(0.5)), logClamped);
     Value* x = dm.sub(dm.log(dm.convert(v[2], dm.type())), logRoot);
-    Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(LambdaTable::kAlphaX0)), dm.c(LambdaTable::kAlphaXStep)), dm.c(0.0));
+    Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(g.x0)), dm.c(g.step)), dm.c(0.0));
     Value* uc = dm.minnum(u, dm.c(size - 1.0));
-    Value* w = dm.div(dm.sub(logClamped, dm.c(LambdaTable::kY0)), dm.c(LambdaTable::kYStep));
+    // The row: asinh(s b), b = (1 - c)(1 + c) / c^2 (LambdaGrid::rowOf), as
+    // sign(t) log1p(|t| + t^2 / (1 + sqrt(1 + t^2))), accurate at small |t|.
+    Value* b = dm.div(dm.mul(dm.sub(dm.c(1.0), clamped), dm.add(dm.c(1.0), clamped)), dm.mul(clamped, clamped));
+    Value* t = dm.mul(b, dm.c(g.rowScale));
+    Value* at = dm.abs(t);
+    Value* t2 = dm.mul(t, t);
+    Value* asinhAbs = dm.log1p(dm.add(at, dm.div(t2, dm.add(dm.c(1.0), dm.sqrt(dm.add(dm.c(1.0), t2))))));
+    Value* y = dm.select(dm.lt(t, dm.c(0.0)), dm.neg(asinhAbs), asinhAbs);
+    Value* w = dm.minnum(dm.maxnum(dm.div(dm.sub(y, dm.c(g.y0)), dm.c(g.yStep)), dm.c(0.0)), dm.c(rows - 1.0));
     LaneEmitter::LagrangeStencil sx = lane.lagrangeStencil(size, LambdaTable::kAlphaOrder, uc);
     LaneEmitter::LagrangeStencil sy = lane.lagrangeStencil(rows, LambdaTable::kAlphaOrder, w);
     // Each row's slope per node past its last node (the linear tail in u):

@@ -2,7 +2,7 @@
 // LambdaTable (LambdaTable.h) as IR, on either of its axes (a alone, or a
 // and alpha), and the hook that embeds that table in the kernel. Shared by
 // the emitters of the NDFs whose entry has tabulatedLambda (student_t, epd,
-// gtr, gaussian); written in StudentTEmitter.cpp.
+// gtr, gaussian, abc, sgd); written in StudentTEmitter.cpp.
 #pragma once
 
 #include "lowering/LaneEmitter.h"
