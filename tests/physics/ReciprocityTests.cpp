@@ -61,8 +61,9 @@ struct Rng {
 
 const char* const kNdfs[] = {
     "ggx(0.3)", "ggx(alpha_x = 0.05, alpha_y = 0.6)", "beckmann(alpha_x = 0.4, alpha_y = 0.1)",
-    "blinn_phong(30)", "gtr(alpha = 0.3, gamma = 1)", "gtr(alpha = 0.2, gamma = 2.5)", "gaussian(0.25)",
-    "ward(alpha_x = 0.2, alpha_y = 0.5)",
+    "blinn_phong(30)", "gtr(alpha = 0.3, gamma = 1)", "gtr(alpha = 0.2, gamma = 5)", "gaussian(0.25)",
+    "student_t(alpha = 0.3, gamma = 3)", "epd(alpha_x = 0.1, alpha_y = 0.4, p = 0.6)", "abc(20, 1.5)",
+    "sgd(0.1, 0.6)", "ward(alpha_x = 0.2, alpha_y = 0.5)",
 };
 const char* const kMaskings[] = {
     "none", "implicit", "cook_torrance", "kelemen", "neumann", "schlick_smith(0.2)",
