@@ -132,7 +132,7 @@ std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const std::v
     table->grid = lambdaGrid(ndf, shape, axes);
     const LambdaGrid& g = table->grid;
     table->z.resize(size_t(g.size) * g.rows);
-    // Two threads for a SlopeAlpha table (its ~28k nodes): even and odd nodes.
+    // Two threads for a SlopeAlpha table (45k-146k nodes): even and odd nodes.
     int threads = axes == LambdaAxes::Slope ? 1 : 2;
     auto fill = [&](int first) {
         for (int k = first; k < int(table->z.size()); k += threads)

@@ -1,5 +1,5 @@
-// LambdaTable: the Smith Lambda of a shape-invariant NDF without a closed
-// form, tabulated by quadrature (NdfEntry::tabulatedLambda). The interpreter
+// LambdaTable: the Smith Lambda of an NDF without a closed form, tabulated
+// by quadrature (NdfEntry::tabulatedLambda). The interpreter
 // (the entry's cosLambda) and the JIT kernel (the entry's emitter, which
 // embeds the nodes as constant data) both interpolate the same table, so the
 // table is that NDF's Lambda, to the accuracy stated below.
@@ -174,8 +174,8 @@ double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, co
                        CosLambdaSource cosLambdaAt = quadratureCosLambda);
 
 // The table of `ndf` for the given shape values from the process's memory
-// layer (built there on first use, then shared; thread-safe). `ndf` must be
-// shapeInvariant.
+// layer (built there on first use, then shared; thread-safe), on the axes
+// of lambdaAxes(ndf).
 std::shared_ptr<const LambdaTable> lambdaTable(const NdfEntry& ndf, const std::vector<double>& shape);
 // (n.v) Lambda(v) of `ndf` with the shape values `shape` (one or none),
 // from its table, for the entries' reference cosLambda (alpha: the

@@ -274,8 +274,9 @@ struct NdfEntry : ModelInfo {
     // its Smith Lambda depends on a = 1 / (alpha(v) tan theta) alone.
     bool shapeInvariant = false;
     // Its Smith Lambda has no closed form and is tabulated by quadrature
-    // (LambdaTable.h, shape-invariant NDFs only): cosLambda interpolates the
-    // table of the material's tableShapeParams, which must then be constant.
+    // (LambdaTable.h: in a = 1/(alpha(v) tan theta) for a shape-invariant NDF,
+    // in (a, alpha) otherwise): cosLambda interpolates the table of the
+    // material's tableShapeParams, which must then be constant.
     bool tabulatedLambda = false;
     // For a tabulated Lambda: why these shape values have none (e.g. an
     // infinite Lambda), or "".

@@ -90,8 +90,9 @@ TableFileResult readEnergyTableExr(const std::string& path, const EnergyTableKey
 TableFileResult decodeEnergyTableExr(const std::string& bytes, const std::string& path,
                                      const EnergyTableKey* expected = nullptr, const EnergyQuadrature& quadrature = {});
 
-// Largest Lambda table file read (the nodes are 33 KB).
-constexpr uint64_t kMaxLambdaTableFileBytes = uint64_t(1) << 20;
+// Largest Lambda table file read (the nodes are 33 KB in a alone, 0.35-1.3
+// MB in (a, alpha)).
+constexpr uint64_t kMaxLambdaTableFileBytes = uint64_t(4) << 20;
 
 // "lambda_student_t_g1.8.bin".
 std::string lambdaTableFileName(const NdfEntry& ndf, const std::vector<double>& shape);

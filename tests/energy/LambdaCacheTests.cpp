@@ -189,6 +189,26 @@ TEST_CASE("Lambda cache: a gtr table in (a, alpha) round-trips and recovers alik
     checkCacheRecovery(gtr, {1.5}, "gtr_g1.5", {2.0}, "gtr_g2");
 }
 
+// gaussian's table, with rows 1/16 apart, is one of the largest files (1.2
+// MB, like gtr's beyond gamma = 5): it must load back, not be rebuilt.
+TEST_CASE("Lambda cache: the largest tables load back from disk") {
+    const facet::NdfEntry& gaussian = facet::ndfEntry(facet::modelNamed(facet::ModelSlot::Ndf, "gaussian"));
+    ScratchDir dir("lambda");
+    std::string path;
+    {
+        TableCache c(dir.path.string());
+        path = c.lambdaPathFor(gaussian, {});
+        c.getLambda(gaussian, {});
+        CHECK(lastEvent(c).writeError == "");
+    }
+    CHECK(fs::file_size(path) > (uint64_t(1) << 20));
+    TableCache c(dir.path.string());
+    auto t = c.getLambda(gaussian, {});
+    INFO("event: ", lastEvent(c).action, " / ", lastEvent(c).reason);
+    CHECK(lastEvent(c).action == "disk");
+    CHECK(sameBits(t->z, facet::lambdaTable(gaussian, {})->z));
+}
+
 TEST_CASE("Lambda cache: memory only, and a group-writable directory refused with the warning") {
     {
         TableCache c("");

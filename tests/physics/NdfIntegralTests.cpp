@@ -79,7 +79,7 @@ std::vector<NdfCase> ndfCases() {
         }
     }
     for (double a : kAlphas) {
-        for (double g : {1.0, 1.5, 5.0})
+        for (double g : {1.0, 1.5, 10.0})
             out.push_back({"gtr(alpha = " + num(a) + ", gamma = " + num(g) + ")", a, false, true, true});
         for (double g : {1.6, 4.0})
             out.push_back({"student_t(alpha = " + num(a) + ", gamma = " + num(g) + ")", a, false, true, true});

@@ -15,7 +15,7 @@ namespace facet::models {
 namespace {
 
 constexpr int kAlpha = 0, kGamma = 1;
-constexpr double kMaxTabulatedGamma = 5;  // with a Smith masking (lambdaShapeError)
+constexpr double kMaxTabulatedGamma = 10;  // with a Smith masking (lambdaShapeError)
 
 // expm1(y)/y, continuous through y = 0 (where it is 1).
 template <typename Real>
@@ -94,10 +94,12 @@ std::vector<const ModelInfo*> facetModels_ndf_Gtr() {
         e.tabulatedLambda = true;
         // Near alpha = 1 the lobe (1 + b sin^2)^-gamma, b = 1/alpha^2 - 1,
         // changes over b ~ 1/gamma: rows with s = 2 gamma (at least 4, which
-        // small gammas need too) keep the table within 1e-6 up to gamma = 5;
-        // beyond, mid-roughness rows drift past it (2e-7 at 5, 1e-6 at 8).
+        // small gammas need too). Across mid-roughness rows Lambda changes
+        // faster as gamma grows (rows 1/8 apart: 2e-7 at gamma = 5, 1.4e-6
+        // at 10), so beyond 5 they are 1/16 apart (2.3e-7 at 10).
         e.lambdaRows = [](const std::vector<double>& shape) {
-            return LambdaRows{kMinAlpha, 1, std::max(4.0, 2 * shape.at(0))};
+            double gamma = shape.at(0);
+            return LambdaRows{kMinAlpha, 1, std::max(4.0, 2 * gamma), gamma > 5 ? 1.0 / 16 : 1.0 / 8};
         };
         e.lambdaShapeError = [](const std::vector<double>& shape) -> std::string {
             if (shape.at(0) <= kMaxTabulatedGamma) return "";
@@ -128,7 +130,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Gtr() {
             {"hcc_gtr_ranged", "input alpha = 0.5 in 0 .. 2; input gamma = 1 in 0 .. 10; ndf = gtr(alpha, gamma); "
                                "masking = cook_torrance;"},
             {"hcc_gtr_smith_g0", "input alpha = 0.5 in 0 .. 2; ndf = gtr(alpha, 0); masking = smith_height_correlated;"},
-            {"hcc_gtr_smith_g5", "input alpha = 0.5 in 0 .. 3; ndf = gtr(alpha, 5); "
+            {"hcc_gtr_smith_g10", "input alpha = 0.5 in 0 .. 3; ndf = gtr(alpha, 10); "
                                  "masking = smith_direction_correlated;"},
         };
         e.formulas = makeFormulas<NdfFormulas, GtrFormulas>();
