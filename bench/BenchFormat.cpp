@@ -157,8 +157,8 @@ std::string energyTableLine(const MaterialBench& m) {
 std::string lambdaTableLine(const MaterialBench& m) {
     if (!m.lambdaTable) return "";
     const LambdaTableBench& e = *m.lambdaTable;
-    std::string s = fmt::format("Smith Lambda table: {}, built in {:.1f} ms (cold, {} nodes; one thread)", e.key,
-                                e.buildMs, e.nodes);
+    std::string s = fmt::format("Smith Lambda table: {}, built in {:.1f} ms (cold, {} nodes; {})", e.key, e.buildMs,
+                                e.nodes, e.threads == 1 ? "one thread" : fmt::format("{} threads", e.threads));
     return s + cacheLoadText(e);
 }
 

@@ -688,6 +688,7 @@ std::optional<LambdaTableBench> benchLambdaTable(const CheckedMaterial& m, int l
     std::shared_ptr<LambdaTable> table = tabulateCosLambda(ndf, shape, quadratureCosLambda);
     e.buildMs = table->buildMillis;
     e.nodes = int(table->z.size());
+    e.threads = table->buildThreads;
     // Cached: the file in the table cache directory, written first if it is
     // missing or not a valid table of this key (as a cache miss would).
     std::string dir = cacheDir ? *cacheDir : defaultTableCacheDir();

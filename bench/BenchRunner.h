@@ -141,6 +141,7 @@ struct EnergyTableBench : TableTiming {
 struct LambdaTableBench : TableTiming {
     std::string key;  // the table's name, e.g. "student_t_g3"
     int nodes = 0;
+    int threads = 1;  // the cold build's
 };
 
 // ns/eval by batch size (kBatchSizes): the regular sample evaluated in

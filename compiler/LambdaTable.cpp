@@ -134,6 +134,7 @@ std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const std::v
     table->z.resize(size_t(g.size) * g.rows);
     // Two threads for a SlopeAlpha table (45k-146k nodes): even and odd nodes.
     int threads = axes == LambdaAxes::Slope ? 1 : 2;
+    table->buildThreads = threads;
     auto fill = [&](int first) {
         for (int k = first; k < int(table->z.size()); k += threads)
             table->z[k] = lambdaTableNode(ndf, shape, g, k, cosLambdaAt);

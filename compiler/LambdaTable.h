@@ -138,6 +138,7 @@ public:
     LambdaGrid grid{};          // lambdaGrid(*ndf, shape, axes)
     std::vector<double> z;      // grid.rows x grid.size nodes, z = log f
     double buildMillis = 0;     // the quadrature's time (read back from a cache file)
+    int buildThreads = 0;       // the threads the quadrature ran on (0: not built here)
     std::string origin = "built";  // or "disk"
 
     // The slope of z per node beyond the last one of row j.
