@@ -1,11 +1,13 @@
 // Builtins: the tables themselves.
 #include "Builtins.h"
 
+#include "Immortal.h"
+
 
 namespace facet {
 
 const std::vector<BuiltinFunction>& builtinFunctions() {
-    static const std::vector<BuiltinFunction> table = {
+    static const std::vector<BuiltinFunction>& table = immortal<std::vector<BuiltinFunction>>(std::vector<BuiltinFunction>{
         {BuiltinFn::Rgb, "rgb", 3, true, "rgb(r, g, b)"},
         {BuiltinFn::Sqrt, "sqrt", 1, false, "sqrt(x)"},
         {BuiltinFn::Pow, "pow", 2, false, "pow(x, y)"},
@@ -18,7 +20,7 @@ const std::vector<BuiltinFunction>& builtinFunctions() {
         {BuiltinFn::Mix, "mix", 3, false, "mix(a, b, t)"},
         {BuiltinFn::PhongExponent, "phong_exponent", 1, false, "phong_exponent(roughness)"},
         {BuiltinFn::BeckmannToPhong, "beckmann_to_phong", 1, false, "beckmann_to_phong(alpha)"},
-    };
+    });
     return table;
 }
 

@@ -1,6 +1,7 @@
 // LambdaTable: the quadrature, the tabulation and the lookups of tabulated
 // Smith Lambdas (LambdaTable.h), and the checks of materials that use them.
 #include "LambdaTable.h"
+#include "Immortal.h"
 
 #include "KullaConty.h"
 #include "Material.h"
@@ -221,7 +222,7 @@ struct MemoryLayer {
     std::mutex mutex;  // building (~0.5 s) under the lock: one build per key
     std::map<Key, std::shared_ptr<const LambdaTable>> tables;
     static MemoryLayer& get() {
-        static MemoryLayer layer;
+        static MemoryLayer& layer = immortal<MemoryLayer>();
         return layer;
     }
 };

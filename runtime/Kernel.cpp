@@ -1,5 +1,6 @@
 // Kernel: option parsing, the compile pipeline, kernel caches, evaluation.
 #include "Kernel.h"
+#include "Immortal.h"
 
 #include "CacheFiles.h"
 #include "CodegenIdentity.h"
@@ -388,7 +389,8 @@ struct KernelCode {
 // is called with closing = false normally, and with closing = true when the
 // Compiler is being destroyed: then it does only work whose result outlives
 // the Compiler (see Compiler::tierUp). A Compiler may be a static that
-// exit() destroys; FacetJit::warmUp() keeps LLVM's state alive until then.
+// exit() destroys; FacetJit::warmUp() keeps LLVM's state alive until then,
+// and Facet's own process-wide state is never destroyed (Immortal.h).
 class TierUpWorker {
 public:
     using Job = std::function<void(bool closing)>;
@@ -598,7 +600,7 @@ void Kernel::ensureSampler() const {
 }
 
 const std::string& Kernel::samplerError() const {
-    static const std::string none;
+    static const std::string& none = immortal<std::string>();
     ensureSampler();
     return code_ ? code_->samplerError : none;
 }

@@ -7,6 +7,7 @@
 // for sample): one plain body, or a guarded first body and a cold fallback
 // function for the lanes it distrusts.
 #include "Lowering.h"
+#include "Immortal.h"
 
 #include "Diagnostics.h"
 #include "LaneEmitter.h"
@@ -503,8 +504,8 @@ void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::str
 //   sample: (wo[3], u[3], inputs) -> (wi[3], pdf, weight[3])
 //   pdf:    (wi[3], wo[3], inputs) -> (pdf)
 // Masked-off lanes of a partial chunk read wo = (0,0,1) and u = 0.
-const EntryShape kSampleShape{{{0, 0, 1}, {0, 0, 0}}, {3, 1, 3}};
-const EntryShape kPdfShape{{{0, 0, 1}, {0, 0, 1}}, {1}};
+const EntryShape& kSampleShape = immortal<EntryShape>(EntryShape{{{0, 0, 1}, {0, 0, 0}}, {3, 1, 3}});
+const EntryShape& kPdfShape = immortal<EntryShape>(EntryShape{{{0, 0, 1}, {0, 0, 1}}, {1}});
 
 BodyLanes sampleBody(LaneEmitter& lanes, const std::vector<llvm::Value*>& in, const std::vector<llvm::Value*>& slots) {
     LaneEmitter::SampleResult r = lanes.emitSample({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);

@@ -1,6 +1,7 @@
 // TermEmitters: the registry of model emitters (generated from
 // compiler/models/*/*Emitter.cpp) and the hooks' defaults.
 #include "TermEmitters.h"
+#include "Immortal.h"
 
 #include "Diagnostics.h"
 #include "LaneEmitter.h"
@@ -14,7 +15,7 @@ namespace facet {
 #undef FACET_EMITTER_FILE
 
 const std::vector<TermEmitterEntry>& termEmitterRegistry() {
-    static const std::vector<TermEmitterEntry> registry = [] {
+    static const std::vector<TermEmitterEntry>& registry = immortal<std::vector<TermEmitterEntry>>([] {
         std::vector<TermEmitterEntry> all;
 #define FACET_EMITTER_FILE(slot, stem)                             \
     for (const TermEmitterEntry& e : facetEmitters_##slot##_##stem()) \
@@ -22,7 +23,7 @@ const std::vector<TermEmitterEntry>& termEmitterRegistry() {
 #include "EmitterRegistry.inc"
 #undef FACET_EMITTER_FILE
         return all;
-    }();
+    }());
     return registry;
 }
 

@@ -4,6 +4,7 @@
 // FACET_MODEL_FILE(<slot>, <Stem>) per file compiler/models/<slot>/<Stem>.cpp;
 // each such file defines facetModels_<slot>_<Stem>(), returning its entries.
 #include "models/ModelCatalog.h"
+#include "Immortal.h"
 
 #include "Diagnostics.h"
 
@@ -63,7 +64,7 @@ std::vector<const ModelInfo*> buildCatalog() {
 
 }  // namespace
 const std::vector<const ModelInfo*>& catalog() {
-    static const std::vector<const ModelInfo*> all = buildCatalog();
+    static const std::vector<const ModelInfo*>& all = immortal<std::vector<const ModelInfo*>>(buildCatalog());
     return all;
 }
 

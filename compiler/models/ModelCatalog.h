@@ -20,6 +20,7 @@
 #pragma once
 
 #include "AST.h"
+#include "Immortal.h"
 
 #include <array>
 #include <limits>
@@ -238,10 +239,10 @@ struct FormulaSet {
 // (static instances: the formulas are stateless).
 template <template <typename> class Base, template <typename> class Impl>
 FormulaSet<Base> makeFormulas() {
-    static const Impl<float> f;
-    static const Impl<double> d;
-    static const Impl<long double> ld;
-    static const Impl<__float128> q;
+    static const Impl<float>& f = immortal<Impl<float>>();
+    static const Impl<double>& d = immortal<Impl<double>>();
+    static const Impl<long double>& ld = immortal<Impl<long double>>();
+    static const Impl<__float128>& q = immortal<Impl<__float128>>();
     return {&f, &d, &ld, &q};
 }
 

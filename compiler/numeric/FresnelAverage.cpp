@@ -1,6 +1,7 @@
 // FresnelAverage: F_avg by quadrature of an unpolarized Fresnel reflectance,
 // and its tables (FresnelAverage.h).
 #include "FresnelAverage.h"
+#include "Immortal.h"
 
 #include "Interpolation.h"
 #include "Quadrature.h"
@@ -89,7 +90,7 @@ double FresnelAverageTables::conductorAt(double eta, double k) const {
 }
 
 const FresnelAverageTables& fresnelAverageTables() {
-    static const FresnelAverageTables tables = [] {
+    static const FresnelAverageTables& tables = immortal<FresnelAverageTables>([] {
         FresnelAverageTables t;
         t.dielectric.resize(FresnelAverageTables::kDielectricCount);
         for (int i = 0; i < FresnelAverageTables::kDielectricCount; ++i) {
@@ -108,7 +109,7 @@ const FresnelAverageTables& fresnelAverageTables() {
                 t.conductor[size_t(j) * n + i] = float(v);
             }
         return t;
-    }();
+    }());
     return tables;
 }
 

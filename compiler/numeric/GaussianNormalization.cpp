@@ -2,6 +2,7 @@
 // log-log table (GaussianNormalization.h).
 #include "QuadMath.h"  // before any std-math template (see QuadMath.h)
 #include "GaussianNormalization.h"
+#include "Immortal.h"
 
 #include "Quadrature.h"
 
@@ -39,7 +40,7 @@ template long double gaussianNdfNorm<long double>(long double);
 template __float128 gaussianNdfNorm<__float128>(__float128);
 
 const GaussianNormTable& gaussianNormTable() {
-    static const GaussianNormTable table = [] {  // immutable data, built once per process
+    static const GaussianNormTable& table = immortal<GaussianNormTable>([] {  // immutable data, built once per process
         GaussianNormTable t;
         t.q.resize(GaussianNormTable::kSize);
         for (int i = 0; i < GaussianNormTable::kSize; ++i) {
@@ -48,7 +49,7 @@ const GaussianNormTable& gaussianNormTable() {
             t.q[i] = std::log(gaussianNdfNorm<double>(std::exp(x)));
         }
         return t;
-    }();
+    }());
     return table;
 }
 

@@ -1,6 +1,7 @@
 // Quadrature: Gauss-Legendre rules and graded break points (see Quadrature.h).
 // QuadMath.h first: numeric_limits<__float128> for the __float128 rules.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "Quadrature.h"
 
 #include "Diagnostics.h"
@@ -17,7 +18,7 @@ namespace facet::quadrature {
 template <typename Real>
 const GaussLegendre<Real>& gaussLegendre(int n) {
     static std::mutex mutex;
-    static std::array<std::unique_ptr<GaussLegendre<Real>>, 65> rules;
+    static auto& rules = immortal<std::array<std::unique_ptr<GaussLegendre<Real>>, 65>>();
     internal_assert(n >= 1 && n <= 64) << "Gauss-Legendre order " << n;
     std::lock_guard<std::mutex> lock(mutex);
     if (!rules[n]) {

@@ -1,5 +1,6 @@
 // none, lambert: the diffuse base as IR (the reference is Diffuse.cpp).
 #include "lowering/LaneEmitter.h"
+#include "Immortal.h"
 
 namespace facet {
 namespace {
@@ -23,8 +24,8 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_diffuse_DiffuseEmitter() {
-    static const NoDiffuseEmitter none;
-    static const LambertEmitter lambert;
+    static const NoDiffuseEmitter& none = immortal<NoDiffuseEmitter>();
+    static const LambertEmitter& lambert = immortal<LambertEmitter>();
     return {{ModelSlot::Diffuse, "none", &none}, {ModelSlot::Diffuse, "lambert", &lambert}};
 }
 

@@ -2,6 +2,7 @@
 // compensation from the tabulated albedo of the material's NDF and masking
 // (compiler/KullaConty.h builds the tables).
 #include "models/ModelMath.h"
+#include "Immortal.h"
 
 namespace facet::models {
 
@@ -11,8 +12,8 @@ std::vector<const ModelInfo*> facetModels_energy_Energy() {
         e.compensates = compensates;
         return e;
     };
-    static const EnergyEntry none = entry(0, "none", "no compensation", false);
-    static const EnergyEntry kullaConty = [&] {
+    static const EnergyEntry& none = immortal<EnergyEntry>(entry(0, "none", "no compensation", false));
+    static const EnergyEntry& kullaConty = immortal<EnergyEntry>([&] {
         EnergyEntry e = entry(1, "kulla_conty", "Kulla & Conty 2017 multiple-scattering compensation", true);
         // f_ms on the hard cases (its tables need constant shape parameters).
         e.hardCases = {
@@ -28,7 +29,7 @@ std::vector<const ModelInfo*> facetModels_energy_Energy() {
              "fresnel = schlick(f0 = f0); energy = kulla_conty;"},
         };
         return e;
-    }();
+    }());
     return {&none, &kullaConty};
 }
 

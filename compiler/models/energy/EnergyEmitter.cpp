@@ -4,6 +4,7 @@
 // with Ec bilinear and EcAvg linear in the material's table, which the
 // kernel embeds as a constant (sqrt-spaced in alpha and mu).
 #include "lowering/LaneEmitter.h"
+#include "Immortal.h"
 
 #include "KullaConty.h"
 
@@ -98,8 +99,8 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_energy_EnergyEmitter() {
-    static const NoCompensationEmitter none;
-    static const KullaContyEmitter kullaConty;
+    static const NoCompensationEmitter& none = immortal<NoCompensationEmitter>();
+    static const KullaContyEmitter& kullaConty = immortal<KullaContyEmitter>();
     return {{ModelSlot::Energy, "none", &none}, {ModelSlot::Energy, "kulla_conty", &kullaConty}};
 }
 

@@ -4,6 +4,7 @@
 // (F -> 0 exactly there) or at c -> 1 (s2 = 1 - c^2 comes from the
 // directions' difference).
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "models/ModelMath.h"
 
 #include <complex>
@@ -89,14 +90,14 @@ constexpr ValueType C = ValueType::Rgb;
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_fresnel_Fresnel() {
-    static const FresnelEntry none = [] {
+    static const FresnelEntry& none = immortal<FresnelEntry>([] {
         FresnelEntry e = makeEntry<FresnelEntry>(ModelSlot::Fresnel, 0, "none", "F = 1");
         e.examples = {{"none", "", "none"}};
         e.representative = true;
         e.formulas = makeFormulas<FresnelFormulas, NoFresnel>();
         return e;
-    }();
-    static const FresnelEntry schlick = [] {
+    }());
+    static const FresnelEntry& schlick = immortal<FresnelEntry>([] {
         FresnelEntry e = makeEntry<FresnelEntry>(ModelSlot::Fresnel, 1, "schlick", "Schlick 1994 approximation");
         e.canonical = {{"f0", C, 0, 1}, {"eta", C, kMinEta}};
         e.forms = {ModelForm{{{"f0", C, {kF0}}}}, ModelForm{{{"eta", C, {kSchlickEta}}}}};
@@ -108,8 +109,8 @@ std::vector<const ModelInfo*> facetModels_fresnel_Fresnel() {
         e.hardCases = {{"hcc_schlick_eta1", "ndf = ggx(0.3); masking = smith_separable; fresnel = schlick(eta = 1);"}};
         e.formulas = makeFormulas<FresnelFormulas, SchlickFresnel>();
         return e;
-    }();
-    static const FresnelEntry dielectric = [] {
+    }());
+    static const FresnelEntry& dielectric = immortal<FresnelEntry>([] {
         FresnelEntry e = makeEntry<FresnelEntry>(ModelSlot::Fresnel, 2, "dielectric", "exact dielectric Fresnel");
         e.reciprocityStep = true;
         e.canonical = {{"eta", C, kMinEta}};
@@ -124,8 +125,8 @@ std::vector<const ModelInfo*> facetModels_fresnel_Fresnel() {
         };
         e.formulas = makeFormulas<FresnelFormulas, DielectricFresnel>();
         return e;
-    }();
-    static const FresnelEntry conductor = [] {
+    }());
+    static const FresnelEntry& conductor = immortal<FresnelEntry>([] {
         FresnelEntry e = makeEntry<FresnelEntry>(ModelSlot::Fresnel, 3, "conductor", "exact conductor Fresnel, complex index eta + ik");
         e.canonical = {{"eta", C, kMinEta}, {"k", C, 0}};
         e.forms = {ModelForm{{{"eta", C, {kEta}}, {"k", C, {kK}}}}};
@@ -139,7 +140,7 @@ std::vector<const ModelInfo*> facetModels_fresnel_Fresnel() {
         };
         e.formulas = makeFormulas<FresnelFormulas, ConductorFresnel>();
         return e;
-    }();
+    }());
     return {&none, &schlick, &dielectric, &conductor};
 }
 

@@ -5,6 +5,7 @@
 // g - c = e / (g + c) for the dielectric, and for the conductor reflection
 // amplitudes that do not cancel as N -> 1, sharing one division.
 #include "lowering/LaneEmitter.h"
+#include "Immortal.h"
 
 #include "FresnelAverage.h"
 #include "Specialize.h"
@@ -353,10 +354,10 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_fresnel_FresnelEmitter() {
-    static const NoFresnelEmitter none;
-    static const SchlickEmitter schlick;
-    static const DielectricEmitter dielectric;
-    static const ConductorEmitter conductor;
+    static const NoFresnelEmitter& none = immortal<NoFresnelEmitter>();
+    static const SchlickEmitter& schlick = immortal<SchlickEmitter>();
+    static const DielectricEmitter& dielectric = immortal<DielectricEmitter>();
+    static const ConductorEmitter& conductor = immortal<ConductorEmitter>();
     // The F_avg tables only where energy compensation needs F_avg of
     // per-lane parameters (averageArgs: constant ones are folded).
     auto dielectricTables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {

@@ -5,6 +5,7 @@
 // and divisions chained, so that no intermediate product of small cosines
 // underflows (double-denormal directions) where the result is representable.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "Interpreter.h"
 #include "models/ModelMath.h"
 
@@ -94,38 +95,38 @@ constexpr const char* kNoMicrosurface = "an empirical G with no microsurface beh
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_masking_Empirical() {
-    static const MaskingEntry none = [] {
+    static const MaskingEntry& none = immortal<MaskingEntry>([] {
         MaskingEntry e = empirical(0, "none", "G = 1",
                                    "masking none ignores shadowing: the albedo grows like 1/(2 cos theta_o)");
         e.representative = true;
         e.formulas = makeFormulas<MaskingFormulas, NoMasking>();
         return e;
-    }();
-    static const MaskingEntry implicit = [] {
+    }());
+    static const MaskingEntry& implicit = immortal<MaskingEntry>([] {
         MaskingEntry e = empirical(1, "implicit", "G = (n.wi)(n.wo)", kNoMicrosurface);
         e.formulas = makeFormulas<MaskingFormulas, ImplicitMasking>();
         return e;
-    }();
-    static const MaskingEntry cookTorrance = [] {
+    }());
+    static const MaskingEntry& cookTorrance = immortal<MaskingEntry>([] {
         MaskingEntry e = empirical(2, "cook_torrance", "V-cavity (Cook & Torrance 1982)", "");
         e.albedoKinks.atWoH = true;
         e.albedoKinks.vCavity = true;
         e.formulas = makeFormulas<MaskingFormulas, CookTorranceMasking>();
         return e;
-    }();
-    static const MaskingEntry kelemen = [] {
+    }());
+    static const MaskingEntry& kelemen = immortal<MaskingEntry>([] {
         MaskingEntry e = empirical(3, "kelemen", "Kelemen & Szirmay-Kalos 2001", kNoMicrosurface);
         e.albedoKinks.cutLayer = true;
         e.formulas = makeFormulas<MaskingFormulas, KelemenMasking>();
         return e;
-    }();
-    static const MaskingEntry neumann = [] {
+    }());
+    static const MaskingEntry& neumann = immortal<MaskingEntry>([] {
         MaskingEntry e = empirical(4, "neumann", "Neumann et al. 1999", kNoMicrosurface);
         e.albedoKinks.atWoH = true;
         e.formulas = makeFormulas<MaskingFormulas, NeumannMasking>();
         return e;
-    }();
-    static const MaskingEntry schlickSmith = [] {
+    }());
+    static const MaskingEntry& schlickSmith = immortal<MaskingEntry>([] {
         MaskingEntry e = empirical(5, "schlick_smith", "Schlick 1994 approximation of Smith",
                                    "Schlick's G1 ignores the NDF: exceeds 1 for heavy-tailed (gtr gamma <= 1.5) and "
                                    "anisotropic lobes");
@@ -139,7 +140,7 @@ std::vector<const ModelInfo*> facetModels_masking_Empirical() {
         };
         e.formulas = makeFormulas<MaskingFormulas, SchlickSmithMasking>();
         return e;
-    }();
+    }());
     return {&none, &implicit, &cookTorrance, &kelemen, &neumann, &schlickSmith};
 }
 

@@ -3,6 +3,7 @@
 // simplified, so that G and the cosines, which go to zero together at
 // grazing, are never divided by each other.
 #include "lowering/LaneEmitter.h"
+#include "Immortal.h"
 
 namespace facet {
 namespace {
@@ -70,12 +71,12 @@ class SchlickSmithMasking final : public MaskingEmitter {  // G1(c) / c = 1 / (c
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_masking_EmpiricalEmitter() {
-    static const NoMasking none;
-    static const ImplicitMasking implicit;
-    static const CookTorranceMasking cookTorrance;
-    static const KelemenMasking kelemen;
-    static const NeumannMasking neumann;
-    static const SchlickSmithMasking schlickSmith;
+    static const NoMasking& none = immortal<NoMasking>();
+    static const ImplicitMasking& implicit = immortal<ImplicitMasking>();
+    static const CookTorranceMasking& cookTorrance = immortal<CookTorranceMasking>();
+    static const KelemenMasking& kelemen = immortal<KelemenMasking>();
+    static const NeumannMasking& neumann = immortal<NeumannMasking>();
+    static const SchlickSmithMasking& schlickSmith = immortal<SchlickSmithMasking>();
     return {{ModelSlot::Masking, "none", &none},
             {ModelSlot::Masking, "implicit", &implicit},
             {ModelSlot::Masking, "cook_torrance", &cookTorrance},

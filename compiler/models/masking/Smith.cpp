@@ -3,6 +3,7 @@
 // height-direction-correlated. Each GOverCosines is its G divided by
 // (n.wi)(n.wo), formed from (n.v) Lambda(v), which stays finite at grazing.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "Interpreter.h"
 #include "models/ModelMath.h"
 
@@ -107,29 +108,29 @@ MaskingEntry smith(int id, const char* name, const char* summary) {
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_masking_Smith() {
-    static const MaskingEntry separable = [] {
+    static const MaskingEntry& separable = immortal<MaskingEntry>([] {
         MaskingEntry e = smith(6, "smith_separable", "uncorrelated Smith (Heitz 2014)");
         e.formulas = makeFormulas<MaskingFormulas, SeparableSmith>();
         return e;
-    }();
-    static const MaskingEntry height = [] {
+    }());
+    static const MaskingEntry& height = immortal<MaskingEntry>([] {
         MaskingEntry e = smith(7, "smith_height_correlated", "height-correlated Smith (Heitz 2014)");
         e.representative = true;
         e.formulas = makeFormulas<MaskingFormulas, HeightCorrelatedSmith>();
         return e;
-    }();
-    static const MaskingEntry direction = [] {
+    }());
+    static const MaskingEntry& direction = immortal<MaskingEntry>([] {
         MaskingEntry e = smith(8, "smith_direction_correlated", "direction-correlated Smith (Heitz 2014, Ashikhmin et al.)");
         e.albedoKinks.atWoH = e.albedoKinks.azimuthal = true;
         e.formulas = makeFormulas<MaskingFormulas, DirectionCorrelatedSmith>();
         return e;
-    }();
-    static const MaskingEntry heightDirection = [] {
+    }());
+    static const MaskingEntry& heightDirection = immortal<MaskingEntry>([] {
         MaskingEntry e = smith(9, "smith_height_direction_correlated", "height-direction-correlated Smith (Heitz 2014)");
         e.albedoKinks.atWoH = e.albedoKinks.azimuthal = true;
         e.formulas = makeFormulas<MaskingFormulas, HeightDirectionCorrelatedSmith>();
         return e;
-    }();
+    }());
     return {&separable, &height, &direction, &heightDirection};
 }
 

@@ -3,6 +3,7 @@
 // sums of positive terms, either from the NDF's root form R(v) (the plan's
 // LambdaForm::RootSums) or from (n.v) Lambda(v).
 #include "lowering/LaneEmitter.h"
+#include "Immortal.h"
 
 namespace facet {
 namespace {
@@ -98,10 +99,10 @@ private:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_masking_SmithEmitter() {
-    static const SeparableSmith separable;
-    static const HeightCorrelatedSmith heightCorrelated(false);
-    static const DirectionCorrelatedSmith directionCorrelated;
-    static const HeightCorrelatedSmith heightDirectionCorrelated(true);
+    static const SeparableSmith& separable = immortal<SeparableSmith>();
+    static const HeightCorrelatedSmith& heightCorrelated = immortal<HeightCorrelatedSmith>(false);
+    static const DirectionCorrelatedSmith& directionCorrelated = immortal<DirectionCorrelatedSmith>();
+    static const HeightCorrelatedSmith& heightDirectionCorrelated = immortal<HeightCorrelatedSmith>(true);
     return {{ModelSlot::Masking, "smith_separable", &separable},
             {ModelSlot::Masking, "smith_height_correlated", &heightCorrelated},
             {ModelSlot::Masking, "smith_direction_correlated", &directionCorrelated},

@@ -12,6 +12,7 @@
 // the polar CDF of D(m) mz, also elementary in t but with no closed-form
 // inverse, by a bracketed Newton iteration in v = ln t.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "LambdaTable.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
@@ -120,7 +121,7 @@ struct AbcFormulas final : NdfFormulas<Real> {
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_ndf_Abc() {
-    static const NdfEntry entry = [] {
+    static const NdfEntry& entry = immortal<NdfEntry>([] {
         NdfEntry e = makeEntry<NdfEntry>(ModelSlot::Ndf, 8, "abc", "ABC distribution (Church et al. 1989; Low et al. 2012)");
         e.canonical = {{"b", ValueType::Float, kMinB, kMaxB}, {"c", ValueType::Float, 0, kMaxC, "c", 2}};
         e.forms = {ModelForm{{{"b", ValueType::Float, {kB}}, {"c", ValueType::Float, {kC}}}}};
@@ -161,7 +162,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Abc() {
         };
         e.formulas = makeFormulas<NdfFormulas, AbcFormulas>();
         return e;
-    }();
+    }());
     return {&entry};
 }
 

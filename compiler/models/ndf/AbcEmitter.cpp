@@ -2,6 +2,7 @@
 // form in the precise type, its normalization and the NDF sampler's CDF
 // inversion in double.
 #include "ShapeNdfEmitter.h"
+#include "Immortal.h"
 #include "TabulatedLambdaEmitter.h"
 
 #include <cmath>
@@ -163,7 +164,7 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_AbcEmitter() {
-    static const AbcEmitter emitter;
+    static const AbcEmitter& emitter = immortal<AbcEmitter>();
     return {{ModelSlot::Ndf, "abc", &emitter, lambdaTableEmbedding}};
 }
 

@@ -1,6 +1,7 @@
 // beckmann: the Beckmann NDF (Cook & Torrance 1982, Walter et al. 2007),
 // isotropic or anisotropic, with its closed-form Smith Lambda.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
 
@@ -53,7 +54,7 @@ struct BeckmannFormulas final : NdfFormulas<Real> {
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_ndf_Beckmann() {
-    static const NdfEntry entry = [] {
+    static const NdfEntry& entry = immortal<NdfEntry>([] {
         NdfEntry e = alphaXYNdf(1, "beckmann", "Beckmann (Cook & Torrance 1982, Walter et al. 2007)");
         e.smith = true;
         e.shapeInvariant = true;
@@ -65,7 +66,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Beckmann() {
         };
         e.formulas = makeFormulas<NdfFormulas, BeckmannFormulas>();
         return e;
-    }();
+    }());
     return {&entry};
 }
 

@@ -2,6 +2,7 @@
 // (the reference is Beckmann.cpp). D is evaluated from wi + wo in the
 // precise type: its exponent amplifies the rounding of h by its own size.
 #include "BeckmannProfileEmitter.h"
+#include "Immortal.h"
 
 #include <cmath>
 
@@ -209,7 +210,7 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_BeckmannEmitter() {
-    static const BeckmannEmitter emitter;
+    static const BeckmannEmitter& emitter = immortal<BeckmannEmitter>();
     return {{ModelSlot::Ndf, "beckmann", &emitter}};
 }
 

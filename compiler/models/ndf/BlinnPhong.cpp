@@ -8,6 +8,7 @@
 // models/NdfSampling.h). The exact Smith Lambda of this D normalizes them;
 // the BRDF's masking keeps the Beckmann one.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
 
@@ -63,7 +64,7 @@ struct BlinnPhongFormulas final : NdfFormulas<Real> {
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_ndf_BlinnPhong() {
-    static const NdfEntry entry = [] {
+    static const NdfEntry& entry = immortal<NdfEntry>([] {
         NdfEntry e = makeEntry<NdfEntry>(ModelSlot::Ndf, 2, "blinn_phong", "normalized Blinn-Phong NDF");
         e.canonical = {{"exponent", ValueType::Float, 0, kMaxPhongExponent}};
         e.forms = {ModelForm{{{"exponent", ValueType::Float, {kExponent}}}}};
@@ -95,7 +96,7 @@ std::vector<const ModelInfo*> facetModels_ndf_BlinnPhong() {
         };
         e.formulas = makeFormulas<NdfFormulas, BlinnPhongFormulas>();
         return e;
-    }();
+    }());
     return {&entry};
 }
 

@@ -10,6 +10,7 @@
 // double whatever the kernel's math: in float the tails of the fraction
 // lose up to 8% (and the normals 3e-5).
 #include "BeckmannProfileEmitter.h"
+#include "Immortal.h"
 #include "StudentSlopeEmitter.h"
 
 #include <cmath>
@@ -313,7 +314,7 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_BlinnPhongEmitter() {
-    static const BlinnPhongEmitter emitter;
+    static const BlinnPhongEmitter& emitter = immortal<BlinnPhongEmitter>();
     return {{ModelSlot::Ndf, "blinn_phong", &emitter}};
 }
 

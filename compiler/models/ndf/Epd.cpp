@@ -15,6 +15,7 @@
 // continued fraction above), the paper's eq. 49-50. No visible-normal
 // sampler: that would need the visible slope CDF, which has no closed form.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "LambdaTable.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
@@ -126,7 +127,7 @@ std::array<double, 2> equivalentAlphas(const ModelArgs<double>& a) { return {a[k
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_ndf_Epd() {
-    static const NdfEntry entry = [] {
+    static const NdfEntry& entry = immortal<NdfEntry>([] {
         NdfEntry e = makeEntry<NdfEntry>(ModelSlot::Ndf, 7, "epd",
                                          "exponential power distribution of slopes (Holzschuch & Pacanowski 2017)");
         e.canonical = {{"alpha_x", ValueType::Float, kMinAlpha},
@@ -168,7 +169,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Epd() {
         };
         e.formulas = makeFormulas<NdfFormulas, EpdFormulas>();
         return e;
-    }();
+    }());
     return {&entry};
 }
 

@@ -4,6 +4,7 @@
 // (TabulatedLambdaEmitter.h); NDF sampling by a bracketed Newton inversion
 // of the regularized incomplete gamma function, in double.
 #include "TabulatedLambdaEmitter.h"
+#include "Immortal.h"
 
 #include "LambdaTable.h"
 #include "Specialize.h"
@@ -147,7 +148,7 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_EpdEmitter() {
-    static const EpdEmitter emitter;
+    static const EpdEmitter& emitter = immortal<EpdEmitter>();
     return {{ModelSlot::Ndf, "epd", &emitter, lambdaTableEmbedding}};
 }
 

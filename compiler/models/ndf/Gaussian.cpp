@@ -2,6 +2,7 @@
 // normalized by quadrature (gaussianNdfNorm). No closed-form Smith Lambda and
 // not shape-invariant: Lambda is tabulated in (a, alpha).
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "GaussianNormalization.h"
 #include "LambdaTable.h"
 
@@ -34,7 +35,7 @@ struct GaussianFormulas final : NdfFormulas<Real> {
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_ndf_Gaussian() {
-    static const NdfEntry entry = [] {
+    static const NdfEntry& entry = immortal<NdfEntry>([] {
         NdfEntry e = makeEntry<NdfEntry>(ModelSlot::Ndf, 4, "gaussian", "Gaussian in the polar angle, normalized by quadrature");
         e.canonical = {{"alpha", ValueType::Float, kMinAlpha}};
         e.forms = {ModelForm{{{"alpha", ValueType::Float, {kAlpha}}}}};
@@ -61,7 +62,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Gaussian() {
         };
         e.formulas = makeFormulas<NdfFormulas, GaussianFormulas>();
         return e;
-    }();
+    }());
     return {&entry};
 }
 

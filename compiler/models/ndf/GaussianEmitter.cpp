@@ -5,6 +5,7 @@
 // numeric/GaussianNormalization.h). Its NDF sampler inverts the polar CDF
 // by Newton's method on Gauss-Legendre quadratures of the density.
 #include "TabulatedLambdaEmitter.h"
+#include "Immortal.h"
 #include "lowering/LaneEmitter.h"
 
 #include "GaussianNormalization.h"
@@ -168,7 +169,7 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_GaussianEmitter() {
-    static const GaussianEmitter emitter;
+    static const GaussianEmitter& emitter = immortal<GaussianEmitter>();
     // The normalization table only where alpha is known per lane
     // (params()), and the Lambda table under a Smith masking.
     auto tables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {

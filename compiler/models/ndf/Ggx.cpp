@@ -1,6 +1,7 @@
 // ggx / trowbridge_reitz: the GGX (Trowbridge-Reitz) NDF of Walter et al.
 // 2007, isotropic or anisotropic, with its closed-form Smith Lambda.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
 
@@ -51,7 +52,7 @@ struct GgxFormulas final : NdfFormulas<Real> {
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_ndf_Ggx() {
-    static const NdfEntry entry = [] {
+    static const NdfEntry& entry = immortal<NdfEntry>([] {
         NdfEntry e = alphaXYNdf(0, "ggx", "GGX / Trowbridge-Reitz (Walter et al. 2007)");
         e.aliases = {"trowbridge_reitz"};
         e.smith = true;
@@ -71,7 +72,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Ggx() {
         };
         e.formulas = makeFormulas<NdfFormulas, GgxFormulas>();
         return e;
-    }();
+    }());
     return {&entry};
 }
 

@@ -3,6 +3,7 @@
 // cancellation, and the root form R(v) = (n.v)(1 + 2 Lambda(v)) that turns
 // the height-correlated denominator into sums of positive terms.
 #include "lowering/LaneEmitter.h"
+#include "Immortal.h"
 
 #include <cmath>
 
@@ -190,7 +191,7 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_GgxEmitter() {
-    static const GgxEmitter emitter;
+    static const GgxEmitter& emitter = immortal<GgxEmitter>();
     return {{ModelSlot::Ndf, "ggx", &emitter}};
 }
 

@@ -3,6 +3,7 @@
 // distribution. No closed-form Smith Lambda for a general gamma, and not
 // shape-invariant: Lambda is tabulated in (a, alpha) per constant gamma.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "LambdaTable.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
@@ -87,7 +88,7 @@ struct GtrFormulas final : NdfFormulas<Real> {
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_ndf_Gtr() {
-    static const NdfEntry entry = [] {
+    static const NdfEntry& entry = immortal<NdfEntry>([] {
         NdfEntry e = makeEntry<NdfEntry>(ModelSlot::Ndf, 3, "gtr", "generalized Trowbridge-Reitz (Burley 2012)");
         e.canonical = {{"alpha", ValueType::Float, kMinAlpha}, {"gamma", ValueType::Float, 0, INFINITY, "g", 2}};
         e.forms = {ModelForm{{{"alpha", ValueType::Float, {kAlpha}}, {"gamma", ValueType::Float, {kGamma}}}}};
@@ -135,7 +136,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Gtr() {
         };
         e.formulas = makeFormulas<NdfFormulas, GtrFormulas>();
         return e;
-    }();
+    }());
     return {&entry};
 }
 

@@ -1,6 +1,7 @@
 // gtr: Burley's generalized Trowbridge-Reitz NDF as IR (the reference is
 // Gtr.cpp), in log form in the precise type.
 #include "TabulatedLambdaEmitter.h"
+#include "Immortal.h"
 #include "lowering/LaneEmitter.h"
 
 namespace facet {
@@ -89,7 +90,7 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_GtrEmitter() {
-    static const GtrEmitter emitter;
+    static const GtrEmitter& emitter = immortal<GtrEmitter>();
     return {{ModelSlot::Ndf, "gtr", &emitter, lambdaTableEmbedding}};
 }
 

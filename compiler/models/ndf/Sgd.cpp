@@ -13,6 +13,7 @@
 // roughness below. NDF sampling draws w from its truncated gamma density, Gamma(1 -
 // p, w) = (1 - u1) Gamma(1 - p, alpha), by a bracketed Newton iteration.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "LambdaTable.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
@@ -136,7 +137,7 @@ struct SgdFormulas final : NdfFormulas<Real> {
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_ndf_Sgd() {
-    static const NdfEntry entry = [] {
+    static const NdfEntry& entry = immortal<NdfEntry>([] {
         NdfEntry e = makeEntry<NdfEntry>(ModelSlot::Ndf, 9, "sgd",
                                          "shifted gamma distribution (Bagher, Soler & Holzschuch 2012)");
         e.canonical = {{"alpha", ValueType::Float, kMinAlpha, kMaxAlpha}, {"p", ValueType::Float, 0, kMaxP, "p", 0.6}};
@@ -182,7 +183,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Sgd() {
         };
         e.formulas = makeFormulas<NdfFormulas, SgdFormulas>();
         return e;
-    }();
+    }());
     return {&entry};
 }
 

@@ -2,6 +2,7 @@
 // in log form in the precise type; the normalization, an upper incomplete
 // gamma function, and the NDF sampler's inversion of it in double.
 #include "ShapeNdfEmitter.h"
+#include "Immortal.h"
 #include "TabulatedLambdaEmitter.h"
 
 #include <cmath>
@@ -153,7 +154,7 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_SgdEmitter() {
-    static const SgdEmitter emitter;
+    static const SgdEmitter& emitter = immortal<SgdEmitter>();
     return {{ModelSlot::Ndf, "sgd", &emitter, lambdaTableEmbedding}};
 }
 

@@ -13,6 +13,7 @@
 // Its visible normals are those of the Student-t slope distribution of
 // NdfSampling.h (blinn_phong's), stretched.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "LambdaTable.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
@@ -95,7 +96,7 @@ std::array<double, 2> equivalentAlphas(const ModelArgs<double>& a) { return {a[k
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_ndf_StudentT() {
-    static const NdfEntry entry = [] {
+    static const NdfEntry& entry = immortal<NdfEntry>([] {
         NdfEntry e = makeEntry<NdfEntry>(ModelSlot::Ndf, 6, "student_t",
                                          "Student's t-distribution of slopes (Ribardiere et al. 2017)");
         e.canonical = {{"alpha_x", ValueType::Float, kMinAlpha},
@@ -139,7 +140,7 @@ std::vector<const ModelInfo*> facetModels_ndf_StudentT() {
         };
         e.formulas = makeFormulas<NdfFormulas, StudentTFormulas>();
         return e;
-    }();
+    }());
     return {&entry};
 }
 

@@ -6,6 +6,7 @@
 // the exact Lambda that normalizes them, from the Student-t slope
 // distribution of StudentSlopeEmitter.h, stretched.
 #include "StudentSlopeEmitter.h"
+#include "Immortal.h"
 #include "TabulatedLambdaEmitter.h"
 
 #include "LambdaTable.h"
@@ -209,7 +210,7 @@ std::vector<EmbeddedTable> lambdaTableEmbedding(const CheckedMaterial& material)
 }
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_StudentTEmitter() {
-    static const StudentTEmitter emitter;
+    static const StudentTEmitter& emitter = immortal<StudentTEmitter>();
     return {{ModelSlot::Ndf, "student_t", &emitter, lambdaTableEmbedding}};
 }
 

@@ -2,6 +2,7 @@
 // exp(-tan^2(theta_h)(cos^2(phi_h)/ax^2 + sin^2(phi_h)/ay^2)) / (4 pi ax ay sqrt(ci co)),
 // times F. It carries its own normalization, so it takes no masking term.
 #include "QuadMath.h"
+#include "Immortal.h"
 #include "models/ModelMath.h"
 #include "models/NdfSampling.h"
 
@@ -37,14 +38,14 @@ struct WardFormulas final : NdfFormulas<Real> {
 }  // namespace
 
 std::vector<const ModelInfo*> facetModels_ndf_Ward() {
-    static const NdfEntry entry = [] {
+    static const NdfEntry& entry = immortal<NdfEntry>([] {
         NdfEntry e = alphaXYNdf(5, "ward", "whole anisotropic Ward (1992) lobe");
         e.wholeLobe = true;
         e.energyNote = "ward's lobe has its own approximate normalization, not a microfacet energy bound";
         e.hardCases = {{"hcc_ward_aniso_1e4", "ndf = ward(alpha_x = 1e-4, alpha_y = 1);"}};
         e.formulas = makeFormulas<NdfFormulas, WardFormulas>();
         return e;
-    }();
+    }());
     return {&entry};
 }
 

@@ -1,6 +1,7 @@
 // ward: Ward's anisotropic lobe as IR (the reference is Ward.cpp): a whole
 // lobe with its own normalization, no D and no masking term.
 #include "lowering/LaneEmitter.h"
+#include "Immortal.h"
 
 namespace facet {
 namespace {
@@ -49,7 +50,7 @@ public:
 }  // namespace
 
 std::vector<TermEmitterEntry> facetEmitters_ndf_WardEmitter() {
-    static const WardEmitter emitter;
+    static const WardEmitter& emitter = immortal<WardEmitter>();
     return {{ModelSlot::Ndf, "ward", &emitter}};
 }
 
