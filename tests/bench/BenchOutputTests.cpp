@@ -336,7 +336,7 @@ TEST_CASE("bench --json output parses and has every field") {
     CHECK(seen.count({"aot", "bare"}));
     CHECK(seen.size() == 14);
 
-    // ns/eval by batch size: simd exact and fast, the two AOT functions,
+    // ns/eval by batch size: simd exact and fast (also under assume=unit), the two AOT functions,
     // and the scalar entry at n = 1 only.
     checkField(m, "batch_sizes", Kind::Array);
     std::set<std::string> evaluators;
@@ -356,7 +356,8 @@ TEST_CASE("bench --json output parses and has every field") {
             else CHECK(ns.at(key).num() > 0);
         }
     }
-    CHECK(evaluators == std::set<std::string>{"simd exact", "simd fast", "aot hand-written", "aot bare",
+    CHECK(evaluators == std::set<std::string>{"simd exact", "simd fast", "simd exact, assume=unit",
+                                              "simd fast, assume=unit", "aot hand-written", "aot bare",
                                               "scalar exact, one call per lane"});
 
     // The sampler rows: interp, scalar and simd (exact, fast), and the
