@@ -159,6 +159,20 @@ bool guardedFastApplies(const CheckedMaterial& material, const MaterialEmitters&
     return em.ndf.traits.guardedFastBody && ndfIsotropic && !material.compensatesEnergy();
 }
 
+// A fast kernel whose NDF has no guarded fast body applicable (an
+// anisotropic GGX) would run the plain float body, with its scaled masking
+// sums and output checks. The exact kernel's guarded float body skips both
+// and is faster than that (anisotropic GGX + dielectric: 4.06 against 4.32
+// ns/eval, docs/perf-log.md), so such a kernel takes the exact kernel's
+// guarded float body, with the fast plain body for the lanes it distrusts:
+// fast mode is then never slower than exact, and no less accurate. A variant
+// that substitutes a model (a tolerance's choice) or turns float-first off
+// keeps its own plain body.
+bool fastTakesFloatFirst(const CheckedMaterial& material, const MaterialEmitters& em, const MathVariant& variant) {
+    if (variant.precise || !variant.floatFirst || variant.walterLambda || variant.schlickDielectric) return false;
+    return floatFirstApplies(material, em, MathVariant::exact());
+}
+
 // One body of the kernel. `role` and `bodyVariant` (the variant the body
 // computes with: a float-first body is the exact variant without
 // `precise`) settle its types; the model traits settle its forms.
@@ -243,13 +257,16 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     // faster than double except for division and square root, and the
     // guards would cost more than they save (docs/perf-log.md).
     plan.scalarBody = planBody(material, em, plan, BodyRole::Plain, variant);
-    if (floatFirstApplies(material, em, variant)) {
+    const bool guardedFast = guardedFastApplies(material, em, variant, plan.ndfIsotropic);
+    if (floatFirstApplies(material, em, variant) || (!guardedFast && fastTakesFloatFirst(material, em, variant))) {
         plan.batchBodies = BatchBodies::FloatFirst;
-        MathVariant floatVariant = variant;
+        // The exact variant's float body, in float (a fast kernel's
+        // estimates and short polynomials are not for it).
+        MathVariant floatVariant = variant.precise ? variant : MathVariant::exact();
         floatVariant.precise = false;
         plan.batchBody = planBody(material, em, plan, BodyRole::FloatGuarded, floatVariant);
         plan.fallbackBody = plan.scalarBody;
-    } else if (guardedFastApplies(material, em, variant, plan.ndfIsotropic)) {
+    } else if (guardedFast) {
         plan.batchBodies = BatchBodies::GuardedFast;
         plan.batchBody = planBody(material, em, plan, BodyRole::FastGuarded, variant);
         plan.fallbackBody = plan.scalarBody;

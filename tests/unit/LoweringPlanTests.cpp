@@ -87,7 +87,7 @@ TEST_CASE("a diffuse term keeps the output check of a guarded body") {
     CHECK(p.batchBody.checkOutput);
 }
 
-TEST_CASE("fast GGX: a guarded body only when isotropic") {
+TEST_CASE("fast GGX: a guarded fast body when isotropic, the exact float-first body when anisotropic") {
     LoweringPlan iso = fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
     CHECK(iso.batchBodies == BatchBodies::GuardedFast);
     CHECK(iso.batchBody.role == BodyRole::FastGuarded);
@@ -100,7 +100,29 @@ TEST_CASE("fast GGX: a guarded body only when isotropic") {
     CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3);").ndfIsotropic);
     CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3);").batchBodies == BatchBodies::GuardedFast);
     CHECK_FALSE(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5);").ndfIsotropic);
-    CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5);").batchBodies == BatchBodies::Plain);
+    // Anisotropic: the exact kernel's guarded float body (estimates and
+    // short polynomials off), the plain fast body for its distrusted lanes.
+    LoweringPlan aniso = fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5);");
+    CHECK(aniso.batchBodies == BatchBodies::FloatFirst);
+    CHECK(aniso.batchBody.role == BodyRole::FloatGuarded);
+    CHECK_FALSE(aniso.batchBody.estimates);
+    CHECK_FALSE(aniso.batchBody.shortPolynomials);
+    CHECK_FALSE(aniso.batchBody.scaleMaskingSums);
+    REQUIRE(aniso.fallbackBody);
+    CHECK(aniso.fallbackBody->estimates);
+    CHECK(aniso.fallbackBody->precise == Precision::Float);
+    CHECK(aniso.flushDenormals);
+    // ... but not with float_first=off, nor for a tolerance's model substitution,
+    // nor where the exact kernel has no float-first body (Beckmann).
+    MathVariant noFloatFirst = MathVariant::fast();
+    noFloatFirst.floatFirst = false;
+    CHECK(planLowering(material("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5);"), noFloatFirst, true).batchBodies ==
+          BatchBodies::Plain);
+    MathVariant schlick = MathVariant::fast();
+    schlick.schlickDielectric = true;
+    CHECK(planLowering(material("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5); fresnel = dielectric(1.5);"), schlick, true)
+              .batchBodies == BatchBodies::Plain);
+    CHECK(fastPlan("ndf = beckmann(alpha_x = 0.3, alpha_y = 0.5);").batchBodies == BatchBodies::Plain);
     // An f0 that can reach 0 keeps the cancellation-free 1 - cos and the F guard.
     LoweringPlan lanes = fastPlan("input f0 = 0.04; ndf = ggx(0.3); fresnel = schlick(f0 = f0);");
     CHECK(lanes.batchBody.halfVector == HalfVectorForm::Precise);
