@@ -19,6 +19,8 @@
 #include "Kernel.h"
 #include "LoweringPlan.h"
 
+#include "../CoveringMaterials.h"
+
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
@@ -157,26 +159,6 @@ void compareBits(const char* what, const std::vector<float>& a, const std::vecto
         }
 }
 
-// The materials that bring a model (or an NDF under a Smith masking, or
-// energy compensation) that the ones before did not.
-std::vector<HardCaseMaterial> coveringMaterials(const std::vector<HardCaseMaterial>& all) {
-    std::set<std::string> seen;
-    std::vector<HardCaseMaterial> out;
-    for (const HardCaseMaterial& hm : all) {
-        DiagnosticEngine diags;
-        CheckedProgram program = loadProgramText(hm.text, hm.name + ".mat", diags);
-        if (program.materials.empty()) continue;
-        const CheckedMaterial& m = program.materials.front();
-        std::vector<std::string> keys = {"ndf " + hm.ndf, "masking " + hm.masking, "fresnel " + hm.fresnel};
-        if (m.masking.model->smith) keys.push_back("smith " + hm.ndf);
-        if (m.compensatesEnergy()) keys.push_back(m.masking.model->smith ? "energy smith" : "energy");
-        bool adds = false;
-        for (const std::string& k : keys) adds |= seen.insert(k).second;
-        if (adds) out.push_back(hm);
-    }
-    return out;
-}
-
 MaterialRun runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& compiler) {
     MaterialRun r;
     DiagnosticEngine diags;
@@ -223,7 +205,7 @@ TEST_CASE("assume=unit: the default kernels' bits on valid inputs, and no crash 
     std::vector<std::string> rejected;
     const std::vector<HardCaseMaterial> all = hardCaseMaterials(&rejected);
     REQUIRE(rejected.empty());
-    const std::vector<HardCaseMaterial> materials = coveringMaterials(all);
+    const std::vector<HardCaseMaterial> materials = test::coveringMaterials(all);
     std::vector<MaterialRun> runs(materials.size());
     std::atomic<size_t> next{0};
     auto worker = [&] {

@@ -8,44 +8,29 @@
 //
 //   facet_static_compiler_exit compile MATERIALS_DIR CACHE_DIR
 //       compiles every *.mat of MATERIALS_DIR and, so that every model's
-//       code runs, the fewest generated hard-case materials that together
-//       use every NDF, masking and Fresnel model and Kulla-Conty energy
-//       compensation (tiered, disk cache CACHE_DIR, emptied first), writes
-//       how many it compiled to CACHE_DIR/compiled, and returns from main
-//       with the tier-ups pending
+//       code runs, the hard-case materials that cover the catalog
+//       (CoveringMaterials.h), tiered, with the disk cache CACHE_DIR
+//       (emptied first); writes how many it compiled to CACHE_DIR/compiled
+//       and returns from main with the tier-ups pending
 //   facet_static_compiler_exit count CACHE_DIR
 //       exits 0 when CACHE_DIR holds one kernel object per material
 //       compiled: the tier-ups that ran during exit() completed their work
 #include "HardCases.h"
 #include "Kernel.h"
 
+#include "../CoveringMaterials.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <set>
 #include <string>
 #include <vector>
 
 namespace fs = std::filesystem;
 
 namespace {
-
-// Generated materials that together use every model of the catalog, each
-// one taken when it adds a model the earlier ones did not use.
-std::vector<facet::HardCaseMaterial> catalogCover() {
-    std::set<std::string> used;
-    std::vector<facet::HardCaseMaterial> cover;
-    for (facet::HardCaseMaterial& m : facet::hardCaseMaterials()) {
-        std::vector<std::string> keys = {"ndf " + m.ndf, "masking " + m.masking, "fresnel " + m.fresnel};
-        if (m.text.find("kulla_conty") != std::string::npos) keys.push_back("energy kulla_conty");
-        bool adds = false;
-        for (const std::string& k : keys) adds |= used.insert(k).second;
-        if (adds) cover.push_back(std::move(m));
-    }
-    return cover;
-}
 
 int compileAll(const std::string& materials, const std::string& cacheDir) {
     static facet::Compiler compiler;  // before anything else of Facet's is touched
@@ -77,7 +62,7 @@ int compileAll(const std::string& materials, const std::string& cacheDir) {
         facet::DiagnosticEngine diags;
         if (!check(compiler.compileFile(path, "", options, diags), path, diags)) return 1;
     }
-    for (const facet::HardCaseMaterial& m : catalogCover()) {
+    for (const facet::HardCaseMaterial& m : facet::test::coveringMaterials(facet::hardCaseMaterials())) {
         facet::DiagnosticEngine diags;
         if (!check(compiler.compileText(m.text, "<" + m.name + ">", m.name, options, diags), m.name, diags)) return 1;
     }
