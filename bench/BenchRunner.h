@@ -149,8 +149,9 @@ struct LambdaTableBench : TableTiming {
 // evaluates its per-material queues; per call the caller's pointer
 // arithmetic included. One row per evaluator: simd exact and fast
 // (Kernel::evalBatch, what facet_eval_batch calls after its argument
-// checks), the same under the host's promise assume=unit, the AOT hand-written and bare functions (through a function
-// pointer: at n = 1, one call of the bare function per lane); plus the
+// checks), the same under the host's promise assume=unit, the AOT
+// hand-written and bare functions (through a function pointer: at n = 1,
+// one call of the bare function per lane); plus the
 // scalar entry called once per lane (Kernel::eval, what facet_eval calls),
 // in the n = 1 column only.
 inline constexpr size_t kBatchSizes[] = {1, 4, 16, 64, 256, 65536};

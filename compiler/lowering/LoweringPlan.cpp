@@ -159,18 +159,19 @@ bool guardedFastApplies(const CheckedMaterial& material, const MaterialEmitters&
     return em.ndf.traits.guardedFastBody && ndfIsotropic && !material.compensatesEnergy();
 }
 
-// A fast kernel whose NDF has no guarded fast body applicable (an
-// anisotropic GGX) would run the plain float body, with its scaled masking
-// sums and output checks. The exact kernel's guarded float body skips both
-// and is faster than that (anisotropic GGX + dielectric: 4.06 against 4.32
-// ns/eval, docs/perf-log.md), so such a kernel takes the exact kernel's
-// guarded float body, with the fast plain body for the lanes it distrusts:
-// fast mode is then never slower than exact, and no less accurate. A variant
-// that substitutes a model (a tolerance's choice) or turns float-first off
-// keeps its own plain body.
-bool fastTakesFloatFirst(const CheckedMaterial& material, const MaterialEmitters& em, const MathVariant& variant) {
+// A fast kernel without a guarded fast body (anisotropic GGX) would run the
+// plain float body, with its scaled masking sums and output checks. Where
+// the exact kernel has a guarded float body, which skips both, that body is
+// the faster one (docs/perf-log.md), so such a fast kernel takes it, with
+// the plain fast body for the lanes it distrusts: fast mode is then never
+// slower than exact, and no less accurate. A variant that substitutes a
+// model (a tolerance's choice) or turns float-first off keeps its own plain
+// body.
+bool fastTakesFloatFirst(const CheckedMaterial& material, const MaterialEmitters& em, const MathVariant& variant,
+                         bool ndfIsotropic) {
     if (variant.precise || !variant.floatFirst || variant.walterLambda || variant.schlickDielectric) return false;
-    return floatFirstApplies(material, em, MathVariant::exact());
+    return !guardedFastApplies(material, em, variant, ndfIsotropic) &&
+           floatFirstApplies(material, em, MathVariant::exact());
 }
 
 // One body of the kernel. `role` and `bodyVariant` (the variant the body
@@ -257,8 +258,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     // faster than double except for division and square root, and the
     // guards would cost more than they save (docs/perf-log.md).
     plan.scalarBody = planBody(material, em, plan, BodyRole::Plain, variant);
-    const bool guardedFast = guardedFastApplies(material, em, variant, plan.ndfIsotropic);
-    if (floatFirstApplies(material, em, variant) || (!guardedFast && fastTakesFloatFirst(material, em, variant))) {
+    if (floatFirstApplies(material, em, variant) || fastTakesFloatFirst(material, em, variant, plan.ndfIsotropic)) {
         plan.batchBodies = BatchBodies::FloatFirst;
         // The exact variant's float body, in float (a fast kernel's
         // estimates and short polynomials are not for it).
@@ -266,7 +266,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
         floatVariant.precise = false;
         plan.batchBody = planBody(material, em, plan, BodyRole::FloatGuarded, floatVariant);
         plan.fallbackBody = plan.scalarBody;
-    } else if (guardedFast) {
+    } else if (guardedFastApplies(material, em, variant, plan.ndfIsotropic)) {
         plan.batchBodies = BatchBodies::GuardedFast;
         plan.batchBody = planBody(material, em, plan, BodyRole::FastGuarded, variant);
         plan.fallbackBody = plan.scalarBody;
