@@ -117,8 +117,16 @@ std::array<Value*, 3> LaneEmitter::unitDirection(const std::array<Value*, 3>& w,
     std::array<Value*, 3> out;
     Value* len2 = checkedLength2(pm, w, out);
     Value* delta = pm.sub(len2, pm.c(1.0));
-    Value* inv = pm.isDouble() ? pm.poly(delta, {1.0, -1.0 / 2, 3.0 / 8, -5.0 / 16, 35.0 / 128, -63.0 / 256, 231.0 / 1024})
-                               : pm.poly(delta, {1.0, -1.0 / 2, 3.0 / 8});
+    // A one-lane body waits on the double series (the first link of every
+    // dependency chain): there it is evaluated by Estrin's scheme, 3
+    // dependent FMAs instead of 6; a SIMD body keeps Horner's fewer
+    // operations.
+    Value* inv;
+    if (pm.isDouble()) {
+        const auto series = {1.0, -1.0 / 2, 3.0 / 8, -5.0 / 16, 35.0 / 128, -63.0 / 256, 231.0 / 1024};
+        inv = pm.width() == 1 ? pm.polyEstrin(delta, series) : pm.poly(delta, series);
+    } else
+        inv = pm.poly(delta, {1.0, -1.0 / 2, 3.0 / 8});
     for (Value*& x : out) x = pm.mul(x, inv);
     if (pm.isDouble()) {
         Value* corr = fm.convert(pm.sub(inv, pm.c(1.0)), fm.type());

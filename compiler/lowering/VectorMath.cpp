@@ -6,6 +6,7 @@
 #include <llvm/IR/Intrinsics.h>
 
 #include <cmath>
+#include <vector>
 
 namespace facet {
 
@@ -75,6 +76,22 @@ Value* MathEmitter::poly(Value* x, std::initializer_list<double> coeffs) {
     Value* acc = c(*--it);
     while (it != coeffs.begin()) acc = fma(acc, x, c(*--it));
     return acc;
+}
+
+Value* MathEmitter::polyEstrin(Value* x, std::initializer_list<double> coeffs) {
+    const std::vector<double> k(coeffs);
+    std::vector<Value*> terms;
+    for (size_t i = 0; i < k.size(); i += 2) terms.push_back(i + 1 < k.size() ? fma(x, c(k[i + 1]), c(k[i])) : c(k[i]));
+    // Each round halves the terms, t[2i] + x^(2^r) t[2i+1] in round r.
+    Value* power = mul(x, x);
+    while (terms.size() > 1) {
+        std::vector<Value*> next;
+        for (size_t i = 0; i < terms.size(); i += 2)
+            next.push_back(i + 1 < terms.size() ? fma(power, terms[i + 1], terms[i]) : terms[i]);
+        terms = std::move(next);
+        if (terms.size() > 1) power = mul(power, power);
+    }
+    return terms.front();
 }
 
 Value* MathEmitter::convert(Value* v, llvm::Type* to) {

@@ -65,6 +65,12 @@ public:
     llvm::Value* rint(llvm::Value* a);
     // Horner evaluation of sum coeffs[i] x^i.
     llvm::Value* poly(llvm::Value* x, std::initializer_list<double> coeffs);
+    // The same sum by Estrin's scheme: pairs c[i] + c[i+1] x combined with
+    // x^2, x^4, ..., a dependency chain of about log2(n) FMAs instead of
+    // n - 1, for a multiplication or two more. For series on the latency
+    // path of a one-lane call; in a SIMD body, where throughput counts,
+    // Horner does less work.
+    llvm::Value* polyEstrin(llvm::Value* x, std::initializer_list<double> coeffs);
 
     llvm::Value* exp(llvm::Value* x);
     // exp(x) for x the caller has bounded to [-700, 700] (double) or
