@@ -46,14 +46,6 @@ struct NdfCase {
     bool tabulated = false;  // that Lambda is tabulated (LambdaTable.h)
 };
 
-// `name(p0 = v0, p1 = v1, ...)` with every canonical parameter of the entry.
-std::string callOf(const NdfEntry& ndf, const ModelArgs<double>& a) {
-    std::string text = std::string(ndf.name) + "(";
-    for (size_t p = 0; p < ndf.canonical.size(); ++p)
-        text += (p ? ", " : "") + std::string(ndf.canonical[p].name) + " = " + num(a[int(p)]);
-    return text + ")";
-}
-
 // Every NDF of the catalog (but whole lobes), at each roughness with its
 // typical shape parameters, and anisotropic where it has alpha_x and alpha_y
 // (also with the axes swapped, so that they cannot be confused without the
@@ -66,14 +58,12 @@ std::vector<NdfCase> ndfCases() {
         const NdfEntry& ndf = ndfEntry(*m);
         if (ndf.wholeLobe) continue;
         const bool exactSmith = facet::hasSmithLambda(ndf) && !*ndf.lambdaNote;
-        std::vector<double> shape;
-        for (int p : ndf.tableShapeParams) shape.push_back(ndf.canonical[p].typical);
         for (double a : kAlphas)
-            out.push_back({callOf(ndf, ndf.argsAtAlpha(a, shape)), a, false, exactSmith, ndf.tabulatedLambda});
+            out.push_back({callOf(ndf, typicalArgsAtAlpha(ndf, a)), a, false, exactSmith, ndf.tabulatedLambda});
         const int ax = paramIndex(ndf, "alpha_x"), ay = paramIndex(ndf, "alpha_y");
         if (ax < 0 || ay < 0) continue;
         for (auto& p : pairs) {
-            ModelArgs<double> args = ndf.argsAtAlpha(p[0], shape);
+            ModelArgs<double> args = typicalArgsAtAlpha(ndf, p[0]);
             args.set(ay, p[1]);
             out.push_back({callOf(ndf, args), std::min(p[0], p[1]), true, exactSmith, ndf.tabulatedLambda});
         }

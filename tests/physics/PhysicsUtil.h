@@ -17,6 +17,7 @@
 
 #include "Checker.h"
 #include "Interpreter.h"
+#include "models/ModelCatalog.h"
 
 #include <doctest/doctest.h>
 
@@ -189,6 +190,23 @@ inline std::string num(double x) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.17g", x);
     return buf;
+}
+
+// `name(p0 = v0, p1 = v1, ...)`: the source of an NDF statement's model
+// with every canonical parameter of the entry at `a`.
+inline std::string callOf(const facet::NdfEntry& ndf, const facet::ModelArgs<double>& a) {
+    std::string text = std::string(ndf.name) + "(";
+    for (size_t p = 0; p < ndf.canonical.size(); ++p)
+        text += (p ? ", " : "") + std::string(ndf.canonical[p].name) + " = " + num(a[int(p)]);
+    return text + ")";
+}
+
+// The entry's arguments at roughness `alpha` with its shape parameters at
+// their typical values.
+inline facet::ModelArgs<double> typicalArgsAtAlpha(const facet::NdfEntry& ndf, double alpha) {
+    std::vector<double> shape;
+    for (int p : ndf.tableShapeParams) shape.push_back(ndf.canonical[p].typical);
+    return ndf.argsAtAlpha(alpha, shape);
 }
 
 }  // namespace physics
