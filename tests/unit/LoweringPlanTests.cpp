@@ -152,11 +152,15 @@ TEST_CASE("float bodies sum the float directions with a normalization correction
     CHECK(printPlan(material("ndf = ggx(0.3);"), guarded).find("corrected-sums=yes") != std::string::npos);
 }
 
-TEST_CASE("the half angle in float: exponent NDFs with well-conditioned consumers") {
+TEST_CASE("the half angle in float: NDFs whose D takes wi + wo, with well-conditioned consumers") {
     CHECK(exactPlan("ndf = beckmann(0.3); masking = smith_separable; fresnel = schlick(f0 = 0.04);")
               .scalarBody.halfVector == HalfVectorForm::InFloat);
     CHECK(exactPlan("ndf = beckmann(0.3); masking = cook_torrance;").scalarBody.halfVector == HalfVectorForm::Precise);
-    CHECK(exactPlan("ndf = ggx(0.3); masking = smith_separable;").scalarBody.halfVector == HalfVectorForm::Precise);
+    CHECK(exactPlan("ndf = ggx(0.3); masking = smith_separable;").scalarBody.halfVector == HalfVectorForm::InFloat);
+    CHECK(exactPlan("ndf = ggx(0.3); masking = kelemen;").scalarBody.halfVector == HalfVectorForm::Precise);
+    // An NDF whose D needs the unit h.
+    CHECK(exactPlan("ndf = gtr(alpha = 0.3, gamma = 1.5); masking = smith_separable;").scalarBody.halfVector ==
+          HalfVectorForm::Precise);
     LoweringPlan constant = exactPlan("ndf = beckmann(0.3); fresnel = dielectric(1.5);");
     CHECK(constant.fresnel.exactInFloat);
     CHECK(constant.scalarBody.halfVector == HalfVectorForm::InFloat);

@@ -17,6 +17,7 @@ using llvm::Value;
 class GgxEmitter final : public NdfEmitter {
 public:
     GgxEmitter() {
+        traits.dFromUnnormalizedHalf = true;
         traits.floatFirstBody = true;
         traits.guardedFastBody = true;
         traits.smithRootSums = true;
@@ -32,28 +33,41 @@ public:
     // D(h) in the precise type; even the float value is carried on in it,
     // because D can be far below float range where D G / (ci co) is not.
     Value* D(LaneEmitter& lane, const NdfParams& n, const LaneGeometry& geo) const override {
-        const std::array<Value*, 3>&h = geo.h, &hD = geo.hD;
         MathEmitter& fm = lane.floatMath();
         MathEmitter& pm = lane.preciseMath();
-        internal_assert(h[0]) << "GGX needs the unit h, which the plan left out";
         if (!lane.body.guarded() && lane.body.precise == Precision::Double) {
             // The precise body of an exact kernel: D in double, so that an
             // alpha beyond float range or alphas far apart (ggx(1e30),
             // alpha_x = 1e30 with alpha_y = 1e-30), whose D or lobe can still
             // be a normal float at grazing h, get the reference's value
             // instead of a float 0 or Inf/Inf.
-            Value *x2 = pm.mul(hD[0], hD[0]), *y2 = pm.mul(hD[1], hD[1]), *z2 = pm.mul(hD[2], hD[2]);
+            // From u = wi + wo (geo.slopeH, h up to scale; |u|^2 = l2, null
+            // for a unit u): D is homogeneous of degree 0 in u, D = a^2
+            // |u|^4 / (pi (ux^2 + uy^2 + a^2 uz^2)^2), so it waits neither
+            // for |u|'s square root nor for the division that normalizes h
+            // (a one-lane call's longest chain), and the half angle may stay
+            // in float (NdfLoweringTraits::dFromUnnormalizedHalf).
+            const std::array<Value*, 3>& u = geo.slopeH;
+            Value* l2 = geo.slopeHLen2;
+            Value *x2 = pm.mul(u[0], u[0]), *y2 = pm.mul(u[1], u[1]), *z2 = pm.mul(u[2], u[2]);
+            Value *num, *t;
             if (n.isotropic) {
                 Value* a2 = pm.mul(n.axD, n.axD);
-                Value* t = pm.fma(a2, z2, pm.add(x2, y2));
-                return pm.div(pm.mul(a2, pm.c(1.0 / kPi)), pm.mul(t, t));
+                num = pm.mul(a2, pm.c(1.0 / kPi));
+                t = pm.fma(a2, z2, pm.add(x2, y2));
+            } else {
+                // 1 / (pi ax ay (x2/ax^2 + y2/ay^2 + z2)^2), scaled by ax ay
+                // so that nothing overflows for ax ay within double range.
+                Value* axy = pm.mul(n.axD, n.ayD);
+                num = pm.mul(axy, pm.c(1.0 / kPi));
+                t = pm.add(pm.fma(pm.div(n.ayD, n.axD), x2, pm.mul(pm.div(n.axD, n.ayD), y2)), pm.mul(axy, z2));
             }
-            // 1 / (pi ax ay (x2/ax^2 + y2/ay^2 + z2)^2), scaled by ax ay so
-            // that nothing overflows for ax ay within double range.
-            Value* axy = pm.mul(n.axD, n.ayD);
-            Value* t = pm.add(pm.fma(pm.div(n.ayD, n.axD), x2, pm.mul(pm.div(n.axD, n.ayD), y2)), pm.mul(axy, z2));
-            return pm.div(pm.mul(axy, pm.c(1.0 / kPi)), pm.mul(t, t));
+            if (!l2) return pm.div(num, pm.mul(t, t));
+            Value* r = pm.div(l2, t);
+            return pm.mul(num, pm.mul(r, r));
         }
+        const std::array<Value*, 3>& h = geo.h;
+        internal_assert(h[0]) << "GGX's float D needs the unit h, which the plan left out";
         if (n.isotropic) {
             // 1 / (pi a^2 (s2/a^2 + mz^2)^2) = a^2 / (pi (s2 + a^2 mz^2)^2): one division.
             Value* a2 = fm.mul(n.ax, n.ax);
