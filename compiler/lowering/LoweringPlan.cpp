@@ -221,6 +221,16 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
 
 }  // namespace
 
+// The technique is the catalog's (visible normals only where the entry has
+// an exact sampler and the masking is a Smith form); the NDF's emitter says
+// whether it has that sampler in IR.
+SpecularSampling plannedSpecularSampling(const CheckedMaterial& material) {
+    const NdfEmitter& ndf = termEmitters(material).ndf;
+    const bool visible = samplesVisibleNormals(ndfEntry(*material.ndf.model), maskingEntry(*material.masking.model));
+    if (!(visible ? ndf.traits.samplesVisibleNormals : ndf.traits.samplesNormals)) return SpecularSampling::None;
+    return visible ? SpecularSampling::VisibleNormals : SpecularSampling::NdfNormals;
+}
+
 LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool x86Target,
                           bool trustInputs) {
     const MaterialEmitters em = termEmitters(material);
@@ -275,14 +285,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
         plan.batchBody = plan.scalarBody;
     }
 
-    // Sampling: the technique is the catalog's (visible normals only where
-    // the entry has an exact sampler and the masking is a Smith form); the
-    // NDF's emitter says whether it has that sampler in IR.
-    const NdfEntry& ndfEntry = facet::ndfEntry(*material.ndf.model);
-    const MaskingEntry& masking = maskingEntry(*material.masking.model);
-    const bool visible = samplesVisibleNormals(ndfEntry, masking);
-    if (visible ? em.ndf.traits.samplesVisibleNormals : em.ndf.traits.samplesNormals)
-        plan.sampling.specular = visible ? SpecularSampling::VisibleNormals : SpecularSampling::NdfNormals;
+    plan.sampling.specular = plannedSpecularSampling(material);
     plan.sampling.cosineLobe = em.diffuse.present() || material.compensatesEnergy();
     plan.sampling.compensationAlbedo = material.compensatesEnergy();
     plan.sampling.body = plan.scalarBody;

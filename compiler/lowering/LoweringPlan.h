@@ -188,6 +188,10 @@ struct LoweringPlan {
 LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool x86Target,
                           bool trustInputs = false);
 
+// How the specular lobe of `material` is sampled in IR (None: the kernel
+// has no compiled sampler), as planLowering() plans it for every variant.
+SpecularSampling plannedSpecularSampling(const CheckedMaterial& material);
+
 // The plan as text, one decision per line (`facet ir --plan`).
 std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan);
 
