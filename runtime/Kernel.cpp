@@ -1,6 +1,7 @@
 // Kernel: option parsing, the compile pipeline, kernel caches, evaluation.
 #include "Kernel.h"
 #include "Immortal.h"
+#include "KernelCacheFile.h"
 
 #include "CacheFiles.h"
 #include "CodegenIdentity.h"
@@ -18,7 +19,6 @@
 #include <llvm/ADT/StringExtras.h>
 #include <llvm/Support/SHA256.h>
 #include <llvm/Support/raw_ostream.h>
-#include <llvm/Support/xxhash.h>
 
 #include <atomic>
 #include <chrono>
@@ -73,68 +73,8 @@ double millisSince(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-constexpr char kCacheMagic[8] = {'F', 'A', 'C', 'E', 'T', 'K', 'O', '2'};
 // Largest kernel cache file read; objects are tens of kilobytes.
 constexpr uint64_t kMaxCacheFileBytes = uint64_t(256) << 20;
-
-// Reads the fields of a cache file from memory; every length is checked
-// against the bytes left before anything is allocated.
-class CacheFileReader {
-public:
-    explicit CacheFileReader(std::string_view bytes) : rest_(bytes) {}
-    bool raw(void* out, size_t n) {
-        if (rest_.size() < n) return false;
-        std::memcpy(out, rest_.data(), n);
-        rest_.remove_prefix(n);
-        return true;
-    }
-    bool field(std::string& out) {
-        uint64_t len = 0;
-        if (!raw(&len, 8) || len > rest_.size()) return false;
-        out.assign(rest_.data(), size_t(len));
-        rest_.remove_prefix(size_t(len));
-        return true;
-    }
-    bool atEnd() const { return rest_.empty(); }
-
-private:
-    std::string_view rest_;
-};
-
-void appendRaw(std::string& out, const void* p, size_t n) { out.append(static_cast<const char*>(p), n); }
-void appendField(std::string& out, const std::string& s) {
-    uint64_t len = s.size();
-    appendRaw(out, &len, 8);
-    out += s;
-}
-
-// Parses a cached kernel; any mismatch (truncation, wrong key, bad checksum)
-// returns nullopt so the caller recompiles.
-std::optional<CachedKernel> parseCacheFile(std::string_view bytes, const std::string& key) {
-    CacheFileReader in(bytes);
-    char magic[8];
-    std::string storedKey;
-    CachedKernel k;
-    uint64_t checksum = 0;
-    if (!in.raw(magic, 8) || std::memcmp(magic, kCacheMagic, 8) != 0) return std::nullopt;
-    if (!in.field(storedKey) || storedKey != key) return std::nullopt;
-    if (!in.field(k.variant)) return std::nullopt;
-    if (!in.raw(&k.measuredError, 8) || !in.raw(&checksum, 8)) return std::nullopt;
-    if (!in.field(k.object) || !in.atEnd()) return std::nullopt;
-    if (llvm::xxh3_64bits(llvm::StringRef(k.object)) != checksum) return std::nullopt;
-    return k;
-}
-
-std::string cacheFileBytes(const std::string& key, const CachedKernel& k) {
-    std::string out(kCacheMagic, 8);
-    uint64_t checksum = llvm::xxh3_64bits(llvm::StringRef(k.object));
-    appendField(out, key);
-    appendField(out, k.variant);
-    appendRaw(out, &k.measuredError, 8);
-    appendRaw(out, &checksum, 8);
-    appendField(out, k.object);
-    return out;
-}
 
 // Candidate variants for a tolerance, fastest first. The model
 // substitutions only appear where they apply to the material.
@@ -200,7 +140,7 @@ std::optional<CachedKernel> lookUpCaches(MemoryCache& memory, CacheDirectory& di
     }
     if (cache != CompileOptions::Cache::On || cachePath.empty()) return std::nullopt;
     std::optional<std::string> bytes = disk.read(cachePath, kMaxCacheFileBytes);
-    std::optional<CachedKernel> record = bytes ? parseCacheFile(*bytes, key) : std::nullopt;
+    std::optional<CachedKernel> record = bytes ? parseKernelCacheFile(*bytes, key) : std::nullopt;
     if (record) {
         origin = "disk cache";
         std::lock_guard<std::mutex> lock(memory.mutex);
@@ -214,7 +154,7 @@ std::optional<CachedKernel> lookUpCaches(MemoryCache& memory, CacheDirectory& di
 // written is only slower.
 void storeInCaches(MemoryCache& memory, CacheDirectory& disk, const std::string& key, const std::string& cachePath,
                    CompileOptions::Cache cache, const CachedKernel& record) {
-    if (cache == CompileOptions::Cache::On && !cachePath.empty()) disk.write(cachePath, cacheFileBytes(key, record));
+    if (cache == CompileOptions::Cache::On && !cachePath.empty()) disk.write(cachePath, kernelCacheFileBytes(key, record));
     if (cache != CompileOptions::Cache::Off) {
         std::lock_guard<std::mutex> lock(memory.mutex);
         memory.objects.emplace(key, record);
@@ -547,9 +487,7 @@ void Kernel::ensureSampler() const {
             LoweringOptions lowering = samplerLowering_;
             lowering.emitEval = false;
             lowering.emitSampling = true;
-            if (planLowering(material_, lowering.variant, lowering.x86Target, lowering.trustInputs).sampling.specular ==
-                SpecularSampling::None)
-                return;
+            if (plannedSpecularSampling(material_) == SpecularSampling::None) return;
             std::optional<CachedKernel> cached =
                 lookUpCaches(*memoryCache_, *diskCache_, samplerKey_, samplerCachePath_, samplerCache_, origin);
             if (!cached) {

@@ -28,6 +28,7 @@
 
 #include "Aot.h"
 #include "Jit.h"
+#include "KernelCacheFile.h"
 #include "Lowering.h"
 #include "Material.h"
 #include "Specialize.h"
@@ -53,14 +54,6 @@ class EnergyTable;
 class TableCache;
 class CacheDirectory;
 struct MemoryCache;
-
-// A compiled kernel as the caches keep it: object code, the math variant it
-// was compiled with, and (for tolerance builds) its measured error.
-struct CachedKernel {
-    std::string object;
-    std::string variant;
-    double measuredError = -1;  // < 0: not measured
-};
 
 // Max relative error of `kernel` against the double interpreter of
 // `material` on a fixed sample (cosine-distributed directions, inputs

@@ -6,6 +6,7 @@
 #include "Interpreter.h"
 #include "Jit.h"
 #include "Kernel.h"
+#include "KernelCacheFile.h"
 #include "Lowering.h"
 #include "Pipeline.h"
 #include "ReferenceComparison.h"
@@ -339,6 +340,27 @@ TEST_CASE("concurrent batches from two threads on one kernel equal the serial re
     for (int c = 0; c < 3; ++c) CHECK(serial.out[c] == parallel.out[c]);
 }
 
+TEST_CASE("kernel cache file: a record reads back, and every damage or another key is refused") {
+    CachedKernel record{std::string("\x7f" "ELF object bytes", 20), "fast", 3.5e-4};
+    const std::string key = "material key", bytes = kernelCacheFileBytes(key, record);
+    std::optional<CachedKernel> back = parseKernelCacheFile(bytes, key);
+    REQUIRE(back);
+    CHECK(back->object == record.object);
+    CHECK(back->variant == "fast");
+    CHECK(back->measuredError == 3.5e-4);
+    CHECK(kernelCacheFileKey(bytes) == key);
+    CHECK_FALSE(parseKernelCacheFile(bytes, "another key"));
+    for (size_t cut = 0; cut < bytes.size(); ++cut) CHECK_FALSE(parseKernelCacheFile(bytes.substr(0, cut), key));
+    CHECK_FALSE(parseKernelCacheFile(bytes + "x", key));
+    std::string flipped = bytes;
+    flipped.back() ^= 1;  // in the object: the checksum no longer matches
+    CHECK_FALSE(parseKernelCacheFile(flipped, key));
+    std::string magic = bytes;
+    magic[0] = 'X';
+    CHECK_FALSE(parseKernelCacheFile(magic, key));
+    CHECK_FALSE(kernelCacheFileKey(magic));
+}
+
 TEST_CASE("disk cache: hit, and truncated or corrupted files are detected and recompiled") {
     std::string dir = tempDir("cache");
     Batch reference(1000, 3);
@@ -467,21 +489,19 @@ TEST_CASE("disk cache: a sampler that does not link is reported, and the referen
         std::ifstream f(path, std::ios::binary);
         return std::string(std::istreambuf_iterator<char>(f), {});
     };
-    // A cache file: 8-byte magic, key and variant (each a 64-bit length and
-    // its bytes), the measured error (8 bytes), then the object's checksum
-    // and the object. Splice eval's checksum and object after the sampler's
-    // key and variant.
-    auto objectOffset = [](const std::string& bytes) {
-        size_t at = 8;
-        for (int field = 0; field < 2; ++field) {
-            uint64_t len = 0;
-            std::memcpy(&len, bytes.data() + at, 8);
-            at += 8 + len;
-        }
-        return at + 8;
-    };
+    // The sampler's file with eval's object in it: a valid cache file (its
+    // checksum matches) whose object lacks the sampler's entry points.
     std::string sampler = readAll(samplerFile), eval = readAll(*evalFiles.begin());
-    std::string spliced = sampler.substr(0, objectOffset(sampler)) + eval.substr(objectOffset(eval));
+    std::optional<std::string> samplerKey = kernelCacheFileKey(sampler), evalKey = kernelCacheFileKey(eval);
+    REQUIRE(samplerKey);
+    REQUIRE(evalKey);
+    std::optional<CachedKernel> samplerRecord = parseKernelCacheFile(sampler, *samplerKey);
+    std::optional<CachedKernel> evalRecord = parseKernelCacheFile(eval, *evalKey);
+    REQUIRE(samplerRecord);
+    REQUIRE(evalRecord);
+    CachedKernel wrong = *samplerRecord;
+    wrong.object = evalRecord->object;
+    std::string spliced = kernelCacheFileBytes(*samplerKey, wrong);
     {
         std::ofstream f(samplerFile, std::ios::binary | std::ios::trunc);
         f.write(spliced.data(), std::streamsize(spliced.size()));
