@@ -63,12 +63,8 @@ struct NdfCase {
     double k;            // schlick_smith k = alpha/2 (Karis 2013: Schlick fit of Smith-GGX)
     bool anisotropic;
     double gamma = 0;    // gtr only
+    bool byHand = true;  // listed below with the forms the test cases name; else from the catalog
 };
-
-// The NDF families listed by hand below, with the forms and shape
-// parameters the test cases name.
-const std::set<std::string> kListedFamilies = {"ggx", "beckmann", "blinn_phong", "gtr", "gaussian", "ward"};
-bool isListedFamily(const std::string& family) { return kListedFamilies.count(family) > 0; }
 
 std::vector<NdfCase> ndfCases() {
     std::vector<NdfCase> out;
@@ -89,10 +85,13 @@ std::vector<NdfCase> ndfCases() {
     // Every other NDF of the catalog, isotropic at its typical shape
     // parameters (the entry's argsAtAlpha), so that a new NDF is covered
     // without editing this list.
+    std::set<std::string> listed;
+    for (const NdfCase& c : out) listed.insert(c.family);
     for (const facet::ModelInfo* m : facet::catalogSlot(facet::ModelSlot::Ndf)) {
         const facet::NdfEntry& ndf = facet::ndfEntry(*m);
-        if (isListedFamily(ndf.name)) continue;
-        for (double a : kAlphas) out.push_back({ndf.name, callOf(ndf, typicalArgsAtAlpha(ndf, a)), a, a / 2, false});
+        if (listed.count(ndf.name)) continue;
+        for (double a : kAlphas)
+            out.push_back({ndf.name, callOf(ndf, typicalArgsAtAlpha(ndf, a)), a, a / 2, false, 0, false});
     }
     return out;
 }
@@ -233,8 +232,8 @@ TEST_CASE("Albedo: the checker accepts exactly the intended NDF x masking pairs"
     std::set<std::pair<std::string, std::string>> listed, others;
     std::set<std::string> otherSources;
     for (const Row& r : table()) {
-        (isListedFamily(r.ndf.family) ? listed : others).insert({r.ndf.source, r.masking});
-        if (!isListedFamily(r.ndf.family)) otherSources.insert(r.ndf.source);
+        (r.ndf.byHand ? listed : others).insert({r.ndf.source, r.masking});
+        if (!r.ndf.byHand) otherSources.insert(r.ndf.source);
     }
     CHECK(listed.size() == 36 * 10 + 6);
     CHECK(otherSources.size() >= 4 * std::size(kAlphas));  // student_t, epd, abc, sgd
@@ -255,7 +254,7 @@ TEST_CASE("Albedo <= 1 (F = 1): Smith maskings with GTR and Gaussian (tabulated 
 
 TEST_CASE("Albedo <= 1 (F = 1): Smith maskings with the other NDFs of the catalog (exact tabulated Lambda)") {
     checkConserving("smith x {student_t, epd, abc, sgd, ...}",
-                    [](const Row& r) { return isSmith(r.masking) && !isListedFamily(r.ndf.family); });
+                    [](const Row& r) { return isSmith(r.masking) && !r.ndf.byHand; });
 }
 
 TEST_CASE("Albedo <= 1 (F = 1): Smith maskings with Blinn-Phong for exponent >= 48 (alpha <= 0.2)") {
@@ -278,7 +277,7 @@ TEST_CASE("Albedo <= 1 (F = 1): ward (whole lobe, masking none), iso and aniso")
 TEST_CASE("Albedo <= 1 (F = 1): schlick_smith(alpha/2) with isotropic GGX, Beckmann, Blinn-Phong, Gaussian, GTR gamma >= 2") {
     checkConserving("schlick_smith (conserving set)",
                     [](const Row& r) {
-                        return r.masking == "schlick_smith" && isListedFamily(r.ndf.family) && !schlickFails(r.ndf);
+                        return r.masking == "schlick_smith" && r.ndf.byHand && !schlickFails(r.ndf);
                     });
 }
 
@@ -324,7 +323,7 @@ TEST_CASE("Albedo EXCEEDS 1 with masking = none (no shadowing: A ~ 1/(2 cos thet
     double maxA = 0;
     std::string at;
     for (const Row& r : table())
-        if (r.masking == "none" && r.ndf.family != "ward" && isListedFamily(r.ndf.family) && r.a > maxA) {
+        if (r.masking == "none" && r.ndf.family != "ward" && r.ndf.byHand && r.a > maxA) {
             maxA = r.a;
             at = where(r);
         }
