@@ -122,6 +122,10 @@ std::vector<const ModelInfo*> facetModels_fresnel_Fresnel() {
              "ndf = ggx(0.3); masking = smith_height_correlated; fresnel = dielectric(rgb(0.5, 0.9, 0.6666667));"},
             {"hcc_dielectric_near1",
              "ndf = beckmann(0.3); masking = smith_separable; fresnel = dielectric(rgb(1.000001, 0.999999, 1));"},
+            // Every channel above 1 also in float, too close to 1 for the
+            // float term: the emitter drops its total-reflection test here.
+            {"hcc_dielectric_above1",
+             "ndf = ggx(0.3); masking = smith_height_correlated; fresnel = dielectric(rgb(1.0000001, 1.000001, 1.0001));"},
         };
         e.formulas = makeFormulas<FresnelFormulas, DielectricFresnel>();
         return e;

@@ -154,6 +154,19 @@ public:
     }
     bool substitutableBySchlick() const override { return true; }
 
+    // With a constant eta > 1 in every channel, also once rounded to float,
+    // g^2 = e + c^2 > 0 in either type (e = (eta - 1)(eta + 1) is then at
+    // least 2^-22, and c^2 >= 0): there is no critical angle, and the
+    // total-reflection test and the clamp of g^2 would only cost each
+    // channel three vector operations.
+    static bool etaAboveOne(const ModelUse& use) {
+        const Expr* eta = constantArg(use, kEta);
+        if (!eta) return false;
+        for (double v : constantValue(*eta))
+            if (!(static_cast<float>(v) > 1.0f)) return false;
+        return true;
+    }
+
     LVal F(LaneEmitter& lane, const LaneGeometry& geo) const override {
         const ModelUse& use = lane.material.fresnel;
         if (lane.plan.fresnel.substituteSchlick) {
@@ -164,27 +177,34 @@ public:
         auto [m, inFloat, one, c, c2] = exactTermMath(lane, geo);
         MathEmitter& pm = lane.preciseMath();
         LVal eta = lane.rgbParam(use, kEta, inFloat, lane.maxFresnelIndex());
+        const bool totalReflectionPossible = !etaAboveOne(use);
         c2 = m.mul(c, c);
         return lane.map({eta}, true, [&](auto& x) {
             // g^2 = eta^2 - sin^2 = (eta^2 - 1) + c^2 and, with gp = g + c,
             // g - c = (eta^2 - 1)/gp (pbrt's form, no cancellation):
             //   A = (g - c)/(g + c) = e/gp^2,   e = eta^2 - 1,
-            //   B = (c gp - 1)/(c (g - c) + 1) = gp (c gp - 1)/(c e + gp),
-            //   F = A^2 (1 + B^2) / 2,
-            // with one division for both (c e + gp = g + c eta^2 > 0).
+            //   B = (c gp - 1)/(c (g - c) + 1) = gp (c gp - 1)/den,
+            //   den = c e + gp = g + c eta^2 > 0,
+            //   F = A^2 (1 + B^2) / 2 = r^2 (den^2 + b^2) / 2,
+            //   r = e/(gp^2 den),   b = gp (c gp - 1),
+            // with one division and each factor within the type's range for
+            // every eta up to maxFresnelIndex (r^2 and the sum are bounded
+            // where e^2 (den^2 + b^2) would not be).
             Value* n = x[0];
             Value* e = m.mul(m.sub(n, one), m.add(n, one));
             Value* g2 = m.add(e, c2);
-            Value* g = m.sqrt(m.maxnum(g2, m.c(0.0)));
+            Value* g = m.sqrt(totalReflectionPossible ? m.maxnum(g2, m.c(0.0)) : g2);
             Value* gp = m.add(g, c);
             Value* den = m.fma(c, e, gp);
-            Value* gp2 = m.mul(gp, gp);
-            Value* q = m.div(one, m.mul(gp2, den));
-            Value* A = m.mul(m.mul(e, den), q);
-            Value* B = m.mul(m.mul(gp, m.fma(c, gp, m.c(-1.0))), m.mul(gp2, q));
-            Value* F = m.mul(m.mul(m.c(0.5), m.mul(A, A)), m.fma(B, B, one));
-            Value* totalReflection = lane.builder.CreateOr(m.le(g2, m.c(0.0)), m.eq(gp, m.c(0.0)));
-            return pm.convert(m.select(totalReflection, one, F), pm.type());
+            Value* r = m.div(e, m.mul(m.mul(gp, gp), den));
+            Value* b = m.mul(gp, m.fma(c, gp, m.c(-1.0)));
+            Value* halfSum = m.mul(m.c(0.5), m.fma(den, den, m.mul(b, b)));
+            Value* F = m.mul(m.mul(r, r), halfSum);
+            if (totalReflectionPossible) {
+                Value* totalReflection = lane.builder.CreateOr(m.le(g2, m.c(0.0)), m.eq(gp, m.c(0.0)));
+                F = m.select(totalReflection, one, F);
+            }
+            return pm.convert(F, pm.type());
         });
     }
 
