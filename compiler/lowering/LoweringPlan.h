@@ -128,7 +128,8 @@ struct FresnelPlan {
     bool exactInFloat = false;       // the exact term in float (well-conditioned constant parameters)
     bool rangeGuard = true;          // guarded body: check 1e-8 <= F (and F <= 2 unless atMostOne)
     bool atMostOne = false;          // F <= 1 by construction
-    bool canVanish = true;           // F can be 0 (every term but none)
+    // F can be 0: every term but none, unless constant arguments keep F >= 1e-30.
+    bool canVanish = true;
 };
 
 // How the sample and pdf entry points draw and weigh directions (SPEC 8):

@@ -56,6 +56,18 @@ TEST_CASE("exact GGX with Schlick f0: a guarded float body and the double body f
     CHECK(printPlan(m, p).find("batch-bodies: float-first") != std::string::npos);
 }
 
+TEST_CASE("F = 0 needs its own select only where constant arguments do not keep F positive") {
+    const std::string lobe = "ndf = ggx(0.3); masking = smith_height_correlated; ";
+    CHECK_FALSE(exactPlan(lobe + "fresnel = schlick(f0 = 0.04);").fresnel.canVanish);
+    CHECK_FALSE(fastPlan(lobe + "fresnel = schlick(f0 = rgb(0.9, 0.5, 1e-20));").fresnel.canVanish);
+    CHECK(exactPlan(lobe + "fresnel = schlick(f0 = rgb(0.9, 0.5, 0));").fresnel.canVanish);
+    CHECK(exactPlan(lobe + "fresnel = schlick(f0 = 1e-40);").fresnel.canVanish);  // 0 in float
+    CHECK(exactPlan(lobe + "fresnel = schlick(eta = 1);").fresnel.canVanish);
+    CHECK(exactPlan("input f = 0.5; " + lobe + "fresnel = schlick(f0 = f);").fresnel.canVanish);
+    CHECK(exactPlan(lobe + "fresnel = dielectric(1.5);").fresnel.canVanish);
+    CHECK_FALSE(exactPlan(lobe + "fresnel = none;").fresnel.canVanish);
+}
+
 TEST_CASE("the float body keeps sums, long chains and exp in double") {
     CHECK(exactPlan("input r = 0.5; ndf = ggx(r + 0.01); fresnel = schlick(f0 = 0.04);").batchBody.expressions ==
           Precision::Double);
