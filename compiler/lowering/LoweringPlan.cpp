@@ -262,10 +262,11 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     plan.fresnel.exactInFloat = !plan.fresnel.substituteSchlick && fresnel.evaluableInFloat(material.fresnel);
     plan.fresnel.rangeGuard = !fresnel.atLeast(material.fresnel, 1e-6);
     plan.fresnel.atMostOne = fresnel.atMostOne();
-    // F >= 1e-30 at every angle (a constant f0 or eta that keeps it there)
+    // F >= 1e-12 at every angle (a constant f0 or eta that keeps it there)
     // stays positive in either type, rounded or flushed, so the lobe needs
-    // no F = 0 select.
-    plan.fresnel.canVanish = fresnel.canVanish() && !fresnel.atLeast(material.fresnel, 1e-30);
+    // no F = 0 select. (A smaller bound would admit a Schlick eta within
+    // 1e-14 of 1, which a float body rounds to 1: f0 = 0.)
+    plan.fresnel.canVanish = fresnel.canVanish() && !fresnel.atLeast(material.fresnel, 1e-12);
 
     // The scalar kernel computes the plain body: per lane, float is no
     // faster than double except for division and square root, and the

@@ -128,7 +128,7 @@ struct FresnelPlan {
     bool exactInFloat = false;       // the exact term in float (well-conditioned constant parameters)
     bool rangeGuard = true;          // guarded body: check 1e-8 <= F (and F <= 2 unless atMostOne)
     bool atMostOne = false;          // F <= 1 by construction
-    // F can be 0: every term but none, unless constant arguments keep F >= 1e-30.
+    // F can be 0: every term but none, unless constant arguments keep F >= 1e-12.
     bool canVanish = true;
 };
 

@@ -59,10 +59,13 @@ TEST_CASE("exact GGX with Schlick f0: a guarded float body and the double body f
 TEST_CASE("F = 0 needs its own select only where constant arguments do not keep F positive") {
     const std::string lobe = "ndf = ggx(0.3); masking = smith_height_correlated; ";
     CHECK_FALSE(exactPlan(lobe + "fresnel = schlick(f0 = 0.04);").fresnel.canVanish);
-    CHECK_FALSE(fastPlan(lobe + "fresnel = schlick(f0 = rgb(0.9, 0.5, 1e-20));").fresnel.canVanish);
+    CHECK_FALSE(fastPlan(lobe + "fresnel = schlick(f0 = rgb(0.9, 0.5, 1e-10));").fresnel.canVanish);
+    CHECK_FALSE(fastPlan(lobe + "fresnel = schlick(eta = 1.5);").fresnel.canVanish);
     CHECK(exactPlan(lobe + "fresnel = schlick(f0 = rgb(0.9, 0.5, 0));").fresnel.canVanish);
     CHECK(exactPlan(lobe + "fresnel = schlick(f0 = 1e-40);").fresnel.canVanish);  // 0 in float
     CHECK(exactPlan(lobe + "fresnel = schlick(eta = 1);").fresnel.canVanish);
+    // f0 = 2.5e-29 in double, but 1 in float, f0 = 0, in a fast body.
+    CHECK(fastPlan(lobe + "fresnel = schlick(eta = 1.00000000000001);").fresnel.canVanish);
     CHECK(exactPlan("input f = 0.5; " + lobe + "fresnel = schlick(f0 = f);").fresnel.canVanish);
     CHECK(exactPlan(lobe + "fresnel = dielectric(1.5);").fresnel.canVanish);
     CHECK_FALSE(exactPlan(lobe + "fresnel = none;").fresnel.canVanish);
