@@ -63,6 +63,17 @@ const Expr* constantArg(const ModelUse& use, int p) {
     return use.has(p) && isConstantExpr(*use.args[p]) ? use.args[p].get() : nullptr;
 }
 
+// Whether parameter p is a constant whose every channel satisfies `holds`
+// (false for a per-lane or missing argument).
+template <typename Holds>
+bool everyConstantChannel(const ModelUse& use, int p, Holds holds) {
+    const Expr* arg = constantArg(use, p);
+    if (!arg) return false;
+    for (double v : constantValue(*arg))
+        if (!holds(v)) return false;
+    return true;
+}
+
 class NoFresnelEmitter final : public FresnelEmitter {
 public:
     bool atMostOne() const override { return true; }
@@ -86,19 +97,13 @@ public:
     // F = f0 + (1 - f0) q^5 with f0 in [0, 1] and q^5 >= 0 is never below
     // f0 (the fma of non-negative terms rounds to a value >= f0), so a
     // constant f0 >= bound (given, or from a constant eta) settles it.
+    // (Exactly one of f0 and eta is given.)
     bool atLeast(const ModelUse& use, double bound) const override {
-        if (const Expr* f0 = constantArg(use, kF0)) {
-            for (double v : constantValue(*f0))
-                if (!(std::min(v, 1.0) >= bound)) return false;
-            return true;
-        }
-        const Expr* eta = constantArg(use, kSchlickEta);
-        if (!eta) return false;
-        for (double v : constantValue(*eta)) {
-            double n = std::max(v, kMinEta), r = (n - 1) / (n + 1);
-            if (!(r * r >= bound)) return false;
-        }
-        return true;
+        return everyConstantChannel(use, kF0, [&](double v) { return std::min(v, 1.0) >= bound; }) ||
+               everyConstantChannel(use, kSchlickEta, [&](double v) {
+                   double n = std::max(v, kMinEta), r = (n - 1) / (n + 1);
+                   return r * r >= bound;
+               });
     }
     LVal F(LaneEmitter& lane, const LaneGeometry& geo) const override { return schlick(lane, geo, f0(lane)); }
     FresnelAverageArgs averageArgs(LaneEmitter& lane) const override {
@@ -146,11 +151,7 @@ public:
     // rounded from the double geometry; tests/jit and the differential
     // tests measure that the error stays within the rest of the kernel's.
     bool evaluableInFloat(const ModelUse& use) const override {
-        const Expr* eta = constantArg(use, kEta);
-        if (!eta) return false;
-        for (double v : constantValue(*eta))
-            if (!(v >= 1.01 && v <= 1e3)) return false;
-        return true;
+        return everyConstantChannel(use, kEta, [](double v) { return v >= 1.01 && v <= 1e3; });
     }
     bool substitutableBySchlick() const override { return true; }
 
@@ -160,11 +161,7 @@ public:
     // total-reflection test and the clamp of g^2 would only cost each
     // channel three vector operations.
     static bool etaAboveOne(const ModelUse& use) {
-        const Expr* eta = constantArg(use, kEta);
-        if (!eta) return false;
-        for (double v : constantValue(*eta))
-            if (!(static_cast<float>(v) > 1.0f)) return false;
-        return true;
+        return everyConstantChannel(use, kEta, [](double v) { return static_cast<float>(v) > 1.0f; });
     }
 
     LVal F(LaneEmitter& lane, const LaneGeometry& geo) const override {
