@@ -206,16 +206,23 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
     const bool halfInFloat = body.halfVector == HalfVectorForm::InFloat;
     MathEmitter& halfMath = halfInFloat ? fm : pm;
     Value *hlen, *cosD, *oneMinusCos;
-    if (body.halfVector == HalfVectorForm::Estimated) {
-        // 1/|h| as one rsqrt estimate + Newton step (the estimates flag
-        // turns 1/sqrt into that), |h| = |h|^2/|h|: no square root and no
-        // division. 1 - cos then cancels near wi = wo, to an absolute error
-        // of ~2e-7, which the plan allows only for Fresnel terms that it
-        // cannot move visibly (none, or Schlick with f0 >= 1e-6: the error
-        // of F relative to itself peaks at 4 dq/q where q^5 = 4 f0).
-        Value* hinv = pm.div(pm.c(1.0), pm.sqrt(hlen2));
-        hlen = pm.mul(hlen2, hinv);
-        for (Value*& c : hD) c = pm.mul(c, hinv);
+    if (body.halfVector == HalfVectorForm::Estimated || body.halfVector == HalfVectorForm::Direct) {
+        // 1 - cos = 1 - |h|/2 cancels near wi = wo, to an absolute error of
+        // a few ulp of 1, which the plan allows only for Fresnel terms that
+        // it cannot move visibly (none, or Schlick with a constant f0 bounded
+        // below: the error of F relative to itself peaks at 4 dq/q where
+        // q^5 = 4 f0). It saves the |wi - wo|^2 sum and a division.
+        if (body.halfVector == HalfVectorForm::Estimated) {
+            // 1/|h| as one rsqrt estimate + Newton step (the estimates flag
+            // turns 1/sqrt into that), |h| = |h|^2/|h|: no square root and
+            // no division; dq ~ 2e-7.
+            Value* hinv = pm.div(pm.c(1.0), pm.sqrt(hlen2));
+            hlen = pm.mul(hlen2, hinv);
+            for (Value*& c : hD) c = pm.mul(c, hinv);
+        } else {
+            hlen = pm.sqrt(hlen2);
+            hD = {};  // no consumer of the unit h (the plan checked)
+        }
         cosD = pm.minnum(pm.mul(hlen, pm.c(0.5)), pm.c(1.0));
         oneMinusCos = pm.sub(pm.c(1.0), cosD);
     } else {

@@ -47,6 +47,7 @@ const char* halfVectorFormName(HalfVectorForm h) {
         case HalfVectorForm::Precise: return "precise";
         case HalfVectorForm::InFloat: return "in-float";
         case HalfVectorForm::Estimated: return "estimated";
+        case HalfVectorForm::Direct: return "direct";
     }
     return "?";
 }
@@ -186,20 +187,26 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
     body.shortPolynomials = bodyVariant.shortPolynomials;
     const bool inDouble = body.precise == Precision::Double;
 
-    // The guarded fast body takes 1 - wo.h as 1 - |wi + wo|/2 with |wi +
-    // wo| from an rsqrt estimate: the cancellation leaves an absolute error
-    // of ~2e-7 in q = 1 - cos, which moves Schlick's F relative to itself by
-    // at most 4 dq/q where q^5 = 4 f0: 1e-5 for f0 = 1e-6. So only for no
-    // Fresnel term or one that stays >= 1e-6; the exact terms need 1 - cos
-    // to relative precision near their critical angle and near eta = 1.
-    // A double body may keep the half angle in float when every consumer is
-    // well-conditioned in it: D from wi + wo (the exponent NDFs), a masking
-    // that neither divides by wo.h nor reads the unit h, and a Fresnel term
-    // that is fine with a float cos (docs/perf-log.md has the speed-ups).
-    if (body.guarded() && body.estimates && em.fresnel.atLeast(material.fresnel, 1e-6))
+    // A fast body takes 1 - wo.h as 1 - |wi + wo|/2 with |wi + wo| from an
+    // rsqrt estimate: the cancellation leaves an absolute error of ~2e-7 in
+    // q = 1 - cos, which moves Schlick's F relative to itself by at most
+    // 4 dq/q where q^5 = 4 f0: 1e-5 for f0 = 1e-6. So only for no Fresnel
+    // term or one that stays >= 1e-6; the exact terms need 1 - cos to
+    // relative precision near their critical angle and near eta = 1.
+    // A double body may leave out the unit h when every consumer is
+    // well-conditioned without it: D from wi + wo (the exponent NDFs) and a
+    // masking that neither divides by wo.h nor reads the unit h. Its 1 - cos
+    // is then 1 - |wi + wo|/2 in double (dq ~ 2e-16, which moves F by at
+    // most 2e-13 where F >= 1e-12) or, for a Fresnel term fine with a float
+    // cos, the cancellation-free form in float (docs/perf-log.md has the
+    // speed-ups).
+    const bool unitHalfUnused = inDouble && role == BodyRole::Plain && em.ndf.traits.dFromUnnormalizedHalf &&
+                                !em.masking.traits.needsPreciseHalfAngle;
+    if (!inDouble && body.estimates && em.fresnel.atLeast(material.fresnel, 1e-6))
         body.halfVector = HalfVectorForm::Estimated;
-    else if (inDouble && role == BodyRole::Plain && em.ndf.traits.dFromUnnormalizedHalf &&
-             !em.masking.traits.needsPreciseHalfAngle && em.fresnel.halfAngleInFloatOk(material.fresnel, plan.fresnel))
+    else if (unitHalfUnused && em.fresnel.atLeast(material.fresnel, 1e-12))
+        body.halfVector = HalfVectorForm::Direct;
+    else if (unitHalfUnused && em.fresnel.halfAngleInFloatOk(material.fresnel, plan.fresnel))
         body.halfVector = HalfVectorForm::InFloat;
 
     body.correctedSums = !inDouble && role != BodyRole::FastGuarded;

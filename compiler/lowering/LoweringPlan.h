@@ -74,7 +74,8 @@ const char* bodyRoleName(BodyRole r);
 enum class HalfVectorForm {
     Precise,    // in the body's precise type, cancellation-free 1 - cos
     InFloat,    // in float inside a double body: every consumer is well-conditioned in them
-    Estimated,  // 1/|h| from an rsqrt estimate, 1 - cos = 1 - |h|/2 (guarded fast body)
+    Estimated,  // 1/|h| from an rsqrt estimate, 1 - cos = 1 - |h|/2 (fast bodies)
+    Direct,     // |h| in the precise type, 1 - cos = 1 - |h|/2, no unit h (double bodies)
 };
 const char* halfVectorFormName(HalfVectorForm h);
 

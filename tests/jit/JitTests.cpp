@@ -87,6 +87,14 @@ CompileOptions opts(const std::string& spec) {
     return o;
 }
 
+// The checked program of a material text that must have no errors.
+CheckedProgram checkedText(const std::string& text) {
+    DiagnosticEngine d;
+    CheckedProgram p = loadProgramText(text, "t.mat", d);
+    REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+    return p;
+}
+
 std::unique_ptr<Kernel> compile(Compiler& c, const std::string& text, const std::string& spec) {
     DiagnosticEngine d;
     auto k = c.compileText(text, "t.mat", "", opts(spec), d);
@@ -863,77 +871,102 @@ TEST_CASE("guarded fast SIMD: a small alpha keeps the guarded body away from the
     }
 }
 
-TEST_CASE("guarded fast SIMD: Schlick's 1 - wo.h from |wi + wo| stays within fast accuracy near wi = wo") {
-    // The guarded fast body takes q = 1 - wo.h as 1 - |wi + wo|/2 when F is
-    // Schlick's with f0 >= 1e-6 (Lowering.cpp, cheapHalfVector): q then has
-    // an absolute error ~2e-7, which costs F at most 4 dq/q relative, ~1e-5
-    // at f0 = 1e-6 (q ~ 0.08). f0 = 0 keeps the cancellation-free form, whose
-    // error stays at float rounding as q -> 0 (the cheap form would give
-    // 5 dq/q there, 4e-5 at q = 0.025 where the F >= 1e-8 guard stops).
-    // Mirror directions wi = (s, 0, c), wo = (-s, 0, c): wo.h = c, q = 1 - c
-    // from 1e-7 to 0.4, on lanes 16 at a time.
+// Mirror directions wi = (s, 0, c), wo = (-s, 0, c): wo.h = c, q = 1 - c
+// from 1e-7 to 0.4. Returns the worst relative error of the red channel
+// against the interpreter over `kernels`.
+static double worstNearMirror(const std::string& text, std::initializer_list<const char*> kernels) {
+    CheckedProgram p = checkedText(text);
+    Interpreter<double> interp(p.materials[0]);
     Compiler c;
     c.setCacheDir("");
-    for (const char* f0 : {"1e-6", "0"}) {
-        std::string text = fmt::format("material m {{ ndf = ggx(0.5); fresnel = schlick(f0 = {}); }}", f0);
-        DiagnosticEngine d;
-        CheckedProgram p = loadProgramText(text, "t.mat", d);
-        REQUIRE_MESSAGE(!d.hasErrors(), d.str());
-        Interpreter<double> interp(p.materials[0]);
-        auto k = compile(c, text, "backend=simd;width=16;math=fast;cache=off");
-        Batch b(4096, 11);
-        for (size_t i = 0; i < b.size(); ++i) {
-            double q = 1e-7 * std::pow(4e6, double(i) / double(b.size() - 1));
-            double cosT = 1 - q, sinT = std::sqrt(q * (2 - q));
-            b.dir[0][i] = float(sinT), b.dir[1][i] = 0, b.dir[2][i] = float(cosT);
-            b.dir[3][i] = float(-sinT), b.dir[4][i] = 0, b.dir[5][i] = float(cosT);
-        }
+    Batch b(4096, 11);
+    for (size_t i = 0; i < b.size(); ++i) {
+        double q = 1e-7 * std::pow(4e6, double(i) / double(b.size() - 1));
+        double cosT = 1 - q, sinT = std::sqrt(q * (2 - q));
+        b.dir[0][i] = float(sinT), b.dir[1][i] = 0, b.dir[2][i] = float(cosT);
+        b.dir[3][i] = float(-sinT), b.dir[4][i] = 0, b.dir[5][i] = float(cosT);
+    }
+    double worst = 0;
+    for (const char* spec : kernels) {
+        auto k = compile(c, text, spec);
         CHECK(b.run(*k) == 0);
-        double worst = 0;
         for (size_t i = 0; i < b.size(); ++i) {
             EvalResult<double> want = b.reference(interp, i);
             REQUIRE(want.valid);
-            double rel = relativeError(b.out[0][i], want.rgb[0]);
-            worst = std::max(worst, rel);
+            worst = std::max(worst, relativeError(b.out[0][i], want.rgb[0]));
         }
+    }
+    return worst;
+}
+
+TEST_CASE("fast kernels: Schlick's 1 - wo.h from |wi + wo| stays within fast accuracy near wi = wo") {
+    // Fast bodies take q = 1 - wo.h as 1 - |wi + wo|/2 when F is Schlick's
+    // with f0 >= 1e-6 (LoweringPlan.cpp, HalfVectorForm::Estimated): q then
+    // has an absolute error ~2e-7, which costs F at most 4 dq/q relative,
+    // ~1e-5 at f0 = 1e-6 (q ~ 0.08). f0 = 0 keeps the cancellation-free
+    // form, whose error stays at float rounding as q -> 0 (the cheap form
+    // would give 5 dq/q there, 4e-5 at q = 0.025 where the F >= 1e-8 guard
+    // stops). The guarded SIMD body and the plain one of the scalar kernel.
+    for (const char* f0 : {"1e-6", "0"}) {
+        std::string text = fmt::format("material m {{ ndf = ggx(0.5); fresnel = schlick(f0 = {}); }}", f0);
+        double worst = worstNearMirror(text, {"backend=simd;width=16;math=fast;cache=off", "backend=scalar;math=fast;cache=off"});
         MESSAGE("schlick f0 = " << std::string(f0) << ": worst relative error near wi = wo " << worst);
         CHECK(worst < (std::string(f0) == "0" ? 5e-6 : 2e-5));
     }
 }
 
-TEST_CASE("beckmann with the half angle in float: near-opposite directions below float's |wi + wo|^2 range") {
-    // For beckmann with Schlick, |wi + wo|, wo.h and 1 - wo.h are computed in
-    // float in the double body (Lowering.cpp, halfAngleInFloat), with
-    // |wi + wo|^2 clamped to FLT_MIN; D takes wi + wo in double. Directions
+TEST_CASE("exact kernels: Schlick's 1 - wo.h from |wi + wo| in double stays at float rounding near wi = wo") {
+    // The double body takes q = 1 - |wi + wo|/2 in double when F is
+    // Schlick's with f0 >= 1e-12 (HalfVectorForm::Direct): dq ~ 2e-16 moves
+    // F by at most 4 dq/q ~ 2e-13 at f0 = 1e-12 (q ~ 5e-3), where a float
+    // |wi + wo| would give ~5e-5: the values stay within the output's float
+    // rounding. The scalar kernel and a SIMD one without the float body.
+    for (const char* f0 : {"1e-12", "0.04"}) {
+        std::string text = fmt::format("material m {{ ndf = ggx(0.5); fresnel = schlick(f0 = {}); }}", f0);
+        CheckedProgram p = checkedText(text);
+        REQUIRE(planLowering(p.materials[0], MathVariant::exact(), true).scalarBody.halfVector == HalfVectorForm::Direct);
+        for (const char* spec : {"backend=scalar;cache=off", "backend=simd;width=16;cache=off;float_first=off"}) {
+            double worst = worstNearMirror(text, {spec});
+            MESSAGE("schlick f0 = " << std::string(f0) << ", " << std::string(spec) << ": worst relative error near wi = wo " << worst);
+            CHECK(worst < 1e-7);
+        }
+    }
+}
+
+TEST_CASE("beckmann's double body: near-opposite directions below float's |wi + wo|^2 range") {
+    // Beckmann's double body takes D from wi + wo in double. With a constant
+    // dielectric term, |wi + wo|, wo.h and 1 - wo.h are computed in float
+    // (HalfVectorForm::InFloat), with |wi + wo|^2 clamped to FLT_MIN; with
+    // Schlick's f0 = 0.04, in double (HalfVectorForm::Direct). Directions
     // grazing from opposite sides, wi + wo = (0, 0, 2z), reach |wi + wo|^2 =
     // 4e-74 where float has only 0: the values must still be the
     // interpreter's, on every exact backend.
-    const char* text =
-        "material m { ndf = beckmann(0.3); masking = smith_separable; fresnel = schlick(f0 = 0.04); }";
-    DiagnosticEngine d;
-    CheckedProgram p = loadProgramText(text, "t.mat", d);
-    REQUIRE_MESSAGE(!d.hasErrors(), d.str());
-    Interpreter<double> interp(p.materials[0]);
-    Compiler c;
-    c.setCacheDir("");
-    const float zs[] = {1e-3f, 1e-10f, 1e-19f, 1e-20f, 1e-25f, 1e-30f, 1e-37f};
-    for (const char* spec :
-         {"backend=scalar;cache=off", "backend=simd;width=16;cache=off", "backend=simd;width=8;cache=off"}) {
-        auto k = compile(c, text, spec);
-        Batch b(16, 5);
-        for (size_t i = 0; i < b.size(); ++i) {
-            float z = zs[i % std::size(zs)], phi = 0.4f * float(i);
-            b.dir[0][i] = std::cos(phi), b.dir[1][i] = std::sin(phi), b.dir[2][i] = z;
-            b.dir[3][i] = -std::cos(phi), b.dir[4][i] = -std::sin(phi), b.dir[5][i] = z;
-        }
-        CHECK(b.run(*k) == 0);
-        for (size_t i = 0; i < b.size(); ++i) {
-            EvalResult<double> want = b.reference(interp, i);
-            REQUIRE(want.valid);
-            REQUIRE(want.rgb[0] > 0);
-            double rel = std::abs(b.out[0][i] - want.rgb[0]) / want.rgb[0];
-            INFO(std::string(spec), " n.w = ", b.dir[2][i], " got ", b.out[0][i], " want ", want.rgb[0]);
-            CHECK(rel < 2e-6);
+    for (const char* fresnel : {"dielectric(1.5)", "schlick(f0 = 0.04)"}) {
+        std::string text =
+            fmt::format("material m {{ ndf = beckmann(0.3); masking = smith_separable; fresnel = {}; }}", fresnel);
+        CheckedProgram p = checkedText(text);
+        Interpreter<double> interp(p.materials[0]);
+        Compiler c;
+        c.setCacheDir("");
+        const float zs[] = {1e-3f, 1e-10f, 1e-19f, 1e-20f, 1e-25f, 1e-30f, 1e-37f};
+        for (const char* spec :
+             {"backend=scalar;cache=off", "backend=simd;width=16;cache=off", "backend=simd;width=8;cache=off"}) {
+            auto k = compile(c, text, spec);
+            Batch b(16, 5);
+            for (size_t i = 0; i < b.size(); ++i) {
+                float z = zs[i % std::size(zs)], phi = 0.4f * float(i);
+                b.dir[0][i] = std::cos(phi), b.dir[1][i] = std::sin(phi), b.dir[2][i] = z;
+                b.dir[3][i] = -std::cos(phi), b.dir[4][i] = -std::sin(phi), b.dir[5][i] = z;
+            }
+            CHECK(b.run(*k) == 0);
+            for (size_t i = 0; i < b.size(); ++i) {
+                EvalResult<double> want = b.reference(interp, i);
+                REQUIRE(want.valid);
+                REQUIRE(want.rgb[0] > 0);
+                double rel = std::abs(b.out[0][i] - want.rgb[0]) / want.rgb[0];
+                INFO(fresnel, " ", std::string(spec), " n.w = ", b.dir[2][i], " got ", b.out[0][i], " want ", want.rgb[0]);
+                CHECK(rel < 2e-6);
+            }
         }
     }
 }

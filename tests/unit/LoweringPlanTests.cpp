@@ -167,11 +167,23 @@ TEST_CASE("float bodies sum the float directions with a normalization correction
     CHECK(printPlan(material("ndf = ggx(0.3);"), guarded).find("corrected-sums=yes") != std::string::npos);
 }
 
-TEST_CASE("the half angle in float: NDFs whose D takes wi + wo, with well-conditioned consumers") {
+TEST_CASE("the half angle without the unit h: NDFs whose D takes wi + wo, with well-conditioned consumers") {
+    // Schlick with a constant f0 >= 1e-12 (or no Fresnel term): 1 - cos
+    // directly from |wi + wo| in double.
     CHECK(exactPlan("ndf = beckmann(0.3); masking = smith_separable; fresnel = schlick(f0 = 0.04);")
-              .scalarBody.halfVector == HalfVectorForm::InFloat);
+              .scalarBody.halfVector == HalfVectorForm::Direct);
+    CHECK(exactPlan("ndf = ggx(0.3); masking = smith_separable;").scalarBody.halfVector == HalfVectorForm::Direct);
+    CHECK(exactPlan("ndf = ggx(0.3); fresnel = schlick(f0 = rgb(1e-12, 0.5, 1));").scalarBody.halfVector ==
+          HalfVectorForm::Direct);
+    // f0 below the bound, per lane, or from an eta within 1e-6 of 1: the
+    // cancellation-free form, with the half angle in float.
+    CHECK(exactPlan("ndf = ggx(0.3); fresnel = schlick(f0 = rgb(0.5, 5e-13, 0.5));").scalarBody.halfVector ==
+          HalfVectorForm::InFloat);
+    CHECK(exactPlan("input f0 = 0.5; ndf = ggx(0.3); fresnel = schlick(f0 = f0);").scalarBody.halfVector ==
+          HalfVectorForm::InFloat);
+    CHECK(exactPlan("ndf = ggx(0.3); fresnel = schlick(eta = 1.000001);").scalarBody.halfVector ==
+          HalfVectorForm::InFloat);
     CHECK(exactPlan("ndf = beckmann(0.3); masking = cook_torrance;").scalarBody.halfVector == HalfVectorForm::Precise);
-    CHECK(exactPlan("ndf = ggx(0.3); masking = smith_separable;").scalarBody.halfVector == HalfVectorForm::InFloat);
     CHECK(exactPlan("ndf = ggx(0.3); masking = kelemen;").scalarBody.halfVector == HalfVectorForm::Precise);
     // An NDF whose D needs the unit h.
     CHECK(exactPlan("ndf = gtr(alpha = 0.3, gamma = 1.5); masking = smith_separable;").scalarBody.halfVector ==
@@ -182,8 +194,12 @@ TEST_CASE("the half angle in float: NDFs whose D takes wi + wo, with well-condit
     LoweringPlan perLane = exactPlan("input eta = 1.5; ndf = beckmann(0.3); fresnel = dielectric(eta);");
     CHECK_FALSE(perLane.fresnel.exactInFloat);
     CHECK(perLane.scalarBody.halfVector == HalfVectorForm::Precise);
-    // Fast bodies compute in float already.
-    CHECK(fastPlan("ndf = beckmann(0.3);").scalarBody.halfVector == HalfVectorForm::Precise);
+    // Fast bodies compute in float already: an estimated |h| where F stays
+    // >= 1e-6, the cancellation-free form otherwise.
+    CHECK(fastPlan("ndf = beckmann(0.3);").scalarBody.halfVector == HalfVectorForm::Estimated);
+    CHECK(fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);").scalarBody.halfVector == HalfVectorForm::Estimated);
+    CHECK(fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 1e-7);").scalarBody.halfVector == HalfVectorForm::Precise);
+    CHECK(fastPlan("ndf = beckmann(0.3); fresnel = dielectric(1.5);").scalarBody.halfVector == HalfVectorForm::Precise);
 }
 
 TEST_CASE("the Smith Lambda form and the model substitutions") {
