@@ -74,7 +74,7 @@ LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value
     // trusted lane (checkOutput off) no trusted lane can be NaN, Inf or
     // negative.
     if (body.checkOutput)
-        for (Value*& x : r.rgb) markInvalid(fm.isNanInfOrNegative(x));
+        markInvalid(fm.anyNanInfOrNegative({r.rgb[0], r.rgb[1], r.rgb[2]}));
     if (!body.guarded())
         for (Value*& x : r.rgb) x = fm.select(invalid_, fm.c(0.0), x);
     r.invalid = invalid_;

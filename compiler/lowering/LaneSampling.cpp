@@ -360,8 +360,7 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u,
     r.pdf = fm.convert(pdf, fm.type());
     r.wi = wiLane;
     // As in eval: a result float cannot hold is an invalid lane.
-    markInvalid(fm.isNanInfOrNegative(r.pdf));
-    for (Value* w : r.weight) markInvalid(fm.isNanInfOrNegative(w));
+    markInvalid(fm.anyNanInfOrNegative({r.pdf, r.weight[0], r.weight[1], r.weight[2]}));
     for (Value* x : r.wi) markInvalid(b.CreateNot(fm.isFinite(x)));
     Value* zero = b.CreateOr(invalid_, b.CreateNot(t.above));
     for (Value*& x : r.wi) x = fm.select(zero, fm.c(0.0), x);

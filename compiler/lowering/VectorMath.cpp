@@ -2,9 +2,12 @@
 // log1p, pow, erfcx and atan2 (see VectorMath.h for accuracies).
 #include "VectorMath.h"
 
+#include "Diagnostics.h"
+
 #include <llvm/IR/Constants.h>
 #include <llvm/IR/Intrinsics.h>
 
+#include <cfloat>
 #include <cmath>
 #include <vector>
 
@@ -56,6 +59,27 @@ Value* MathEmitter::isNanInfOrNegative(Value* a) {
     // 5-10% faster (docs/perf-log.md, 52c9884).
     if (width() == 1) return b.CreateNot(b.CreateAnd(isFinite(a), ge(a, c(0.0))));
     return b.CreateOr(b.CreateFCmpULT(a, c(0.0)), b.CreateFCmpOEQ(a, c(INFINITY)));
+}
+
+Value* MathEmitter::anyNanInfOrNegative(const std::vector<Value*>& xs) {
+    internal_assert(!xs.empty() && xs.size() <= 4) << "anyNanInfOrNegative of " << xs.size() << " values";
+    Value* any = nullptr;
+    if (width() > 1 || xs.size() == 1 || !type_->isFloatTy()) {
+        for (Value* x : xs) any = any ? b.CreateOr(any, isNanInfOrNegative(x)) : isNanInfOrNegative(x);
+        return any;
+    }
+    // One lane: the values packed into one 4-lane vector and tested by two
+    // compares, instead of a sign and exponent test per value through
+    // integer registers (~10 instructions each, at the end of the lane's
+    // longest chain). The test is "not in [0, FLT_MAX]": the vector form of
+    // isNanInfOrNegative (unordered < 0 or = inf) is an fpclass test to
+    // LLVM 19, which it expands into integer operations on 4-lane vectors.
+    auto* quad = llvm::FixedVectorType::get(type_, 4);
+    Value* v = llvm::Constant::getNullValue(quad);
+    for (size_t i = 0; i < xs.size(); ++i) v = b.CreateInsertElement(v, xs[i], b.getInt32(uint32_t(i)));
+    Value* bad = b.CreateNot(b.CreateAnd(b.CreateFCmpOGE(v, llvm::ConstantFP::get(quad, 0.0)),
+                                         b.CreateFCmpOLE(v, llvm::ConstantFP::get(quad, FLT_MAX))));
+    return b.CreateOrReduce(bad);
 }
 
 Value* MathEmitter::intrinsic(llvm::Intrinsic::ID id, Value* a) { return b.CreateIntrinsic(id, {type_}, {a}); }

@@ -54,6 +54,9 @@ public:
     llvm::Value* isFinite(llvm::Value* a);
     // NaN, +-inf or below zero (-0 is not).
     llvm::Value* isNanInfOrNegative(llvm::Value* a);
+    // Whether any of up to four values is NaN, +-inf or below zero (the
+    // same test, for the values of one lane).
+    llvm::Value* anyNanInfOrNegative(const std::vector<llvm::Value*>& xs);
     llvm::Value* abs(llvm::Value* a);
     llvm::Value* sqrt(llvm::Value* a);
     // min/max that propagate NaN from either operand.
