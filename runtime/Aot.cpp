@@ -391,7 +391,7 @@ void addAotEntryPoints(LoweredModule& lowered, const CheckedMaterial& material, 
     for (llvm::Function& fn : module)
         if (!fn.isDeclaration()) fn.setLinkage(llvm::GlobalValue::InternalLinkage);
     auto find = [&](const std::string& symbol) { return symbol.empty() ? nullptr : module.getFunction(symbol); };
-    KernelFamily eval{find(lowered.scalarSymbol.empty() ? "" : lowered.scalarSymbol + "_status"),
+    KernelFamily eval{find(lowered.scalarSymbol),
                       find(lowered.batchSymbol), true, {3}};
     KernelFamily sample{find(lowered.sampleScalarSymbol), find(lowered.sampleBatchSymbol), false, {3, 1, 3}};
     KernelFamily pdf{find(lowered.pdfScalarSymbol), find(lowered.pdfBatchSymbol), false, {1}};

@@ -291,7 +291,6 @@ std::string CompileOptions::canonical() const {
 // (the Kernel, or a tier-up still running) lets go.
 struct KernelCode {
     std::shared_ptr<FacetJit> jit;
-    std::atomic<ScalarKernelFn> scalar{nullptr};
     std::atomic<ScalarStatusFn> scalarStatus{nullptr};
     std::atomic<BatchKernelFn> batch{nullptr};
     // The sampler's (null where the kernel has none: the reference samples).
@@ -405,7 +404,7 @@ double Kernel::tierUpMillis() const {
 }
 
 void Kernel::eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]) const {
-    if (ScalarKernelFn scalar = code_ ? code_->scalar.load(std::memory_order_acquire) : nullptr) {
+    if (ScalarStatusFn scalar = code_ ? code_->scalarStatus.load(std::memory_order_acquire) : nullptr) {
         scalar(wi, wo, inputs, rgb);
         return;
     }
@@ -867,14 +866,9 @@ void Compiler::link(KernelCode& code, const std::string& object, const std::stri
         std::lock_guard<std::mutex> lock(code.mutex);
         code.dylibs.push_back(&dylib);
     }
-    // Release order: the status entry before the plain one, so that no
-    // reader pairs a new plain entry with an old status entry's absence.
-    if (lowering.emitScalar) {
+    if (lowering.emitScalar)
         code.scalarStatus.store(reinterpret_cast<ScalarStatusFn>(jit_->lookup(dylib, prefix + "_scalar_status")),
                                 std::memory_order_release);
-        code.scalar.store(reinterpret_cast<ScalarKernelFn>(jit_->lookup(dylib, prefix + "_scalar")),
-                          std::memory_order_release);
-    }
     if (lowering.emitBatch)
         code.batch.store(reinterpret_cast<BatchKernelFn>(jit_->lookup(dylib, prefix + "_batch")),
                          std::memory_order_release);

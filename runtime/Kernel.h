@@ -100,8 +100,7 @@ struct CompileOptions {
 // ahead-of-time builds and facet_compile_timing use it).
 LoweringOptions loweringOptionsFor(const CompileOptions& options, const EnergyTable* energyTable, bool simd, int width);
 
-using ScalarKernelFn = void (*)(const float*, const float*, const float*, float*);
-// The scalar kernel's twin that also reports whether the lane was invalid.
+// The scalar kernel; it returns 1 where the lane was invalid.
 using ScalarStatusFn = int32_t (*)(const float*, const float*, const float*, float*);
 // The batch kernel; the last argument is the optional per-lane status array.
 using BatchKernelFn = int64_t (*)(int64_t, const float* const*, const float* const*, const float* const*,

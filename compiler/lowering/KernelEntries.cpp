@@ -281,26 +281,16 @@ BodyLanes evalBody(LaneEmitter& lanes, const std::vector<llvm::Value*>& in, cons
     return {{r.rgb.begin(), r.rgb.end()}, r.invalid, r.untrusted};
 }
 
-// The scalar kernel: `<name>_status` computes one lane and returns 1 if it
-// was invalid; `<name>` is the SPEC's void entry point, a thin wrapper.
+// The scalar kernel: `<name>` computes one lane and returns 1 if it was
+// invalid. Kernel::eval, the SPEC's void entry point, calls it and drops
+// the status.
 void emitScalarEntry(const KernelContext& k, llvm::Module& module, const std::string& name) {
     // The scalar kernel computes the precise body directly: per lane, float
     // arithmetic is no faster than double except for division and square
     // root, and the guards would cost more than they save (measured: GGX
     // 47 ns/eval precise, 56 ns float-first).
     EntryShape shape{{{0, 0, 1}, {0, 0, 1}}, {3}};
-    llvm::Function* fn = emitScalarFunction(k, module, name + "_status", shape, k.plan.scalarBody,
-                                            bodies(k, module, k.plan.scalarBody, nullptr, evalBody));
-
-    llvm::LLVMContext& ctx = module.getContext();
-    llvm::IRBuilder<> b(ctx);
-    llvm::Type* ptr = b.getPtrTy();
-    auto* voidTy = llvm::FunctionType::get(b.getVoidTy(), {ptr, ptr, ptr, ptr}, false);
-    auto* entry = llvm::Function::Create(voidTy, llvm::Function::ExternalLinkage, name, module);
-    addKernelAttributes(entry, 1, k.plan.scalarBody);
-    b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", entry));
-    b.CreateCall(fn, {entry->getArg(0), entry->getArg(1), entry->getArg(2), entry->getArg(3)});
-    b.CreateRetVoid();
+    emitScalarFunction(k, module, name, shape, k.plan.scalarBody, bodies(k, module, k.plan.scalarBody, nullptr, evalBody));
 }
 
 // A batch entry point: int64 name(int64 n, const float* const in0[3], ...,
@@ -530,7 +520,7 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
     const bool sampling = options.emitSampling && plan.sampling.specular != SpecularSampling::None;
     if (options.emitScalar) {
         if (options.emitEval) {
-            out.scalarSymbol = symbolPrefix + "_scalar";
+            out.scalarSymbol = symbolPrefix + "_scalar_status";
             emitScalarEntry(k, *out.module, out.scalarSymbol);
         }
         if (sampling) {

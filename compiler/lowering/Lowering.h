@@ -64,7 +64,9 @@ struct LoweringOptions {
 struct LoweredModule {
     std::unique_ptr<llvm::Module> module;
     LoweringPlan plan;  // the decisions the module was lowered with
-    std::string scalarSymbol, batchSymbol;  // empty when not emitted
+    // int32 <prefix>_scalar_status(wi[3], wo[3], inputs, rgb[3]) (1: invalid
+    // lane) and the batch entry point; empty when not emitted.
+    std::string scalarSymbol, batchSymbol;
     // The sampler's (empty when not emitted):
     //   int32 <prefix>_sample_scalar(const float wo[3], const float u[3], const float* inputs,
     //                                float wi[3], float* pdf, float weight[3])   (1: invalid lane)
