@@ -4,6 +4,8 @@
 
 #include "Diagnostics.h"
 
+#include <llvm/IR/MDBuilder.h>
+
 #include <cfloat>
 
 namespace facet {
@@ -75,11 +77,40 @@ LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value
     // negative.
     if (body.checkOutput)
         markInvalid(fm.anyNanInfOrNegative({r.rgb[0], r.rgb[1], r.rgb[2]}));
-    if (!body.guarded())
-        for (Value*& x : r.rgb) x = fm.select(invalid_, fm.c(0.0), x);
+    if (!body.guarded()) {
+        if (fm.width() == 1 && plan.oneLaneZeroesByBranch) {
+            zeroInvalidLaneByBranch(r.rgb);
+        } else {
+            for (Value*& x : r.rgb) x = fm.select(invalid_, fm.c(0.0), x);
+        }
+    }
     r.invalid = invalid_;
     r.untrusted = builder.CreateOr(untrusted_, invalid_);
     return r;
+}
+
+// One lane: the zeroing of an invalid lane as a branch weighted unlikely
+// and a phi, not a select. A select makes the stored value wait for the
+// output check at the end of the lane's longest chain; the predicted branch
+// does not (the weights keep SimplifyCFG from folding it back). Fast
+// kernels keep the select (LoweringPlan::oneLaneZeroesByBranch): their
+// MXCSR restore after the branch made a GGX call 29 -> 79 ns.
+void LaneEmitter::zeroInvalidLaneByBranch(std::array<Value*, 3>& values) {
+    llvm::LLVMContext& ctx = builder.getContext();
+    llvm::Function* fn = builder.GetInsertBlock()->getParent();
+    llvm::BasicBlock* valid = builder.GetInsertBlock();
+    auto* zero = llvm::BasicBlock::Create(ctx, "lane.invalid", fn);
+    auto* done = llvm::BasicBlock::Create(ctx, "lane.done", fn);
+    builder.CreateCondBr(invalid_, zero, done, llvm::MDBuilder(ctx).createBranchWeights(1, 1u << 20));
+    builder.SetInsertPoint(zero);
+    builder.CreateBr(done);
+    builder.SetInsertPoint(done);
+    for (Value*& x : values) {
+        llvm::PHINode* phi = builder.CreatePHI(x->getType(), 2);
+        phi->addIncoming(x, valid);
+        phi->addIncoming(llvm::Constant::getNullValue(x->getType()), zero);
+        x = phi;
+    }
 }
 
 // |w|^2 in emitter `math` (double in both bodies of an exact kernel, so

@@ -249,6 +249,9 @@ private:
     LaneGeometry geometry(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
                           bool wiSampled = false);
     std::array<llvm::Value*, 3> brdf(const LaneGeometry& geo);
+    // 0 for an invalid lane, in a one-lane body (LaneEmitter.cpp says why
+    // not by a select).
+    void zeroInvalidLaneByBranch(std::array<llvm::Value*, 3>& values);
     // f per channel in the precise type and the lanes where it applies (both
     // directions above the horizon, wi + wo not 0; elsewhere f = 0).
     std::array<llvm::Value*, 3> brdfPrecise(const LaneGeometry& geo, llvm::Value*& valid);

@@ -251,6 +251,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     // fast kernels produce them routinely in NDF and Smith tails. Exact
     // kernels keep IEEE subnormals.
     plan.flushDenormals = !variant.precise && x86Target;
+    plan.oneLaneZeroesByBranch = !plan.flushDenormals;
 
     if (!material.masking.model->smith)
         plan.lambda = LambdaForm::None;
@@ -343,6 +344,7 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
        << " at-most-one=" << yesNo(plan.fresnel.atMostOne) << " can-vanish=" << yesNo(plan.fresnel.canVanish) << "\n";
     os << "energy-compensation: " << yesNo(plan.compensatesEnergy) << "\n";
     os << "flush-denormals: " << yesNo(plan.flushDenormals) << "\n";
+    os << "one-lane-zeroes-by-branch: " << yesNo(plan.oneLaneZeroesByBranch) << "\n";
     os << "trust-inputs: " << yesNo(plan.trustInputs) << "\n";
     os << "sampling: specular=" << specularSamplingName(plan.sampling.specular)
        << " cosine-lobe=" << yesNo(plan.sampling.cosineLobe)

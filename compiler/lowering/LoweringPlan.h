@@ -171,6 +171,11 @@ struct LoweringPlan {
     FresnelPlan fresnel;
     bool compensatesEnergy = false;
     bool flushDenormals = false;  // fast kernels on x86: MXCSR FTZ/DAZ for the call
+    // A one-lane body zeroes an invalid lane by a branch weighted unlikely,
+    // not a select (LaneEmitter::zeroInvalidLaneByBranch); not where the
+    // kernel restores MXCSR after it, since LDMXCSR then waits for that
+    // branch to resolve.
+    bool oneLaneZeroesByBranch = false;
     // The host's promise (assume=unit): finite directions with |w| within
     // 1e-3 of 1, finite inputs, u in [0, 1). The kernel then drops the work
     // whose only purpose is to find lanes that break it: the direction,

@@ -53,6 +53,7 @@ TEST_CASE("exact GGX with Schlick f0: a guarded float body and the double body f
     CHECK_FALSE(p.fresnel.rangeGuard);  // f0 = 0.04 >= 1e-6 at every angle
     CHECK(p.fresnel.atMostOne);
     CHECK_FALSE(p.flushDenormals);
+    CHECK(p.oneLaneZeroesByBranch);  // exact: no MXCSR restore after the body
     CHECK(printPlan(m, p).find("batch-bodies: float-first") != std::string::npos);
 }
 
@@ -110,7 +111,9 @@ TEST_CASE("fast GGX: a guarded fast body when isotropic, the exact float-first b
     CHECK_FALSE(iso.batchBody.scaleMaskingSums);
     CHECK(iso.scalarBody.scaleMaskingSums);
     CHECK(iso.flushDenormals);
+    CHECK_FALSE(iso.oneLaneZeroesByBranch);
     CHECK_FALSE(planLowering(material("ndf = ggx(0.3);"), MathVariant::fast(), false).flushDenormals);
+    CHECK(planLowering(material("ndf = ggx(0.3);"), MathVariant::fast(), false).oneLaneZeroesByBranch);
     // Equal constant alphas are one alpha.
     CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3);").ndfIsotropic);
     CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3);").batchBodies == BatchBodies::GuardedFast);
