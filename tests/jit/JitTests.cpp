@@ -111,9 +111,7 @@ struct TwoBodyRun {
     size_t differing = 0, lanes = 0;
 };
 TwoBodyRun runTwoBodies(const Kernel& twoBody, const Kernel& oneBody, const char* text) {
-    DiagnosticEngine d;
-    CheckedProgram program = loadProgramText(text, "t.mat", d);
-    REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+    CheckedProgram program = checkedText(text);
     Interpreter<double> interp(program.materials[0], nullptr);
     Batch a(1 << 14, 11), b(1 << 14, 11);
     CHECK(a.run(twoBody) == 0);
@@ -706,9 +704,7 @@ TEST_CASE("exact Fresnel near a critical angle or N = 1 keeps exact-mode accurac
     Compiler c;
     double worst = 0;
     for (const char* text : materials) {
-        DiagnosticEngine d;
-        CheckedProgram p = loadProgramText(text, "t.mat", d);
-        REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+        CheckedProgram p = checkedText(text);
         Interpreter<double> interp(p.materials[0]);
         auto k = compile(c, text, "backend=scalar;math=exact");
         // cos(theta) from 0.998 to 1 (eta = 0.05: critical at 0.99875) and
@@ -747,9 +743,7 @@ TEST_CASE("student_t with Smith maskings: the kernel's tabulated Lambda agrees w
         for (const char* masking : maskings) {
             std::string text = std::string("material m { input alpha = 0.3 in 0.001 .. 1; ndf = ") + ndf +
                                "; masking = " + masking + "; }";
-            DiagnosticEngine d;
-            CheckedProgram p = loadProgramText(text, "t.mat", d);
-            REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+            CheckedProgram p = checkedText(text);
             Interpreter<double> interp(p.materials[0]);
             for (const char* spec : {"backend=scalar;math=exact;cache=off", "backend=simd;math=exact;cache=off"}) {
                 auto k = compile(c, text, spec);
@@ -781,9 +775,7 @@ TEST_CASE("guarded fast SIMD: unscaled Smith forms where the range guards allow,
         let alpha = roughness * roughness;
         ndf = ggx(alpha); masking = smith_height_correlated; fresnel = schlick(f0 = rgb(0.95, 0.64, 0.54)); })";
     auto applies = [](const char* text, MathVariant variant = MathVariant::fast()) {
-        DiagnosticEngine d;
-        CheckedProgram p = loadProgramText(text, "t.mat", d);
-        REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+        CheckedProgram p = checkedText(text);
         return planLowering(p.materials[0], variant, true).batchBodies == BatchBodies::GuardedFast;
     };
     CHECK(applies(ggx));
@@ -844,9 +836,7 @@ TEST_CASE("guarded fast SIMD: a small alpha keeps the guarded body away from the
     c.setCacheDir("");
     auto guarded = compile(c, ggx, "backend=simd;width=16;math=fast;cache=off");
     auto plain = compile(c, ggx, "backend=simd;width=16;math=fast;cache=off;float_first=off");
-    DiagnosticEngine d;
-    CheckedProgram program = loadProgramText(ggx, "t.mat", d);
-    REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+    CheckedProgram program = checkedText(ggx);
     Interpreter<double> interp(program.materials[0], nullptr);
 
     Batch g(16, 7);
@@ -977,9 +967,7 @@ TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the p
         let alpha = roughness * roughness;
         ndf = ggx(alpha); masking = smith_height_correlated; fresnel = schlick(f0 = rgb(0.95, 0.64, 0.54)); })";
     auto applies = [](const char* text) {
-        DiagnosticEngine d;
-        CheckedProgram p = loadProgramText(text, "t.mat", d);
-        REQUIRE_MESSAGE(!d.hasErrors(), d.str());
+        CheckedProgram p = checkedText(text);
         return planLowering(p.materials[0], MathVariant::exact(), true).batchBodies == BatchBodies::FloatFirst;
     };
     CHECK(applies(ggx));
