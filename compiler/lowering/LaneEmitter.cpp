@@ -142,7 +142,8 @@ Value* LaneEmitter::length2(MathEmitter& math, const std::array<Value*, 3>& w, s
 // receives the unit w in float too, as w + w (1/|w| - 1) with one float FMA
 // from the float input and the correction rounded to float: the same 0.5
 // ulp as rounding the double unit w, for one conversion instead of three.
-std::array<Value*, 3> LaneEmitter::unitDirection(const std::array<Value*, 3>& w, std::array<Value*, 3>& unitF) {
+std::array<Value*, 3> LaneEmitter::unitDirection(const std::array<Value*, 3>& w, std::array<Value*, 3>& unitF,
+                                                 Value** invLen) {
     MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
     std::array<Value*, 3> out;
@@ -159,6 +160,7 @@ std::array<Value*, 3> LaneEmitter::unitDirection(const std::array<Value*, 3>& w,
     } else
         inv = pm.poly(delta, {1.0, -1.0 / 2, 3.0 / 8});
     for (Value*& x : out) x = pm.mul(x, inv);
+    if (invLen) *invLen = inv;
     if (pm.isDouble()) {
         Value* corr = fm.convert(pm.sub(inv, pm.c(1.0)), fm.type());
         for (int i = 0; i < 3; ++i) unitF[i] = fm.fma(w[i], corr, w[i]);
@@ -206,6 +208,7 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
     std::array<Value*, 3> wiD, woD;
     std::array<Value*, 3> wiF{}, woF{};  // unit directions in float, where unitDirection() made them
     std::array<Value*, 3> hD, diff;
+    Value *wiInvLen = nullptr, *woInvLen = nullptr;
     if (body.correctedSums) {
         // Float body. Rounding the normalized directions to float and then
         // adding them would lose h where wi + wo cancels (error eps/|wi + wo|,
@@ -225,8 +228,8 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
             diff[i] = fm.add(fm.sub(wi[i], wo[i]), ci ? fm.fma(wi[i], ci, fm.neg(woCorr)) : fm.neg(woCorr));
         }
     } else {
-        wiD = unitDirection(wi, wiF);
-        woD = unitDirection(wo, woF);
+        wiD = unitDirection(wi, wiF, &wiInvLen);
+        woD = unitDirection(wo, woF, &woInvLen);
         hD = {pm.add(wiD[0], woD[0]), pm.add(wiD[1], woD[1]), pm.add(wiD[2], woD[2])};
         diff = {pm.sub(wiD[0], woD[0]), pm.sub(wiD[1], woD[1]), pm.sub(wiD[2], woD[2])};
     }
@@ -309,6 +312,10 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
         g.slopeHLen2 = pm.convert(hlen2, pm.type());
     } else {
         g.slopeH = g.hD;
+    }
+    if (wiInvLen) {
+        g.wiIn = wi, g.woIn = wo;
+        g.wiInvLen = wiInvLen, g.woInvLen = woInvLen;
     }
     g.cosD = pm.convert(cosD, pm.type());
     g.oneMinusCosD = pm.convert(oneMinusCos, pm.type());

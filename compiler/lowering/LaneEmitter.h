@@ -55,6 +55,12 @@ struct LaneGeometry {
     std::array<llvm::Value*, 3> slopeH;
     llvm::Value* slopeHLen2 = nullptr;
     std::array<llvm::Value*, 3> wiD, woD;  // the unit directions in the precise type
+    // Where the precise body normalized the directions itself (not the
+    // float body's corrected sums): the float inputs as given and 1/|w| in
+    // the precise type, for terms homogeneous in w that can start from the
+    // inputs and scale afterwards (null elsewhere).
+    std::array<llvm::Value*, 3> wiIn{}, woIn{};
+    llvm::Value *wiInvLen = nullptr, *woInvLen = nullptr;
     llvm::Value* cosD;          // wo.h = wi.h in [0, 1], precise type
     llvm::Value* oneMinusCosD;  // 1 - wo.h = |wo - h|^2 / 2, precise type, without cancellation at wi = wo
     llvm::Value* sin2D;         // 1 - (wo.h)^2 from the same, precise type
@@ -257,11 +263,12 @@ private:
     std::array<llvm::Value*, 3> brdfPrecise(const LaneGeometry& geo, llvm::Value*& valid);
     // The unit direction of w in the precise type (SPEC 2: a non-finite or
     // non-unit w marks the lane invalid); with a double precise type, the
-    // unit w in float too (unitF; else untouched).
+    // unit w in float too (unitF; else untouched), and 1/|w| (invLen).
     llvm::Value* checkedLength2(MathEmitter& math, const std::array<llvm::Value*, 3>& w,
                                 std::array<llvm::Value*, 3>& widened);
     llvm::Value* length2(MathEmitter& math, const std::array<llvm::Value*, 3>& w, std::array<llvm::Value*, 3>& widened);
-    std::array<llvm::Value*, 3> unitDirection(const std::array<llvm::Value*, 3>& w, std::array<llvm::Value*, 3>& unitF);
+    std::array<llvm::Value*, 3> unitDirection(const std::array<llvm::Value*, 3>& w, std::array<llvm::Value*, 3>& unitF,
+                                              llvm::Value** invLen = nullptr);
     // Float body: 1/|w| - 1 in float (the unit w is w + w times it), the
     // length checked as the precise body checks it (undecided lanes go to it).
     llvm::Value* unitCorrection(const std::array<llvm::Value*, 3>& w);

@@ -86,6 +86,8 @@ public:
     // (n.v) Lambda(v), float.
     virtual llvm::Value* cosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<llvm::Value*, 3>& v) const;
     // R(v) = sqrt((n.v)^2 + proj(v)) = (n.v)(1 + 2 Lambda(v)), float (smithRootSums).
+    // A norm of v (homogeneous of degree 1): the Smith forms may take it of
+    // an unnormalized v and scale.
     virtual llvm::Value* smithRoot(LaneEmitter& lane, const NdfParams& n, const std::array<llvm::Value*, 3>& v) const;
     // The roughness the Kulla-Conty table is looked up with, precise type
     // (default: alpha, or sqrt(ax ay) for an anisotropic lobe).

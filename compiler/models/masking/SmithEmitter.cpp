@@ -23,8 +23,16 @@ SmithSums smithSums(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n
     SmithSums s;
     if (lane.plan.lambda == LambdaForm::RootSums) {
         // R(v) = (n.v)(1 + 2 Lambda(v)): (n.v)(1 + Lambda) = ((n.v) + R)/2.
-        s.rootI = pm.convert(ndf.smithRoot(lane, n, geo.wi), pm.type());
-        s.rootO = pm.convert(ndf.smithRoot(lane, n, geo.wo), pm.type());
+        // R is a norm of v, so where the body normalized the inputs itself
+        // R(w/|w|) = R(w) / |w|: the square roots start from the loaded
+        // inputs instead of waiting for the renormalization, which is the
+        // head of a one-lane body's chain.
+        auto root = [&](const std::array<Value*, 3>& unit, const std::array<Value*, 3>& input, Value* invLen) {
+            if (!invLen) return pm.convert(ndf.smithRoot(lane, n, unit), pm.type());
+            return pm.mul(pm.convert(ndf.smithRoot(lane, n, input), pm.type()), invLen);
+        };
+        s.rootI = root(geo.wi, geo.wiIn, geo.wiInvLen);
+        s.rootO = root(geo.wo, geo.woIn, geo.woInvLen);
         s.ai = pm.mul(pm.add(ci, s.rootI), pm.c(0.5));
         s.ao = pm.mul(pm.add(co, s.rootO), pm.c(0.5));
     } else {
