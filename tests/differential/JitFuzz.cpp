@@ -10,8 +10,9 @@
 // status array marks; a marked lane is 0; every output is finite and
 // non-negative; a lane the interpreter rejects is marked; and on exact
 // kernels a lane whose reference is a normal float in every channel (below
-// 1e38) is not marked and is within 2e-3 relative of it (the differential
-// tests' bound for every value).
+// 1e38) is not marked and is within 1e-5 relative of it (exact mode's bound
+// on the hard-case sample: a non-unit direction's renormalization or a
+// grazing lane that drifts by 1e-3 must be a finding).
 // Each material gets a batch of L-31..L lanes (L = --lanes, default 256), so
 // that SIMD kernels of every width also run a partial last chunk, and every
 // array a kernel reads or writes ends where an inaccessible page begins
@@ -162,7 +163,9 @@ void checkKernel(const Kernel& k, const std::string& label, const LaneBatch& s, 
             double want = ref.rgb[ch];
             if (!(want >= FLT_MIN && want <= FLT_MAX)) continue;
             double got = out[ch][i];
-            if (status[i] || std::fabs(got - want) > 2e-3 * want)
+            // kHardCaseBoundExact (apps/verify/Verify.h), which this target
+            // does not link: the sanitized build would mix runtimes.
+            if (status[i] || std::fabs(got - want) > 1e-5 * want)
                 finding(c, fmt::format("{}: channel {} is {:.9g} (status {}), the interpreter {:.17g}", lane(), ch,
                                        got, status[i], want));
         }
