@@ -51,7 +51,7 @@ struct NdfLoweringTraits {
     // kernels), and, isotropic, a guarded fast body (D as one fraction).
     bool floatFirstBody = false;
     bool guardedFastBody = false;
-    // Smith terms from R(v) = sqrt((n.v)^2 + proj(v)) (smithRoot).
+    // Smith terms from R(v) = sqrt((n.v)^2 + proj(v)) (smithRootSquared).
     bool smithRootSums = false;
     // Its Smith Lambda has the Beckmann profile: Walter's fit can replace it.
     bool beckmannProfileLambda = false;
@@ -85,10 +85,12 @@ public:
                              bool& isotropic) const;
     // (n.v) Lambda(v), float.
     virtual llvm::Value* cosLambda(LaneEmitter& lane, const NdfParams& n, const std::array<llvm::Value*, 3>& v) const;
-    // R(v) = sqrt((n.v)^2 + proj(v)) = (n.v)(1 + 2 Lambda(v)), float (smithRootSums).
-    // A norm of v (homogeneous of degree 1): the Smith forms may take it of
-    // an unnormalized v and scale.
-    virtual llvm::Value* smithRoot(LaneEmitter& lane, const NdfParams& n, const std::array<llvm::Value*, 3>& v) const;
+    // R(v)^2 = (n.v)^2 + proj(v), float (smithRootSums), where R(v) = (n.v)(1
+    // + 2 Lambda(v)). R is a norm of v (homogeneous of degree 1): the Smith
+    // forms may take it of an unnormalized v and scale, and take the roots
+    // of both directions together.
+    virtual llvm::Value* smithRootSquared(LaneEmitter& lane, const NdfParams& n,
+                                          const std::array<llvm::Value*, 3>& v) const;
     // The roughness the Kulla-Conty table is looked up with, precise type
     // (default: alpha, or sqrt(ax ay) for an anisotropic lobe).
     virtual llvm::Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const;

@@ -88,6 +88,17 @@ Value* MathEmitter::intrinsic(llvm::Intrinsic::ID id, Value* a, Value* x) {
 }
 Value* MathEmitter::abs(Value* a) { return intrinsic(llvm::Intrinsic::fabs, a); }
 Value* MathEmitter::sqrt(Value* a) { return intrinsic(llvm::Intrinsic::sqrt, a); }
+// One lane: two independent square roots queue on the one divide/square
+// root unit; packed, they issue as one instruction.
+std::pair<Value*, Value*> MathEmitter::sqrtBoth(Value* a, Value* x) {
+    if (width() > 1) return {sqrt(a), sqrt(x)};
+    auto* pair = llvm::FixedVectorType::get(type_, 2);
+    Value* v = b.CreateInsertElement(llvm::PoisonValue::get(pair), a, b.getInt32(0));
+    v = b.CreateInsertElement(v, x, b.getInt32(1));
+    v = b.CreateIntrinsic(llvm::Intrinsic::sqrt, {pair}, {v});
+    return {b.CreateExtractElement(v, b.getInt32(0)), b.CreateExtractElement(v, b.getInt32(1))};
+}
+
 Value* MathEmitter::minnum(Value* a, Value* x) { return intrinsic(llvm::Intrinsic::minnum, a, x); }
 Value* MathEmitter::maxnum(Value* a, Value* x) { return intrinsic(llvm::Intrinsic::maxnum, a, x); }
 Value* MathEmitter::min(Value* a, Value* x) { return intrinsic(llvm::Intrinsic::minimum, a, x); }

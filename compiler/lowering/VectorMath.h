@@ -59,6 +59,8 @@ public:
     llvm::Value* anyNanInfOrNegative(const std::vector<llvm::Value*>& xs);
     llvm::Value* abs(llvm::Value* a);
     llvm::Value* sqrt(llvm::Value* a);
+    // sqrt(a) and sqrt(x); in one-lane code by one packed instruction.
+    std::pair<llvm::Value*, llvm::Value*> sqrtBoth(llvm::Value* a, llvm::Value* x);
     // min/max that propagate NaN from either operand.
     llvm::Value* min(llvm::Value* a, llvm::Value* b);
     llvm::Value* max(llvm::Value* a, llvm::Value* b);

@@ -26,13 +26,17 @@ SmithSums smithSums(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n
         // R is a norm of v, so where the body normalized the inputs itself
         // R(w/|w|) = R(w) / |w|: the square roots start from the loaded
         // inputs instead of waiting for the renormalization, which is the
-        // head of a one-lane body's chain.
-        auto root = [&](const std::array<Value*, 3>& unit, const std::array<Value*, 3>& input, Value* invLen) {
-            if (!invLen) return pm.convert(ndf.smithRoot(lane, n, unit), pm.type());
-            return pm.mul(pm.convert(ndf.smithRoot(lane, n, input), pm.type()), invLen);
-        };
-        s.rootI = root(geo.wi, geo.wiIn, geo.wiInvLen);
-        s.rootO = root(geo.wo, geo.woIn, geo.woInvLen);
+        // head of a one-lane body's chain; there both take one instruction.
+        MathEmitter& fm = lane.floatMath();
+        const bool fromInputs = geo.wiInvLen != nullptr;
+        auto [rootI, rootO] = fm.sqrtBoth(ndf.smithRootSquared(lane, n, fromInputs ? geo.wiIn : geo.wi),
+                                          ndf.smithRootSquared(lane, n, fromInputs ? geo.woIn : geo.wo));
+        s.rootI = pm.convert(rootI, pm.type());
+        s.rootO = pm.convert(rootO, pm.type());
+        if (fromInputs) {
+            s.rootI = pm.mul(s.rootI, geo.wiInvLen);
+            s.rootO = pm.mul(s.rootO, geo.woInvLen);
+        }
         s.ai = pm.mul(pm.add(ci, s.rootI), pm.c(0.5));
         s.ao = pm.mul(pm.add(co, s.rootO), pm.c(0.5));
     } else {

@@ -134,9 +134,8 @@ public:
         return fm.select(fm.isFinite(proj), cl, proj);
     }
 
-    Value* smithRoot(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
-        MathEmitter& fm = lane.floatMath();
-        return fm.sqrt(fm.fma(v[2], v[2], lane.smithProjection(*this, n, v)));
+    Value* smithRootSquared(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
+        return lane.floatMath().fma(v[2], v[2], lane.smithProjection(*this, n, v));
     }
 
     // (n.v)(1 + Lambda(v)) = ((n.v) + R(v)) / 2: a sum of positive terms, no
@@ -147,7 +146,7 @@ public:
         MathEmitter& pm = lane.preciseMath();
         std::array<Value*, 3> vLane;
         for (int i = 0; i < 3; ++i) vLane[i] = fm.convert(v[i], fm.type());
-        Value* root = pm.convert(smithRoot(lane, n, vLane), pm.type());
+        Value* root = pm.convert(fm.sqrt(smithRootSquared(lane, n, vLane)), pm.type());
         return pm.mul(pm.add(v[2], root), pm.c(0.5));
     }
 
@@ -167,7 +166,7 @@ public:
         Value *vx = pm.mul(n.axD, wo[0]), *vy = pm.mul(n.ayD, wo[1]);
         // |v| before normalizing is R(wo): in float the same value as the
         // density's and eval's, one square root for the three.
-        Value* len = pm.isDouble() ? pm.sqrt(pm.fma(vx, vx, pm.fma(vy, vy, pm.mul(wo[2], wo[2])))) : smithRoot(lane, n, wo);
+        Value* len = pm.isDouble() ? pm.sqrt(pm.fma(vx, vx, pm.fma(vy, vy, pm.mul(wo[2], wo[2])))) : lane.floatMath().sqrt(smithRootSquared(lane, n, wo));
         Value* inv = pm.div(pm.c(1.0), len);
         vx = pm.mul(vx, inv), vy = pm.mul(vy, inv);
         Value* vz = pm.mul(wo[2], inv);
