@@ -23,10 +23,12 @@ double fresnelAverageDielectric(double eta);
 double fresnelAverageConductor(double eta, double k);
 
 // The panels of the F_avg quadratures on [0, 1]: graded toward grazing
-// incidence (features of width ~1/|eta + ik|) and, for eta < 1, toward the
-// critical angle of total internal reflection (a square-root kink); none
-// wider than 1/16. The interpreter's own quadrature (KullaContyEval.h) uses
-// them too.
+// incidence (features of width ~1/|eta + ik|); for eta < 1 toward the
+// critical angle of total internal reflection (a square-root kink); for eta
+// >= 1 near N = eta + ik = 1 toward the peak of F(mu) mu at mu = sqrt|N^2 -
+// 1| (F ~ |N^2 - 1|^2 / mu^4 above it, which makes F_avg ~ (2/3)(eta -
+// 1)/(eta + 1) for a dielectric); none wider than 1/16. The
+// interpreter's own quadrature (KullaContyEval.h) uses them too.
 std::vector<double> fresnelAverageBreaks(double eta, double k);
 
 // Schlick's average at the conductor's normal reflectance,
@@ -36,11 +38,12 @@ double conductorSchlickAverage(double eta, double k);
 // Tables for evaluators that cannot integrate per evaluation (the JIT, when
 // eta or k are per-lane inputs; constant ones fold to the exact quadrature).
 // Immutable process-wide constants (a pure function of nothing), built on
-// first use (~0.3 s).
-//   dielectric: F_avg over s = (eta - 1)/(eta + 1) for eta >= 1, s in [0, 1],
-//     kDielectricCount nodes uniform in s, linear interpolation. For eta < 1:
-//     F_avg(eta) = 1 - eta^2 (1 - F_avg(1/eta)) (exact reciprocity of the
-//     hemispherical transmittance). Max error 2.1e-6 (eta in [1e-3, 1e3]).
+// first use (~0.35 s).
+//   dielectric: F_avg / s over s = (eta - 1)/(eta + 1) for eta >= 1, s in
+//     [0, 1] (2/3 at s = 0, where F_avg ~ (2/3) s), kDielectricCount nodes
+//     uniform in sqrt(s), linear interpolation, times s: accurate relative
+//     to F_avg near eta = 1 too. For eta < 1: F_avg(eta) = 1 - eta^2 (1 -
+//     F_avg(1/eta)) (exact reciprocity of the hemispherical transmittance).
 //   conductor: the residual F_avg - conductorSchlickAverage(eta, k) over
 //     (a, b) = (eta/(eta+1), sqrt(k)/(sqrt(k)+1)) in [0, 1]^2, kConductorCount^2
 //     nodes uniform in a and b (eta = 1 is node 64), bilinear; the last row and
@@ -50,7 +53,7 @@ double conductorSchlickAverage(double eta, double k);
 //     over [1e-3, 1e3]^2.
 // Measured accuracy is asserted by tests/energy (FresnelAverageTests).
 struct FresnelAverageTables {
-    static constexpr int kDielectricCount = 1024;
+    static constexpr int kDielectricCount = 2048;
     static constexpr int kConductorCount = 129;
     std::vector<float> dielectric;  // kDielectricCount
     std::vector<float> conductor;   // [ib * kConductorCount + ia], ia along eta, ib along sqrt(k): the residual

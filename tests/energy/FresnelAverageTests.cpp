@@ -141,4 +141,31 @@ TEST_CASE("F_avg tables for per-lane eta and k: accuracy") {
     CHECK(t.conductorAt(1e30, 0) == doctest::Approx(1).epsilon(1e-6));
 }
 
+// Near eta = 1 F_avg ~ (2/3) s, s = (eta - 1)/(eta + 1), and the
+// integrand F(mu) mu peaks at mu ~ sqrt(eta^2 - 1): the quadrature must
+// resolve that peak, and the table must be accurate relative to F_avg
+// itself (kulla_conty's Fresnel term is ~F_avg^2). Simpson in sqrt(mu)
+// resolves it (checked against an independent tanh-sinh quadrature:
+// F_avg / s = 0.666664, 0.666643, 0.666475, 0.665208, 0.656655 at s = 1e-7,
+// 1e-6, 1e-5, 1e-4, 1e-3).
+TEST_CASE("dielectric near eta = 1: relative to F_avg itself") {
+    const facet::FresnelAverageTables& t = facet::fresnelAverageTables();
+    const double expected[] = {0.6666638263802097, 0.6666428689220888, 0.6664747367322303, 0.665207548202776,
+                               0.6566553400710399};
+    int i = 0;
+    for (double s : {1e-7, 1e-6, 1e-5, 1e-4, 1e-3}) {
+        double eta = (1 + s) / (1 - s);
+        auto r = fresnelOnly("dielectric", {{"eta", eta}});
+        INFO("s=", s, " eta=", eta);
+        CHECK(referenceAverage(r) / s == doctest::Approx(expected[i]).epsilon(1e-6));
+        CHECK(facet::fresnelAverageDielectric(eta) / s == doctest::Approx(expected[i]).epsilon(1e-8));
+        CHECK(facet::fresnelAverage(r, 0) / s == doctest::Approx(expected[i]).epsilon(1e-8));
+        CHECK(t.dielectricAt(eta) / s == doctest::Approx(expected[i]).epsilon(1e-5));
+        // Below 1, by reciprocity: 1 - F_avg(1/eta) = eta^2 (1 - F_avg(eta)).
+        double inside = facet::fresnelAverageDielectric(1 / eta);
+        CHECK(t.dielectricAt(1 / eta) == doctest::Approx(inside).epsilon(1e-6));
+        ++i;
+    }
+}
+
 }  // TEST_SUITE

@@ -100,7 +100,6 @@ const FastGap kFastGaps[] = {
     {"beckmann", "input alpha=", 0x1p64, INFINITY, "alpha^2 overflows float: the lane is dropped (diffuse or compensation lost)"},
     {"beckmann", "all inputs=", 0x1p64, INFINITY, "alpha^2 overflows float, as above"},
     {"gtr", "input gamma=", 1e29, INFINITY, "mirror pairs at n.h = 1: the lobe (width ~1e-31 in sin^2 theta_h) is narrower than the ~1e-15 rounding of the corrected sums' tangential h (docs/numerics.md)"},
-    {"_kc_", "input eta=", 0.999, 1.001, "kulla_conty with F ~ 1e-13 near eta = 1: 1.6% off (cause not yet found)"},
 };
 const FastGap* fastGap(const std::string& material, const HardCase& c) {
     for (const FastGap& g : kFastGaps) {

@@ -124,22 +124,27 @@ private:
     }
 };
 
-// F_avg of a per-lane dielectric eta from the table over s = (eta - 1)/(eta
-// + 1) for eta >= 1; eta < 1 by the reciprocity F_avg(eta) = 1 - eta^2 (1 -
-// F_avg(1/eta)).
+// F_avg of a per-lane dielectric eta from the table of F_avg / s over
+// sqrt(s), s = (eta - 1)/(eta + 1), for eta >= 1; eta < 1 by the
+// reciprocity F_avg(eta) = 1 - eta^2 (1 - F_avg(1/eta)).
 Value* dielectricAverageLookup(LaneEmitter& lane, Value* eta) {
     MathEmitter& pm = lane.preciseMath();
     const FresnelAverageTables& t = fresnelAverageTables();
     auto* table = lane.floatTable(t.dielectric, "facet_favg_dielectric");
     Value* n = pm.convert(eta, pm.type());
     Value* below = pm.lt(n, pm.c(1.0));
-    Value* m = pm.select(below, pm.div(pm.c(1.0), n), n);
-    Value* sPos = pm.div(pm.sub(m, pm.c(1.0)), pm.add(m, pm.c(1.0)));
+    // s of max(n, 1/n) is |n - 1|/(n + 1): no rounded 1/n, whose error would
+    // be ~6% of s at n = 1 - 1e-6 in float.
+    Value* sPos = pm.div(pm.abs(pm.sub(n, pm.c(1.0))), pm.add(n, pm.c(1.0)));
     const double last = FresnelAverageTables::kDielectricCount - 1;
-    Value* u = pm.minnum(pm.maxnum(pm.mul(sPos, pm.c(last)), pm.c(0.0)), pm.c(last));
+    Value* u = pm.minnum(pm.maxnum(pm.mul(pm.sqrt(sPos), pm.c(last)), pm.c(0.0)), pm.c(last));
     Value* j = pm.minnum(lane.intrinsic(llvm::Intrinsic::floor, u), pm.c(last - 1));
-    Value* fa = lane.lerpFetch(table, j, pm.sub(u, j));
-    return pm.select(below, pm.sub(pm.c(1.0), pm.mul(pm.mul(n, n), pm.sub(pm.c(1.0), fa))), fa);
+    Value* fa = pm.mul(sPos, lane.lerpFetch(table, j, pm.sub(u, j)));  // the table holds F_avg / s
+    // Below 1, 1 - n^2 (1 - fa) as (1 - n)(1 + n) + n^2 fa: F_avg ~ 1 - n^2 is
+    // small near n = 1, where 1 - n is exact and 1 - fa rounded to float
+    // would be off by ~1% of it.
+    Value* reciprocal = pm.fma(pm.mul(n, n), fa, pm.mul(pm.sub(pm.c(1.0), n), pm.add(pm.c(1.0), n)));
+    return pm.select(below, reciprocal, fa);
 }
 
 class DielectricEmitter final : public FresnelEmitter {
