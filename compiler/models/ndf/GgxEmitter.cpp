@@ -166,7 +166,8 @@ public:
         Value *vx = pm.mul(n.axD, wo[0]), *vy = pm.mul(n.ayD, wo[1]);
         // |v| before normalizing is R(wo): in float the same value as the
         // density's and eval's, one square root for the three.
-        Value* len = pm.isDouble() ? pm.sqrt(pm.fma(vx, vx, pm.fma(vy, vy, pm.mul(wo[2], wo[2])))) : lane.floatMath().sqrt(smithRootSquared(lane, n, wo));
+        Value* len = pm.isDouble() ? pm.sqrt(pm.fma(vx, vx, pm.fma(vy, vy, pm.mul(wo[2], wo[2]))))
+                                   : pm.sqrt(smithRootSquared(lane, n, wo));
         Value* inv = pm.div(pm.c(1.0), len);
         vx = pm.mul(vx, inv), vy = pm.mul(vy, inv);
         Value* vz = pm.mul(wo[2], inv);
