@@ -94,7 +94,8 @@ LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value
 // output check at the end of the lane's longest chain; the predicted branch
 // does not (the weights keep SimplifyCFG from folding it back). Fast
 // kernels keep the select (LoweringPlan::oneLaneZeroesByBranch): their
-// MXCSR restore after the branch made a GGX call 29 -> 79 ns.
+// MXCSR restore follows the branch, and LDMXCSR waits for it to resolve,
+// which costs far more than the select (docs/perf-log.md).
 void LaneEmitter::zeroInvalidLaneByBranch(std::array<Value*, 3>& values) {
     llvm::LLVMContext& ctx = builder.getContext();
     llvm::Function* fn = builder.GetInsertBlock()->getParent();
