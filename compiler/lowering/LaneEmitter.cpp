@@ -197,6 +197,50 @@ Value* LaneEmitter::unitCorrection(const std::array<Value*, 3>& w) {
     return fm.mul(delta, fm.poly(delta, {-1.0 / 2, 3.0 / 8, -5.0 / 16}));
 }
 
+// Only the difference of the two corrections ci = 1/|wi| - 1 and co needs
+// to be accurate where wi + wo cancels: an error e common to both scales h
+// = wi (1 + ci) + wo (1 + co) by 1 + e, which leaves its direction as it
+// is, and its length (cos) and the cosines off by e relative. So the
+// common part c = (ci + co)/2 comes from |w|^2 - 1 in float (three FMAs,
+// off by < 6e-8 where the double |w|^2 of unitCorrection() cost a
+// conversion and double arithmetic at the head of every dependency
+// chain), and the difference from |wi|^2 - |wo|^2 = (wi - wo).(wi + wo),
+// whose float terms are rounded relative to the sums themselves:
+//   wi + wo (corrected) = (wi + wo)(1 + c) + (ci - co)/2 (wi - wo),
+//   wi - wo (corrected) = (wi - wo)(1 + c) + (ci - co)/2 (wi + wo).
+// Each corrected sum is then within ~2 ulp of itself. With di = |wi|^2 - 1,
+// do likewise and s = di + do, the series 1/sqrt(1 + d) - 1 = -d/2 + 3d^2/8
+// - ... give c = -s/4 (the rest, < 3s^2/32, is common) and
+// (ci - co)/2 = (di - do)(-1/4 + 3s/16) (the rest, < 0.12 s^2 relative).
+// These hold while |di| + |do| < 1e-4 (float-rounded unit vectors are
+// within 4e-7); the body distrusts the other lanes, NaN and Inf ones among
+// them, and its fallback decides their validity.
+LaneEmitter::CorrectedPair LaneEmitter::floatPairCorrections(const std::array<Value*, 3>& wi,
+                                                              const std::array<Value*, 3>& wo) {
+    MathEmitter& fm = floatMath_;
+    auto lengthMinusOne = [&](const std::array<Value*, 3>& w) {
+        return fm.fma(w[0], w[0], fm.fma(w[1], w[1], fm.fma(w[2], w[2], fm.c(-1.0))));
+    };
+    Value *di = lengthMinusOne(wi), *dO = lengthMinusOne(wo);
+    distrust(builder.CreateNot(fm.lt(fm.add(fm.abs(di), fm.abs(dO)), fm.c(1e-4))));
+    Value* s = fm.add(di, dO);
+    CorrectedPair out;
+    std::array<Value*, 3> sum, diff;
+    for (int i = 0; i < 3; ++i) sum[i] = fm.add(wi[i], wo[i]), diff[i] = fm.sub(wi[i], wo[i]);
+    Value* dd = fm.fma(diff[0], sum[0], fm.fma(diff[1], sum[1], fm.mul(diff[2], sum[2])));  // di - do
+    Value* halfDifference = fm.mul(dd, fm.fma(s, fm.c(3.0 / 16), fm.c(-0.25)));
+    Value* common = fm.mul(s, fm.c(-0.25));
+    Value* onePlusCommon = fm.fma(s, fm.c(-0.25), fm.c(1.0));
+    Value *ci = fm.add(common, halfDifference), *co = fm.sub(common, halfDifference);
+    for (int i = 0; i < 3; ++i) {
+        out.wi[i] = fm.fma(wi[i], ci, wi[i]);
+        out.wo[i] = fm.fma(wo[i], co, wo[i]);
+        out.sum[i] = fm.fma(sum[i], onePlusCommon, fm.mul(halfDifference, diff[i]));
+        out.diff[i] = fm.fma(diff[i], onePlusCommon, fm.mul(halfDifference, sum[i]));
+    }
+    return out;
+}
+
 // SPEC 2: non-finite or non-unit directions are invalid lanes; valid ones
 // are renormalized. Normalization and the half vector are computed in the
 // precise type (double in exact mode): wi + wo cancels when the directions
@@ -210,7 +254,10 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
     std::array<Value*, 3> wiF{}, woF{};  // unit directions in float, where unitDirection() made them
     std::array<Value*, 3> hD, diff;
     Value *wiInvLen = nullptr, *woInvLen = nullptr;
-    if (body.correctedSums) {
+    if (body.floatPairCorrections && !wiSampled) {
+        CorrectedPair pair = floatPairCorrections(wi, wo);
+        wiD = pair.wi, woD = pair.wo, hD = pair.sum, diff = pair.diff;
+    } else if (body.correctedSums) {
         // Float body. Rounding the normalized directions to float and then
         // adding them would lose h where wi + wo cancels (error eps/|wi + wo|,
         // amplified ~2/alpha by D). Instead the float inputs are summed as

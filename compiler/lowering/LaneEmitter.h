@@ -272,6 +272,12 @@ private:
     // Float body: 1/|w| - 1 in float (the unit w is w + w times it), the
     // length checked as the precise body checks it (undecided lanes go to it).
     llvm::Value* unitCorrection(const std::array<llvm::Value*, 3>& w);
+    // The corrected wi, wo, wi + wo and wi - wo of a float body with a
+    // fallback, from float arithmetic only (BodyPlan::floatPairCorrections).
+    struct CorrectedPair {
+        std::array<llvm::Value*, 3> wi, wo, sum, diff;
+    };
+    CorrectedPair floatPairCorrections(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo);
 
     // LaneSampling.cpp
     struct SamplingTerms;

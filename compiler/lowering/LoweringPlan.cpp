@@ -210,6 +210,7 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
         body.halfVector = HalfVectorForm::InFloat;
 
     body.correctedSums = !inDouble && role != BodyRole::FastGuarded;
+    body.floatPairCorrections = body.correctedSums && role == BodyRole::FloatGuarded && plan.ndfIsotropic;
 
     // In float, the masking sums are scaled; in double and in a guarded
     // body (whose guards keep the sums in range) they need not be.
@@ -314,7 +315,7 @@ namespace {
 void printBody(std::ostringstream& os, const char* what, const BodyPlan& body) {
     os << what << ": role=" << bodyRoleName(body.role) << " precise=" << precisionName(body.precise)
        << " expressions=" << precisionName(body.expressions) << " half-vector=" << halfVectorFormName(body.halfVector)
-       << " corrected-sums=" << (body.correctedSums ? "yes" : "no")
+       << " corrected-sums=" << (body.correctedSums ? (body.floatPairCorrections ? "float-pair" : "yes") : "no")
        << " estimates=" << (body.estimates ? "yes" : "no")
        << " short-polynomials=" << (body.shortPolynomials ? "yes" : "no")
        << " scale-masking-sums=" << (body.scaleMaskingSums ? "yes" : "no")

@@ -110,6 +110,18 @@ struct BodyPlan {
     // and its NDF distrusts the lanes where that rounding would move D
     // beyond fast mode's accuracy, which its fallback recomputes.
     bool correctedSums = false;
+    // With correctedSums, in a body with a fallback (the float-first body)
+    // of an isotropic NDF: the pair's corrections from float arithmetic
+    // alone, the common part from |w|^2 - 1 in float and the difference
+    // from (wi - wo).(wi + wo) (LaneEmitter::floatPairCorrections). That
+    // difference is off by up to ~1e-8, which moves the corrected wi + wo
+    // by ~1 ulp of its length along wi - wo: harmless where D sees only the
+    // angle between h and n, but not where an anisotropic D resolves a
+    // tangential component of h that nearly cancels, with an alpha as
+    // small as that component (docs/numerics.md). It is accurate only for
+    // nearly unit inputs; the body distrusts the others, and its fallback
+    // decides their validity, as a body without a fallback could not.
+    bool floatPairCorrections = false;
     // The masking forms in float are scaled by max(ci, co) and divide in
     // steps, so that no sum of products falls into the subnormal range and
     // an intermediate overflows only if the result does. Unneeded in double,

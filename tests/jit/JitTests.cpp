@@ -1025,10 +1025,11 @@ TEST_CASE("float-first exact SIMD: float where a lane is well-conditioned, the p
     }
 }
 
-// The float body tests a direction's length on |w|^2 - 1 rounded to float
-// and hands the lanes that rounding cannot decide to the precise body: at
-// the unit tolerance's bounds, both bodies (and eval and sample) call the
-// same lanes invalid as the all-double kernel.
+// The float bodies hand the lanes whose validity they cannot decide to the
+// precise body (the sampler's, on |w|^2 - 1 rounded to float; the
+// evaluation's isotropic one, every lane not within 1e-4 of unit length in
+// |wi|^2 + |wo|^2): at the unit tolerance's bounds, both bodies (and eval
+// and sample) call the same lanes invalid as the all-double kernel.
 TEST_CASE("float-first exact SIMD: directions at the unit tolerance's bounds are valid exactly as in double") {
     const char* ggx = R"(material m { ndf = ggx(0.3); masking = smith_height_correlated; fresnel = schlick(0.04); })";
     Compiler c;
@@ -1075,6 +1076,73 @@ TEST_CASE("float-first exact SIMD: directions at the unit tolerance's bounds are
         CHECK(k->sampleBatch(int64_t(n), woP, uP, nullptr, wiOutP, pdf.data(), weightP) == expected);
         for (size_t i = 0; i < n; ++i) CHECK((pdf[i] > 0) == !expectInvalid[i]);
     }
+}
+
+// The isotropic float body corrects the pair's lengths in float
+// (LaneEmitter::floatPairCorrections): the difference of the two
+// corrections from (wi - wo).(wi + wo). On nearly opposite directions of
+// slightly different lengths, where that difference decides h, it must
+// stay as accurate as the double corrections were; lanes further from
+// unit length go to the precise body, bit for bit.
+TEST_CASE("float-first exact SIMD: nearly opposite directions of slightly different lengths") {
+    const char* ggx = R"(material m {
+        input roughness = 0.4 in 0 .. 1;
+        let alpha = roughness * roughness;
+        ndf = ggx(alpha); masking = smith_height_correlated; fresnel = schlick(f0 = rgb(0.95, 0.64, 0.54)); })";
+    CheckedProgram program = checkedText(ggx);
+    CHECK(planLowering(program.materials[0], MathVariant::exact(), true).batchBody.floatPairCorrections);
+    Compiler c;
+    c.setCacheDir("");
+    auto floatFirst = compile(c, ggx, "backend=simd;width=16;cache=off");
+    auto precise = compile(c, ggx, "backend=simd;width=16;cache=off;float_first=off");
+    Interpreter<double> interp(program.materials[0], nullptr);
+    // Elevations from 1e-3 to 0.3 rad, azimuths pi -+ 0.01 apart, each
+    // direction scaled by 1 + e with |e| up to 2e-5 (float body) or 2e-4
+    // (|wi|^2 + |wo|^2 - 2 beyond 1e-4: precise body); alpha from 1e-3 to 0.5.
+    Batch b(8192, 17), reference(8192, 17);
+    std::mt19937_64 rng(23);
+    std::uniform_real_distribution<double> uniform(0, 1);
+    std::vector<bool> farFromUnit(b.size());
+    for (size_t i = 0; i < b.size(); ++i) {
+        auto elevation = [&] { return std::exp(std::log(1e-3) + uniform(rng) * std::log(300.0)); };
+        double ei = elevation(), eo = elevation(), phi = 6.283185307179586 * uniform(rng);
+        double phiI = phi + 3.141592653589793 + 0.02 * (uniform(rng) - 0.5);
+        farFromUnit[i] = i % 4 == 0;
+        double spread = farFromUnit[i] ? 2e-4 : 2e-5;
+        double si = 1 + spread * (2 * uniform(rng) - 1), so = 1 + spread * (2 * uniform(rng) - 1);
+        double wi[3] = {std::cos(ei) * std::cos(phiI) * si, std::cos(ei) * std::sin(phiI) * si, std::sin(ei) * si};
+        double wo[3] = {std::cos(eo) * std::cos(phi) * so, std::cos(eo) * std::sin(phi) * so, std::sin(eo) * so};
+        for (int k = 0; k < 3; ++k) b.dir[k][i] = float(wi[k]), b.dir[3 + k][i] = float(wo[k]);
+        double len2[2] = {0, 0};
+        for (int k = 0; k < 3; ++k) len2[0] += double(b.dir[k][i]) * b.dir[k][i], len2[1] += double(b.dir[3 + k][i]) * b.dir[3 + k][i];
+        if (farFromUnit[i]) farFromUnit[i] = std::abs(len2[0] - 1) + std::abs(len2[1] - 1) > 1.01e-4;
+        b.slots[0][i] = float(std::sqrt(std::exp(std::log(1e-3) + uniform(rng) * std::log(500.0))));
+        for (int k = 0; k < 6; ++k) reference.dir[k][i] = b.dir[k][i];
+        reference.slots[0][i] = b.slots[0][i];
+    }
+    CHECK(b.run(*floatFirst) == 0);
+    CHECK(reference.run(*precise) == 0);
+    double worst = 0;
+    size_t fromFloat = 0, far = 0;
+    for (size_t i = 0; i < b.size(); ++i) {
+        EvalResult<double> ref = b.reference(interp, i);
+        REQUIRE(ref.valid);
+        bool same = true;
+        for (int ch = 0; ch < 3; ++ch) {
+            worst = std::max(worst, relativeError(b.out[ch][i], ref.rgb[ch]));
+            same = same && b.out[ch][i] == reference.out[ch][i];
+        }
+        fromFloat += !same;
+        if (farFromUnit[i]) {
+            ++far;
+            CHECK(same);
+        }
+    }
+    MESSAGE("nearly opposite pairs: worst relative error " << worst << "; " << fromFloat << " of " << b.size()
+                                                           << " lanes from the float body, " << far << " far from unit length");
+    CHECK(worst < 2e-6);
+    CHECK(fromFloat > b.size() / 2);
+    CHECK(far > b.size() / 8);
 }
 
 namespace {

@@ -170,6 +170,29 @@ TEST_CASE("float bodies sum the float directions with a normalization correction
     CHECK(printPlan(material("ndf = ggx(0.3);"), guarded).find("corrected-sums=yes") != std::string::npos);
 }
 
+TEST_CASE("float pair corrections: only the isotropic float-first body, which has a fallback") {
+    LoweringPlan floatFirst = exactPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
+    REQUIRE(floatFirst.batchBodies == BatchBodies::FloatFirst);
+    CHECK(floatFirst.batchBody.floatPairCorrections);
+    CHECK_FALSE(floatFirst.fallbackBody->floatPairCorrections);
+    CHECK_FALSE(floatFirst.scalarBody.floatPairCorrections);
+    CHECK(printPlan(material("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);"), floatFirst).find("corrected-sums=float-pair") !=
+          std::string::npos);
+    // An anisotropic D resolves a tangential component of h that may nearly
+    // cancel, which the float difference of the corrections moves by ~1 ulp
+    // of |h|: the double corrections there.
+    LoweringPlan aniso = exactPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5); fresnel = dielectric(1.5);");
+    REQUIRE(aniso.batchBodies == BatchBodies::FloatFirst);
+    CHECK(aniso.batchBody.correctedSums);
+    CHECK_FALSE(aniso.batchBody.floatPairCorrections);
+    // Bodies without a fallback (fast mode's plain float bodies) decide a
+    // direction's validity themselves, on |w|^2 - 1 in double.
+    LoweringPlan fast = fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
+    CHECK(fast.scalarBody.correctedSums);
+    CHECK_FALSE(fast.scalarBody.floatPairCorrections);
+    CHECK_FALSE(fast.fallbackBody->floatPairCorrections);
+}
+
 TEST_CASE("the half angle without the unit h: NDFs whose D takes wi + wo, with well-conditioned consumers") {
     // Schlick with a constant f0 >= 1e-12 (or no Fresnel term): 1 - cos
     // directly from |wi + wo| in double.
