@@ -354,8 +354,10 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
     // The exponent NDFs need h only up to scale: in double they take u = wi
     // + wo itself, which the half angle in float relies on (no unit h
     // there). In float the unit h: a^2 uz^2 of near-opposite grazing
-    // directions would underflow where a^2 mz^2 does not.
-    if (pm.isDouble()) {
+    // directions would underflow where a^2 mz^2 does not; except in the
+    // float-first body where the plan leaves the unit h out (GGX's D, whose
+    // lobe range guard catches that).
+    if (pm.isDouble() || !hD[0]) {
         for (int i = 0; i < 3; ++i) g.slopeH[i] = pm.convert(hU[i], pm.type());
         g.slopeHLen2 = pm.convert(hlen2, pm.type());
     } else {

@@ -209,6 +209,14 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
     else if (unitHalfUnused && em.fresnel.halfAngleInFloatOk(material.fresnel, plan.fresnel))
         body.halfVector = HalfVectorForm::InFloat;
 
+    // The float-first body leaves the unit h out where the NDF's float D
+    // takes wi + wo and the masking reads no unit h: D then waits neither
+    // for |wi + wo|'s square root nor for the normalizing division, which
+    // shortens the loop's longest chain.
+    if (role == BodyRole::FloatGuarded && em.ndf.traits.dFromUnnormalizedHalf &&
+        !em.masking.traits.needsPreciseHalfAngle)
+        body.halfVector = HalfVectorForm::InFloat;
+
     body.correctedSums = !inDouble && role != BodyRole::FastGuarded;
     body.floatPairCorrections = body.correctedSums && role == BodyRole::FloatGuarded && plan.ndfIsotropic;
 

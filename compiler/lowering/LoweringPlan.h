@@ -73,7 +73,8 @@ const char* bodyRoleName(BodyRole r);
 // How |wi + wo|, wo.h, 1 - wo.h and sin^2 are computed.
 enum class HalfVectorForm {
     Precise,    // in the body's precise type, cancellation-free 1 - cos
-    InFloat,    // in float inside a double body: every consumer is well-conditioned in them
+    InFloat,    // in float, no unit h: a double body's consumers are well-conditioned in float,
+                // or the float-first body's D takes wi + wo
     Estimated,  // 1/|h| from an rsqrt estimate, 1 - cos = 1 - |h|/2 (fast bodies)
     Direct,     // |h| in the precise type, 1 - cos = 1 - |h|/2, no unit h (double bodies)
 };

@@ -42,8 +42,9 @@ struct NdfParams {
 };
 
 struct NdfLoweringTraits {
-    // D needs h only up to scale (an exponent of slope ratios): a double
-    // body may keep the half angle in float and give D wi + wo.
+    // D needs h only up to scale (an exponent of slope ratios, or GGX's
+    // ratio of powers): a double body may keep the half angle in float and
+    // give D wi + wo, and so may a float-first body (floatFirstBody).
     bool dFromUnnormalizedHalf = false;
     // The whole lobe is one formula (no D, no masking): wholeLobe().
     bool wholeLobe = false;

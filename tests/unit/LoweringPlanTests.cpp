@@ -226,6 +226,21 @@ TEST_CASE("the half angle without the unit h: NDFs whose D takes wi + wo, with w
     CHECK(fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);").scalarBody.halfVector == HalfVectorForm::Estimated);
     CHECK(fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 1e-7);").scalarBody.halfVector == HalfVectorForm::Precise);
     CHECK(fastPlan("ndf = beckmann(0.3); fresnel = dielectric(1.5);").scalarBody.halfVector == HalfVectorForm::Precise);
+    // The float-first body: GGX's float D from wi + wo, without the unit h,
+    // unless the masking reads the unit h; the guarded fast body's D guard
+    // takes the unit h.
+    for (const char* body : {"ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);",
+                             "ndf = ggx(alpha_x = 0.3, alpha_y = 0.5); fresnel = dielectric(1.5);"}) {
+        LoweringPlan floatFirst = exactPlan(body);
+        REQUIRE(floatFirst.batchBodies == BatchBodies::FloatFirst);
+        CHECK(floatFirst.batchBody.halfVector == HalfVectorForm::InFloat);
+    }
+    LoweringPlan kelemen = exactPlan("ndf = ggx(0.3); masking = kelemen; fresnel = schlick(f0 = 0.04);");
+    REQUIRE(kelemen.batchBodies == BatchBodies::FloatFirst);
+    CHECK(kelemen.batchBody.halfVector == HalfVectorForm::Precise);
+    LoweringPlan guardedFast = fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
+    REQUIRE(guardedFast.batchBodies == BatchBodies::GuardedFast);
+    CHECK(guardedFast.batchBody.halfVector == HalfVectorForm::Estimated);
 }
 
 TEST_CASE("the Smith Lambda form and the model substitutions") {

@@ -66,18 +66,27 @@ public:
             Value* r = pm.div(l2, t);
             return pm.mul(num, pm.mul(r, r));
         }
-        const std::array<Value*, 3>& h = geo.h;
-        internal_assert(h[0]) << "GGX's float D needs the unit h, which the plan left out";
+        // In float, h is the unit h or, in the float-first body (the plan
+        // leaves the unit h out there), u = wi + wo with |u|^2 = l2: D is
+        // homogeneous of degree 0 in u, so D then waits neither for |u|'s
+        // square root nor for the division that normalizes h. The lobe
+        // range guard catches what u's range changes (|u|^2 >= 1e-8 there).
+        const std::array<Value*, 3>& h = geo.slopeH;
+        Value* l2 = geo.slopeHLen2;
+        internal_assert(h[0]) << "GGX's float D without h";
+        internal_assert(!l2 || lane.body.guarded()) << "GGX's float D from wi + wo outside a guarded body";
         if (n.isotropic) {
-            // 1 / (pi a^2 (s2/a^2 + mz^2)^2) = a^2 / (pi (s2 + a^2 mz^2)^2): one division.
+            // 1 / (pi a^2 (s2/a^2 + mz^2)^2) = a^2 / (pi (s2 + a^2 mz^2)^2): one
+            // division; from u, a^2 |u|^4 / (pi (s2 + a^2 uz^2)^2).
             Value* a2 = fm.mul(n.ax, n.ax);
             Value* s2 = fm.fma(h[0], h[0], fm.mul(h[1], h[1]));
             Value* t = fm.fma(a2, fm.mul(h[2], h[2]), s2);
-            Value* D = fm.div(fm.mul(a2, fm.c(1.0 / kPi)), fm.mul(t, t));
+            Value* num = l2 ? fm.mul(a2, fm.mul(l2, l2)) : a2;
+            Value* D = fm.div(fm.mul(num, fm.c(1.0 / kPi)), fm.mul(t, t));
             // Guarded body: D/4 also as a fraction, so that the lobe divides
             // once (LaneEmitter::quarterDOver). a^2 = Inf there gives a NaN
             // lobe, which the lobe range guard rejects.
-            if (lane.body.guarded()) lane.setQuarterDFraction(fm.mul(a2, fm.c(0.25 / kPi)), fm.mul(t, t));
+            if (lane.body.guarded()) lane.setQuarterDFraction(fm.mul(num, fm.c(0.25 / kPi)), fm.mul(t, t));
             // A body that sums the rounded unit directions (the guarded fast
             // body, without correctedSums) has h off by an angle up to d ~
             // 1e-7 / |wi + wo| = 5e-8 / (wo.h). With s = sin theta_h of the
@@ -95,6 +104,7 @@ public:
             // is, where alpha (wo.h) < 5e-4, the same bound taken over all
             // theta_h, takes 2.7% (docs/numerics.md).
             if (lane.body.guarded() && !lane.body.correctedSums) {
+                internal_assert(!l2) << "the guarded fast body's D guard takes the unit h";
                 Value* cosD = fm.convert(geo.cosD, fm.type());
                 Value* c2 = fm.mul(cosD, cosD);
                 Value* k = fm.fma(fm.neg(a2), fm.c(std::sqrt(2e-6)), fm.c(std::sqrt(2e-6)));  // sqrt(2e-6) (1 - a^2)
@@ -112,11 +122,12 @@ public:
             // normal for alpha >= 1e-4; where r = ax ay / N or its square
             // over- or underflows (alphas far apart or beyond ~1e9), or
             // (ax ay)^2 overflows (NaN), D is Inf, NaN or below 1e-38, and
-            // the lobe range guard sends the lane to the other body.
+            // the lobe range guard sends the lane to the other body. From u,
+            // N is |u|^2 times N of the unit h: r = ax ay |u|^2 / N.
             Value* axy = fm.mul(n.ax, n.ay);
             Value* N = fm.fma(fm.mul(axy, axy), fm.mul(h[2], h[2]),
                               fm.fma(fm.mul(n.ay, n.ay), fm.mul(h[0], h[0]), fm.mul(fm.mul(n.ax, n.ax), fm.mul(h[1], h[1]))));
-            Value* r = fm.div(axy, N);
+            Value* r = fm.div(l2 ? fm.mul(axy, l2) : axy, N);
             return pm.convert(fm.mul(fm.mul(r, r), fm.mul(axy, fm.c(1.0 / kPi))), pm.type());
         }
         Value* t = fm.fma(h[2], h[2], lane.slope2(n, h));
