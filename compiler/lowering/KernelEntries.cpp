@@ -381,10 +381,6 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
 
     b.SetInsertPoint(bodyBlock);
     llvm::Value* partial = b.CreateICmpSLT(remaining, llvm::ConstantInt::get(i64, W));
-    std::vector<llvm::Constant*> laneIds;
-    for (int l = 0; l < W; ++l) laneIds.push_back(llvm::ConstantInt::get(i64, l));
-    // All lanes on a full chunk; the first `remaining` on the last one.
-    llvm::Value* mask = b.CreateICmpSLT(llvm::ConstantVector::get(laneIds), b.CreateVectorSplat(W, remaining));
     // Source pointers of the chunk: the caller's arrays, or the stage
     // buffers on the partial chunk (filled below).
     std::vector<llvm::Value*> streamPtr;
@@ -404,9 +400,14 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
     b.CreateCondBr(partial, stageBlock, compute);
 
     b.SetInsertPoint(stageBlock);
+    // The first `remaining` lanes of the last chunk (computed there only: a
+    // full chunk takes all lanes, without the two compares per vector).
+    std::vector<llvm::Constant*> laneIds;
+    for (int l = 0; l < W; ++l) laneIds.push_back(llvm::ConstantInt::get(i64, l));
+    llvm::Value* partialMask = b.CreateICmpSLT(llvm::ConstantVector::get(laneIds), b.CreateVectorSplat(W, remaining));
     std::vector<llvm::Value*> stagePtr;
     for (int s = 0; s < streams; ++s) {
-        llvm::Value* v = b.CreateMaskedLoad(vecTy, streamPtr[s], llvm::Align(4), mask,
+        llvm::Value* v = b.CreateMaskedLoad(vecTy, streamPtr[s], llvm::Align(4), partialMask,
                                             llvm::ConstantFP::get(vecTy, padding[s]));
         stagePtr.push_back(b.CreateConstGEP1_32(vecTy, stageIn, s));
         b.CreateAlignedStore(v, stagePtr.back(), llvm::Align(4));
@@ -414,6 +415,9 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
     b.CreateBr(compute);
 
     b.SetInsertPoint(compute);
+    llvm::PHINode* mask = b.CreatePHI(partialMask->getType(), 2, "lanes");
+    mask->addIncoming(llvm::Constant::getAllOnesValue(partialMask->getType()), bodyEntry);
+    mask->addIncoming(partialMask, stageBlock);
     std::vector<llvm::PHINode*> src;
     for (int s = 0; s < streams; ++s) {
         src.push_back(b.CreatePHI(ptr, 2));

@@ -379,7 +379,11 @@ std::array<Value*, 3> LaneEmitter::brdfPrecise(const LaneGeometry& geo, Value*& 
     llvm::IRBuilder<>& b = builder;
     const std::array<Value*, 3>&wi = geo.wi, &wo = geo.wo;
     Value *ci = wi[2], *co = wo[2];
-    Value* above = b.CreateAnd(fm.gt(ci, fm.c(0.0)), fm.gt(co, fm.c(0.0)));
+    // A guarded body tests the smaller cosine (one vminps, which ignores a
+    // NaN cosine's order: that comes from a NaN input, whose lane the body
+    // distrusts, or which the host promised not to pass).
+    Value* lowerCos = body.guarded() ? fm.select(fm.lt(ci, co), ci, co) : nullptr;
+    Value* above = lowerCos ? fm.gt(lowerCos, fm.c(0.0)) : b.CreateAnd(fm.gt(ci, fm.c(0.0)), fm.gt(co, fm.c(0.0)));
 
     // Specular lobe, F and the sum in the precise type (factors beyond
     // float range whose product is not).
@@ -412,13 +416,10 @@ std::array<Value*, 3> LaneEmitter::brdfPrecise(const LaneGeometry& geo, Value*& 
         // Every trusted lane's F times the lobe is then in [1e-28, 2e20]:
         // finite and positive, so without a diffuse term (whose albedo is
         // the user's expression, unbounded) the output needs no check.
-        Value* bad = b.CreateOr(fm.lt(ci, fm.c(1e-6)), fm.lt(co, fm.c(1e-6)));
-        bad = b.CreateOr(bad, b.CreateNot(b.CreateAnd(pm.ge(spec, pm.c(1e-20)), pm.le(spec, pm.c(1e20)))));
-        for (int ch = 0; plan.fresnel.rangeGuard && ch < (F.gray() ? 1 : 3); ++ch) {
-            Value* inRange = pm.ge(F.c[ch], pm.c(1e-8));
-            if (!plan.fresnel.atMostOne) inRange = b.CreateAnd(inRange, pm.le(F.c[ch], pm.c(2.0)));
-            bad = b.CreateOr(bad, b.CreateNot(inRange));
-        }
+        Value* bad = b.CreateOr(fm.lt(lowerCos, fm.c(1e-6)), pm.outside(spec, 1e-20, 1e20));
+        for (int ch = 0; plan.fresnel.rangeGuard && ch < (F.gray() ? 1 : 3); ++ch)
+            bad = b.CreateOr(bad, plan.fresnel.atMostOne ? b.CreateNot(pm.ge(F.c[ch], pm.c(1e-8)))
+                                                         : pm.outside(F.c[ch], 1e-8, 2.0));
         distrust(b.CreateAnd(above, bad));
         internal_assert(!plan.compensatesEnergy) << "a guarded body with energy compensation";
     }
@@ -436,8 +437,9 @@ std::array<Value*, 3> LaneEmitter::brdfPrecise(const LaneGeometry& geo, Value*& 
         std::array<Value*, 3> ms = emitters_.energy.compensation(*this, ndf, n, emitters_.fresnel, ci, co);
         for (int ch = 0; ch < 3; ++ch) total.c[ch] = pm.add(total.c[ch], ms[ch]);
     }
-    // Below the horizon (or wi + wo = 0): f = 0, a valid lane.
-    valid = b.CreateAnd(above, geo.hNonZero);
+    // Below the horizon (or wi + wo = 0): f = 0, a valid lane. (A guarded
+    // body distrusts |wi + wo|^2 < 1e-8 already.)
+    valid = body.guarded() ? above : b.CreateAnd(above, geo.hNonZero);
     return total.c;
 }
 

@@ -61,6 +61,29 @@ Value* MathEmitter::isNanInfOrNegative(Value* a) {
     return b.CreateOr(b.CreateFCmpULT(a, c(0.0)), b.CreateFCmpOEQ(a, c(INFINITY)));
 }
 
+Value* MathEmitter::outside(Value* a, double lo, double hi) {
+    internal_assert(lo > 0 && lo <= hi && std::isfinite(hi)) << "outside [" << lo << ", " << hi << "]";
+    if (width() == 1) return b.CreateNot(b.CreateAnd(ge(a, c(lo)), le(a, c(hi))));
+    // Vectors: one unsigned compare instead of two. Positive floats are
+    // ordered as their bits, so a in [lo, hi] exactly when bits(a) - bits(lo)
+    // (wrapping) is at most bits(hi) - bits(lo); 0, -0, negative values and
+    // NaN wrap or lie above, as the ordered compares reject them. A compare
+    // into a mask register costs an FMA's issue slot on the vector pipes,
+    // the subtraction does not.
+    const bool single = type_->getScalarType()->isFloatTy();
+    auto bitsOf = [&](double x) -> uint64_t {
+        if (single) return llvm::bit_cast<uint32_t>(float(x));
+        return llvm::bit_cast<uint64_t>(x);
+    };
+    llvm::Type* intTy = single ? b.getInt32Ty() : b.getInt64Ty();
+    auto splat = [&](uint64_t v) {
+        return llvm::ConstantVector::getSplat(llvm::ElementCount::getFixed(unsigned(width())),
+                                              llvm::ConstantInt::get(intTy, v));
+    };
+    Value* bits = b.CreateBitCast(a, llvm::FixedVectorType::get(intTy, unsigned(width())));
+    return b.CreateICmpUGT(b.CreateSub(bits, splat(bitsOf(lo))), splat(bitsOf(hi) - bitsOf(lo)));
+}
+
 Value* MathEmitter::anyNanInfOrNegative(const std::vector<Value*>& xs) {
     internal_assert(!xs.empty() && xs.size() <= 4) << "anyNanInfOrNegative of " << xs.size() << " values";
     Value* any = nullptr;

@@ -57,6 +57,8 @@ public:
     // Whether any of up to four values is NaN, +-inf or below zero (the
     // same test, for the values of one lane).
     llvm::Value* anyNanInfOrNegative(const std::vector<llvm::Value*>& xs);
+    // Not in [lo, hi] (0 < lo <= hi, finite): below, above, NaN, -0 or 0.
+    llvm::Value* outside(llvm::Value* a, double lo, double hi);
     llvm::Value* abs(llvm::Value* a);
     llvm::Value* sqrt(llvm::Value* a);
     // sqrt(a) and sqrt(x); in one-lane code by one packed instruction.

@@ -6,6 +6,7 @@
 #include "VectorMath.h"
 
 #include <doctest/doctest.h>
+#include <cfloat>
 #include <cmath>
 #include <cstring>
 #include <fmt/format.h>
@@ -222,5 +223,41 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
     u = maxUlp(*jit, [](MathEmitter& m, Value* x, Value*) { return m.log(x); }, special,
                [](long double x, long double) { return std::log(x); }, keep);
     CHECK(u <= 1.0);
+    for (auto* d : keep) jit->release(*d);
+}
+
+// outside(x, lo, hi) tests bits on vectors (one unsigned compare) and
+// ordered compares on one lane: both must say what not (lo <= x <= hi)
+// says, for float and double lanes, at the bounds and their neighbours,
+// for 0 and -0, negatives, subnormals, infinities and NaN of either sign.
+TEST_CASE("outside(x, lo, hi) is not (lo <= x <= hi) on every kind of value") {
+    auto jit = FacetJit::Create();
+    std::vector<llvm::orc::JITDylib*> keep;
+    for (auto [lo, hi] : {std::pair{1e-20, 1e20}, std::pair{1e-8, 2.0}}) {
+        const float flo = float(lo), fhi = float(hi);
+        Sweep s;
+        s.x = {0.0f, -0.0f, flo, fhi, std::nextafter(flo, 0.0f), std::nextafter(flo, 1.0f), std::nextafter(fhi, 0.0f),
+               std::nextafter(fhi, INFINITY), -flo, -fhi, 1e-45f, -1e-45f, INFINITY, -INFINITY, NAN, -NAN, 1.0f, 0.5f,
+               3.0f, FLT_MAX, -FLT_MAX, 1e-30f, 1e30f};
+        while (s.x.size() % 16) s.x.push_back(1.0f);
+        s.y = s.x;
+        for (bool inDouble : {false, true}) {
+            Emit emit = [lo, hi, inDouble](MathEmitter& m, Value* x, Value*) {
+                if (!inDouble) return m.select(m.outside(x, lo, hi), m.c(1.0), m.c(0.0));
+                MathEmitter d = doubleEmitter(m, x, false);
+                return m.select(d.outside(d.convert(x, d.type()), lo, hi), m.c(1.0), m.c(0.0));
+            };
+            for (bool vector : {false, true}) {
+                std::vector<float> out = run(*jit, emit, s, vector, keep, false);
+                for (size_t i = 0; i < s.x.size(); ++i) {
+                    const double x = s.x[i];
+                    const bool inside = inDouble ? (lo <= x && x <= hi) : (flo <= s.x[i] && s.x[i] <= fhi);
+                    INFO("x = " << x << ", [" << lo << ", " << hi << "], " << (inDouble ? "double" : "float")
+                                << (vector ? ", 16 lanes" : ", one lane"));
+                    CHECK(out[i] == (inside ? 0.0f : 1.0f));
+                }
+            }
+        }
+    }
     for (auto* d : keep) jit->release(*d);
 }
