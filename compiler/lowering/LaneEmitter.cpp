@@ -208,9 +208,11 @@ Value* LaneEmitter::unitCorrection(const std::array<Value*, 3>& w) {
 // whose float terms are rounded relative to the sums themselves:
 //   wi + wo (corrected) = (wi + wo)(1 + c) + (ci - co)/2 (wi - wo),
 //   wi - wo (corrected) = (wi - wo)(1 + c) + (ci - co)/2 (wi + wo).
-// Each corrected sum is then within ~2 ulp of itself. With di = |wi|^2 - 1,
-// do likewise and s = di + do, the series 1/sqrt(1 + d) - 1 = -d/2 + 3d^2/8
-// - ... give c = -s/4 (the rest, < 3s^2/32, is common) and
+// Each corrected sum is then off by ~2 ulp of its length, not of each
+// component (BodyPlan::floatPairCorrections says why only an isotropic NDF
+// may take this). With di = |wi|^2 - 1, do likewise and s = di + do, the
+// series 1/sqrt(1 + d) - 1 = -d/2 + 3d^2/8 - ... give c = -s/4 (the rest,
+// < 3s^2/32, is common) and
 // (ci - co)/2 = (di - do)(-1/4 + 3s/16) (the rest, < 0.12 s^2 relative).
 // These hold while |di| + |do| < 1e-4 (float-rounded unit vectors are
 // within 4e-7); the body distrusts the other lanes, NaN and Inf ones among
