@@ -324,16 +324,17 @@ LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::a
         cosD = halfMath.minnum(halfMath.mul(hlen, halfMath.c(0.5)), halfMath.c(1.0));
         Value* diff2 =
             halfMath.convert(pm.fma(diff[0], diff[0], pm.fma(diff[1], diff[1], pm.mul(diff[2], diff[2]))), halfMath.type());
-        // 1/hlen and 1/(2 (2 + hlen)) from one division.
         Value* twoSum = halfMath.mul(halfMath.c(2.0), halfMath.add(halfMath.c(2.0), hlen));
-        Value* recip = halfMath.div(halfMath.c(1.0), halfMath.mul(hlen, twoSum));
         if (halfInFloat) {
             hD = {};  // no consumer of the unit h (the plan checked)
+            oneMinusCos = halfMath.div(diff2, twoSum);
         } else {
+            // 1/hlen and 1/(2 (2 + hlen)) from one division.
+            Value* recip = halfMath.div(halfMath.c(1.0), halfMath.mul(hlen, twoSum));
             Value* hinv = pm.mul(twoSum, recip);
             for (Value*& c : hD) c = pm.mul(c, hinv);
+            oneMinusCos = halfMath.mul(diff2, halfMath.mul(hlen, recip));
         }
-        oneMinusCos = halfMath.mul(diff2, halfMath.mul(hlen, recip));
         oneMinusCos = halfMath.minnum(oneMinusCos, halfMath.c(1.0));
     }
     // Guard: |wi + wo| >= 1e-4. h is accurate below that too, but
