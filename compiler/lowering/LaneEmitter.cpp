@@ -120,12 +120,9 @@ void LaneEmitter::zeroInvalidLaneByBranch(std::array<Value*, 3>& values) {
 // |w|^2 is also the finiteness test: a NaN component makes |w|^2 NaN and an
 // infinite one makes it +inf, and both fail it.
 Value* LaneEmitter::checkedLength2(MathEmitter& math, const std::array<Value*, 3>& w, std::array<Value*, 3>& widened) {
-    llvm::IRBuilder<>& b = builder;
     Value* len2 = length2(math, w, widened);
-    rejectInput([&] {
-        return b.CreateNot(b.CreateAnd(math.ge(len2, math.c((1 - kUnitTolerance) * (1 - kUnitTolerance))),
-                                       math.le(len2, math.c((1 + kUnitTolerance) * (1 + kUnitTolerance)))));
-    });
+    const double lo = (1 - kUnitTolerance) * (1 - kUnitTolerance), hi = (1 + kUnitTolerance) * (1 + kUnitTolerance);
+    rejectInput([&] { return math.outside(len2, lo, hi); });
     return len2;
 }
 
