@@ -26,6 +26,23 @@ const CheckedInput* CheckedMaterial::findInput(std::string_view n) const {
     return nullptr;
 }
 
+const ModelUse& CheckedMaterial::use(ModelSlot slot) const {
+    switch (slot) {
+        case ModelSlot::Ndf: return ndf;
+        case ModelSlot::Masking: return masking;
+        case ModelSlot::Fresnel: return fresnel;
+        case ModelSlot::Energy: return energy;
+        case ModelSlot::Diffuse: return diffuse;
+    }
+    internal_error << "bad slot";
+}
+
+ModelSlot CheckedMaterial::slotOf(const ModelUse& u) const {
+    for (int s = 0; s < kModelSlotCount; ++s)
+        if (&use(ModelSlot(s)) == &u) return ModelSlot(s);
+    internal_error << "a model use of another material";
+}
+
 std::string CheckedMaterial::slotName(int slot) const {
     for (const CheckedInput& in : inputs) {
         if (slot < in.firstSlot || slot >= in.firstSlot + in.slotCount()) continue;

@@ -55,6 +55,9 @@ struct CheckedMaterial {
     bool compensatesEnergy() const { return energy.model && energyEntry(*energy.model).compensates; }
 
     const CheckedInput* findInput(std::string_view name) const;
+    const ModelUse& use(ModelSlot slot) const;
+    // The slot of `use`, one of this material's own uses.
+    ModelSlot slotOf(const ModelUse& use) const;
     // Name of a float slot as shown to API users: "roughness", or "tint.r".
     std::string slotName(int slot) const;
     // Default values of all slots, in slot order.

@@ -137,29 +137,33 @@ LVal LaneEmitter::lower(const Expr& e) {
 }
 
 // Clamps a parameter in the expression type to [lo, hi]; NaN, or infinite
-// in float after clamping, marks the lane invalid (as in the reference).
-// The result is float (floatResult) or the precise type.
-Value* LaneEmitter::clampParam(Value* x, double lo, double hi, bool floatResult) {
+// in float after clamping, marks the lane invalid (as in the reference),
+// where the plan's range of the parameter leaves either possible. The
+// result is float (floatResult) or the precise type.
+Value* LaneEmitter::clampParam(Value* x, const ParamPlan& param, double lo, double hi, bool floatResult) {
     MathEmitter& em = expressionMath();
-    markInvalid(em.isNan(x));
+    if (param.testNaN) markInvalid(em.isNan(x));
     if (std::isfinite(hi)) x = em.minnum(x, em.c(hi));
     x = em.maxnum(x, em.c(lo));
     Value* xf = floatMath_.convert(x, floatMath_.type());
     // Finite in double but not in float is still an invalid lane: the float
     // formulas would overflow.
-    markInvalid(builder.CreateNot(floatMath_.isFinite(xf)));
+    if (param.testFloatRange) markInvalid(builder.CreateNot(floatMath_.isFinite(xf)));
     return floatResult ? xf : preciseMath_.convert(x, preciseMath_.type());
 }
 
 Value* LaneEmitter::scalarParam(const ModelUse& use, int p, bool floatResult, double capHi) {
     const ModelParam& domain = use.model->canonical.at(p);
-    return clampParam(lower(*use.args.at(p)).c[0], domain.lo, std::min(domain.hi, capHi), floatResult);
+    const ParamPlan& param = plan.param(material.slotOf(use), p);
+    return clampParam(lower(*use.args.at(p)).c[0], param, domain.lo, std::min(domain.hi, capHi), floatResult);
 }
 
 LVal LaneEmitter::rgbParam(const ModelUse& use, int p, bool floatResult, double capHi) {
     const ModelParam& domain = use.model->canonical.at(p);
+    const ParamPlan& param = plan.param(material.slotOf(use), p);
     LVal v = lower(*use.args.at(p));
-    return map({v}, true, [&](auto& x) { return clampParam(x[0], domain.lo, std::min(domain.hi, capHi), floatResult); });
+    return map({v}, true,
+               [&](auto& x) { return clampParam(x[0], param, domain.lo, std::min(domain.hi, capHi), floatResult); });
 }
 
 }  // namespace facet

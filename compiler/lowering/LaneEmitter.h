@@ -291,7 +291,7 @@ private:
     LVal lower(const Expr& e);
     llvm::Value* applyBuiltin(BuiltinFn fn, const std::vector<llvm::Value*>& a);
     llvm::Value* powInt(llvm::Value* x, long k);
-    llvm::Value* clampParam(llvm::Value* x, double lo, double hi, bool floatResult);
+    llvm::Value* clampParam(llvm::Value* x, const ParamPlan& param, double lo, double hi, bool floatResult);
 
     const EnergyTable* energyTable_;
     llvm::Module& module_;

@@ -306,6 +306,24 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
         plan.batchBody = plan.scalarBody;
     }
 
+    // The clamp is the one LaneEmitter::clampParam applies (a caller's
+    // tighter cap only narrows it); a NaN argument or a clamped value
+    // beyond float makes the lane invalid, so the lowering tests for what
+    // the range leaves possible.
+    const ValueRanges ranges(material);
+    for (int s = 0; s < kModelSlotCount; ++s) {
+        const ModelUse& use = material.use(ModelSlot(s));
+        for (int p = 0; p < int(use.model->canonical.size()); ++p) {
+            const ModelParam& domain = use.model->canonical[p];
+            ValueRange arg = ranges.argument(use, p);
+            ParamPlan param;
+            param.range = arg.clampedTo(domain.lo, domain.hi);
+            param.testNaN = arg.maybeNaN;
+            param.testFloatRange = !param.range.withinFloat();
+            plan.params[s].push_back(param);
+        }
+    }
+
     plan.sampling.specular = plannedSpecularSampling(material);
     plan.sampling.cosineLobe = em.diffuse.present() || material.compensatesEnergy();
     plan.sampling.compensationAlbedo = material.compensatesEnergy();
@@ -355,6 +373,20 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
     os << "flush-denormals: " << yesNo(plan.flushDenormals) << "\n";
     os << "one-lane-zeroes-by-branch: " << yesNo(plan.oneLaneZeroesByBranch) << "\n";
     os << "trust-inputs: " << yesNo(plan.trustInputs) << "\n";
+    for (int s = 0; s < kModelSlotCount; ++s) {
+        const ModelUse& use = material.use(ModelSlot(s));
+        for (int p = 0; p < int(plan.params[s].size()); ++p) {
+            if (!use.has(p)) continue;
+            const ParamPlan& param = plan.params[s][p];
+            os << "param " << modelSlotName(ModelSlot(s)) << "." << use.model->canonical[p].name << ": "
+               << param.range.str() << " tests=";
+            if (param.testNaN) os << "nan";
+            if (param.testNaN && param.testFloatRange) os << ",";
+            if (param.testFloatRange) os << "float-range";
+            if (!param.testNaN && !param.testFloatRange) os << "none";
+            os << "\n";
+        }
+    }
     os << "sampling: specular=" << specularSamplingName(plan.sampling.specular)
        << " cosine-lobe=" << yesNo(plan.sampling.cosineLobe)
        << " compensation-albedo=" << yesNo(plan.sampling.compensationAlbedo) << "\n";

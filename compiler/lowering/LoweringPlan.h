@@ -13,6 +13,7 @@
 
 #include "LambdaTable.h"
 #include "Material.h"
+#include "ValueRange.h"
 
 #include <memory>
 #include <optional>
@@ -172,6 +173,15 @@ struct SamplingPlan {
     BodyPlan batchBody;
 };
 
+// A model parameter as the material's expressions can give it (ValueRange.h):
+// the lowering tests a lane's parameter only for what its range leaves
+// possible, and emitters may pick forms that hold within the range.
+struct ParamPlan {
+    ValueRange range;            // after the clamp to the catalog domain
+    bool testNaN = true;         // the argument can be NaN (the lane is then invalid)
+    bool testFloatRange = true;  // the clamped value can overflow float (invalid too)
+};
+
 struct LoweringPlan {
     MathVariant variant;
     BatchBodies batchBodies = BatchBodies::Plain;
@@ -195,11 +205,15 @@ struct LoweringPlan {
     // input and u tests, the invalid count and the status (0). It keeps
     // everything that can change a value on such inputs: the normalization,
     // the input range clamps, the clamps of model parameters to their
-    // domains and their NaN/overflow tests, the output check, the guards of
+    // domains and their NaN/overflow tests (those the parameters' ranges
+    // leave possible, as in the default), the output check, the guards of
     // two-body kernels; so its outputs are bit-identical to the default's
     // there.
     bool trustInputs = false;
     SamplingPlan sampling;
+    // By ModelSlot, then the catalog's canonical parameter index.
+    std::array<std::vector<ParamPlan>, kModelSlotCount> params;
+    const ParamPlan& param(ModelSlot slot, int p) const { return params.at(int(slot)).at(p); }
 };
 
 // `material` checked (and usually specialized). `x86Target`: the kernel's

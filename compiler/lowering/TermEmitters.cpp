@@ -77,7 +77,8 @@ llvm::Value* NdfEmitter::cosLambda(LaneEmitter&, const NdfParams&, const std::ar
     internal_error << "Smith Lambda of an NDF without one (the checker refuses the pair)";
 }
 
-llvm::Value* NdfEmitter::smithRootSquared(LaneEmitter&, const NdfParams&, const std::array<llvm::Value*, 3>&) const {
+llvm::Value* NdfEmitter::smithRootSquared(LaneEmitter&, const NdfParams&, const std::array<llvm::Value*, 3>&,
+                                          bool) const {
     internal_error << "Smith root form of an NDF without one (NdfLoweringTraits::smithRootSums)";
 }
 

@@ -89,9 +89,10 @@ public:
     // R(v)^2 = (n.v)^2 + proj(v), float (smithRootSums), where R(v) = (n.v)(1
     // + 2 Lambda(v)). R is a norm of v (homogeneous of degree 1): the Smith
     // forms may take it of an unnormalized v and scale, and take the roots
-    // of both directions together.
-    virtual llvm::Value* smithRootSquared(LaneEmitter& lane, const NdfParams& n,
-                                          const std::array<llvm::Value*, 3>& v) const;
+    // of both directions together. `unit`: v is a unit vector to float
+    // rounding, so the NDF may take |v| = 1 for granted.
+    virtual llvm::Value* smithRootSquared(LaneEmitter& lane, const NdfParams& n, const std::array<llvm::Value*, 3>& v,
+                                          bool unit) const;
     // The roughness the Kulla-Conty table is looked up with, precise type
     // (default: alpha, or sqrt(ax ay) for an anisotropic lobe).
     virtual llvm::Value* energyAlpha(LaneEmitter& lane, const NdfParams& n) const;

@@ -1145,6 +1145,82 @@ TEST_CASE("float-first exact SIMD: nearly opposite directions of slightly differ
     CHECK(far > b.size() / 8);
 }
 
+TEST_CASE("GGX's Smith root from n.v alone only where the plan's alpha range allows it") {
+    // R^2 = z^2 + a^2 (1 - z^2) needs a^2 <= 2 (GgxEmitter): near the
+    // normal, 1 - z^2 carries z's rounding scaled by a^2 (that form gives
+    // 2.3e-6 at alpha up to 10, 2.0e-5 up to 40). A roughness in 0 .. 1
+    // squared takes it; an alpha input up to 40 keeps the components. Both stay within exact accuracy on every
+    // backend, near the normal and at random directions.
+    const char* small = R"(material m {
+        input roughness = 0.4 in 0 .. 1;
+        let alpha = roughness * roughness;
+        ndf = ggx(alpha); masking = smith_height_correlated; fresnel = schlick(f0 = rgb(0.95, 0.64, 0.54)); })";
+    const char* large = R"(material m {
+        input alpha = 1 in 0 .. 40;
+        ndf = ggx(alpha); masking = smith_height_correlated; fresnel = schlick(f0 = rgb(0.95, 0.64, 0.54)); })";
+    CHECK(planLowering(checkedText(small).materials[0], MathVariant::exact(), true).param(ModelSlot::Ndf, 0).range.hi < 1.001);
+    CHECK(planLowering(checkedText(large).materials[0], MathVariant::exact(), true).param(ModelSlot::Ndf, 0).range.hi >= 40);
+    for (const char* text : {small, large}) {
+        CheckedProgram program = checkedText(text);
+        Interpreter<double> interp(program.materials[0], nullptr);
+        Compiler c;
+        c.setCacheDir("");
+        const bool isLarge = text == large;
+        // Half the lanes with both directions within 0.1 rad of the normal.
+        Batch b(4096, 31);
+        std::mt19937_64 rng(5);
+        std::uniform_real_distribution<double> uniform(0, 1);
+        for (size_t i = 0; i < b.size(); i += 2)
+            for (int d = 0; d < 2; ++d) {
+                double theta = 0.1 * uniform(rng), phi = 6.283185307179586 * uniform(rng);
+                b.dir[3 * d][i] = float(std::sin(theta) * std::cos(phi));
+                b.dir[3 * d + 1][i] = float(std::sin(theta) * std::sin(phi));
+                b.dir[3 * d + 2][i] = float(std::cos(theta));
+            }
+        for (size_t i = 0; i < b.size(); ++i)
+            b.slots[0][i] = isLarge ? float(1 + 39 * uniform(rng)) : float(uniform(rng));
+        for (const char* spec : {"backend=scalar;cache=off", "backend=simd;width=16;cache=off", "backend=simd;width=8;cache=off"}) {
+            INFO(spec);
+            auto k = compile(c, text, spec);
+            CHECK(b.run(*k) == 0);
+            double worst = 0;
+            for (size_t i = 0; i < b.size(); ++i) {
+                EvalResult<double> ref = b.reference(interp, i);
+                REQUIRE(ref.valid);
+                for (int ch = 0; ch < 3; ++ch) worst = std::max(worst, relativeError(b.out[ch][i], ref.rgb[ch]));
+            }
+            std::string label = std::string(spec) + (isLarge ? ", alpha up to 40" : ", roughness squared");
+            MESSAGE(label << ": worst relative error " << worst);
+            CHECK(worst < 2e-6);
+        }
+    }
+}
+
+TEST_CASE("model parameters that can be NaN or overflow float still make their lanes invalid") {
+    // The plan leaves a parameter's tests out only where its range shows
+    // them dead (ValueRange.h); these arguments can be NaN (sqrt of a
+    // negative) or beyond float (x^2 of a finite float).
+    const char* nanText = R"(material m { input x = 0.25 in -1 .. 1; ndf = ggx(sqrt(x)); })";
+    const char* overflowText = R"(material m { input x = 0.5; ndf = ggx(x * x); })";
+    CHECK(planLowering(checkedText(nanText).materials[0], MathVariant::exact(), true).param(ModelSlot::Ndf, 0).testNaN);
+    CHECK(planLowering(checkedText(overflowText).materials[0], MathVariant::exact(), true).param(ModelSlot::Ndf, 0).testFloatRange);
+    Compiler c;
+    c.setCacheDir("");
+    for (const char* spec : {"backend=scalar;cache=off", "backend=simd;width=16;cache=off",
+                             "backend=simd;width=16;math=fast;cache=off"}) {
+        CAPTURE(spec);
+        Batch b(64, 3);
+        for (size_t i = 0; i < b.size(); ++i) b.slots[0][i] = i % 4 == 1 ? -0.5f : 0.25f;
+        CHECK(b.run(*compile(c, nanText, spec)) == 16);
+        for (size_t i = 0; i < b.size(); ++i) {
+            bool bad = i % 4 == 1;
+            for (int ch = 0; ch < 3; ++ch) CHECK((b.out[ch][i] == 0.0f) == bad);
+        }
+        for (size_t i = 0; i < b.size(); ++i) b.slots[0][i] = i % 8 == 3 ? 1e20f : 0.5f;
+        CHECK(b.run(*compile(c, overflowText, spec)) == 8);
+    }
+}
+
 namespace {
 // Outputs and invalid-lane counts of `k` on a sample, bit for bit.
 struct SampleOutput {

@@ -304,6 +304,28 @@ TEST_CASE("every catalog entry has an emitter") {
     }
 }
 
+TEST_CASE("model parameters: NaN and float-range tests only where the expressions leave them possible") {
+    auto alpha = [](const std::string& body) { return exactPlan(body).param(ModelSlot::Ndf, 0); };
+    // roughness in 0 .. 1 squared: never NaN, never beyond float.
+    const std::string bench = "input roughness = 0.4 in 0 .. 1; let alpha = roughness * roughness; ndf = ggx(alpha);";
+    ParamPlan squared = alpha(bench);
+    CHECK_FALSE(squared.testNaN);
+    CHECK_FALSE(squared.testFloatRange);
+    CHECK(squared.range.lo == 1e-4);  // ggx's domain
+    CHECK(squared.range.hi < 1.00001);
+    CHECK(printPlan(material(bench), exactPlan(bench)).find("param ndf.alpha_x: [0.0001, 1.0000") != std::string::npos);
+    // sqrt of a negative, division by a range holding 0: NaN possible.
+    CHECK(alpha("input x = 0.25 in -1 .. 1; ndf = ggx(sqrt(x));").testNaN);
+    CHECK(alpha("input x = 0.25 in 0 .. 1; ndf = ggx(1 / x);").testNaN);
+    // A finite float input is within float; its square is not.
+    CHECK_FALSE(alpha("input x = 0.5; ndf = ggx(x);").testFloatRange);
+    CHECK_FALSE(alpha("input x = 0.5; ndf = ggx(x);").testNaN);
+    CHECK(alpha("input x = 0.5; ndf = ggx(x * x);").testFloatRange);
+    CHECK_FALSE(alpha("input x = 0.5; ndf = ggx(x * x);").testNaN);
+    CHECK(printPlan(material("input x = 0.5; ndf = ggx(x * x);"), exactPlan("input x = 0.5; ndf = ggx(x * x);"))
+              .find("tests=float-range") != std::string::npos);
+}
+
 }  // TEST_SUITE
 
 TEST_SUITE("codegen_key") {

@@ -29,8 +29,8 @@ SmithSums smithSums(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n
         // head of a one-lane body's chain; there both take one instruction.
         MathEmitter& fm = lane.floatMath();
         const bool fromInputs = geo.wiInvLen != nullptr;
-        auto [rootI, rootO] = fm.sqrtBoth(ndf.smithRootSquared(lane, n, fromInputs ? geo.wiIn : geo.wi),
-                                          ndf.smithRootSquared(lane, n, fromInputs ? geo.woIn : geo.wo));
+        auto [rootI, rootO] = fm.sqrtBoth(ndf.smithRootSquared(lane, n, fromInputs ? geo.wiIn : geo.wi, !fromInputs),
+                                          ndf.smithRootSquared(lane, n, fromInputs ? geo.woIn : geo.wo, !fromInputs));
         s.rootI = pm.convert(rootI, pm.type());
         s.rootO = pm.convert(rootO, pm.type());
         if (fromInputs) {

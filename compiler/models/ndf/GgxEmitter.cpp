@@ -145,8 +145,22 @@ public:
         return fm.select(fm.isFinite(proj), cl, proj);
     }
 
-    Value* smithRootSquared(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v) const override {
-        return lane.floatMath().fma(v[2], v[2], lane.smithProjection(*this, n, v));
+    // R^2 = z^2 + a^2 (x^2 + y^2). For a unit v and one alpha with a^2 <= 2
+    // (the plan's range of alpha), R^2 = z^2 + a^2 (1 - z^2) needs neither
+    // x nor y (nor, in the float-first body, their corrections): with z
+    // within a relative e of the unit v's, 1 - z^2 by one fma is off by
+    // 2 e z^2, which moves R^2 by 2 e z^2 |1 - a^2| <= 2 e R^2; |v|^2 = 1 +
+    // d moves it by a^2 d <= 2 d R^2 more. A larger alpha scales both
+    // errors by a^2 where z is near 1 (docs/numerics.md).
+    Value* smithRootSquared(LaneEmitter& lane, const NdfParams& n, const std::array<Value*, 3>& v,
+                            bool unit) const override {
+        MathEmitter& fm = lane.floatMath();
+        const double alphaHi = lane.plan.param(ModelSlot::Ndf, kAlphaX).range.hi;
+        if (unit && n.isotropic && alphaHi * alphaHi <= 2.0) {
+            Value* z = v[2];
+            return fm.fma(fm.mul(n.ax, n.ax), fm.fma(fm.neg(z), z, fm.c(1.0)), fm.mul(z, z));
+        }
+        return fm.fma(v[2], v[2], lane.smithProjection(*this, n, v));
     }
 
     // (n.v)(1 + Lambda(v)) = ((n.v) + R(v)) / 2: a sum of positive terms, no
@@ -157,7 +171,7 @@ public:
         MathEmitter& pm = lane.preciseMath();
         std::array<Value*, 3> vLane;
         for (int i = 0; i < 3; ++i) vLane[i] = fm.convert(v[i], fm.type());
-        Value* root = pm.convert(fm.sqrt(smithRootSquared(lane, n, vLane)), pm.type());
+        Value* root = pm.convert(fm.sqrt(smithRootSquared(lane, n, vLane, true)), pm.type());
         return pm.mul(pm.add(v[2], root), pm.c(0.5));
     }
 
@@ -178,7 +192,7 @@ public:
         // |v| before normalizing is R(wo): in float the same value as the
         // density's and eval's, one square root for the three.
         Value* len = pm.isDouble() ? pm.sqrt(pm.fma(vx, vx, pm.fma(vy, vy, pm.mul(wo[2], wo[2]))))
-                                   : pm.sqrt(smithRootSquared(lane, n, wo));
+                                   : pm.sqrt(smithRootSquared(lane, n, wo, true));
         Value* inv = pm.div(pm.c(1.0), len);
         vx = pm.mul(vx, inv), vy = pm.mul(vy, inv);
         Value* vz = pm.mul(wo[2], inv);
