@@ -150,8 +150,9 @@ bool floatFirstApplies(const CheckedMaterial& material, const MaterialEmitters& 
            em.fresnel.floatFirstCapable(material.fresnel);
 }
 
-// The fast kernel's batch body is guarded when the NDF has a guarded fast
-// body and is isotropic: an anisotropic D is not one fraction, so the
+// Otherwise (a Fresnel term or expressions the float-first body cannot
+// take) the fast kernel's batch body is guarded when the NDF has a guarded
+// fast body and is isotropic: an anisotropic D is not one fraction, so the
 // guarded body would save only the Smith divisions (measured 3% faster for
 // 5 ms more compile time: docs/perf-log.md).
 bool guardedFastApplies(const CheckedMaterial& material, const MaterialEmitters& em, const MathVariant& variant,
@@ -160,19 +161,16 @@ bool guardedFastApplies(const CheckedMaterial& material, const MaterialEmitters&
     return em.ndf.traits.guardedFastBody && ndfIsotropic && !material.compensatesEnergy();
 }
 
-// A fast kernel without a guarded fast body (anisotropic GGX) would run the
-// plain float body, with its scaled masking sums and output checks. Where
-// the exact kernel has a guarded float body, which skips both, that body is
-// the faster one (docs/perf-log.md), so such a fast kernel takes it, with
-// the plain fast body for the lanes it distrusts: fast mode is then never
-// slower than exact, and no less accurate. A variant that substitutes a
-// model (a tolerance's choice) or turns float-first off keeps its own plain
-// body.
-bool fastTakesFloatFirst(const CheckedMaterial& material, const MaterialEmitters& em, const MathVariant& variant,
-                         bool ndfIsotropic) {
+// Where the exact kernel has a guarded float body, a fast kernel takes it,
+// with the plain fast body for the lanes it distrusts: that body skips the
+// scaled masking sums and output checks of the plain fast body, and since
+// it forms no unit h and no x, y Smith terms it is also faster than the
+// guarded fast body (docs/perf-log.md); fast mode is then never slower
+// than exact, and no less accurate. A variant that substitutes a model (a
+// tolerance's choice) or turns float-first off keeps its own bodies.
+bool fastTakesFloatFirst(const CheckedMaterial& material, const MaterialEmitters& em, const MathVariant& variant) {
     if (variant.precise || !variant.floatFirst || variant.walterLambda || variant.schlickDielectric) return false;
-    return !guardedFastApplies(material, em, variant, ndfIsotropic) &&
-           floatFirstApplies(material, em, MathVariant::exact());
+    return floatFirstApplies(material, em, MathVariant::exact());
 }
 
 // One body of the kernel. `role` and `bodyVariant` (the variant the body
@@ -289,7 +287,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     // faster than double except for division and square root, and the
     // guards would cost more than they save (docs/perf-log.md).
     plan.scalarBody = planBody(material, em, plan, BodyRole::Plain, variant);
-    if (floatFirstApplies(material, em, variant) || fastTakesFloatFirst(material, em, variant, plan.ndfIsotropic)) {
+    if (floatFirstApplies(material, em, variant) || fastTakesFloatFirst(material, em, variant)) {
         plan.batchBodies = BatchBodies::FloatFirst;
         // The exact variant's float body, in float (a fast kernel's
         // estimates and short polynomials are not for it).

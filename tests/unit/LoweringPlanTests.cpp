@@ -103,8 +103,17 @@ TEST_CASE("a diffuse term keeps the output check of a guarded body") {
     CHECK(p.batchBody.checkOutput);
 }
 
-TEST_CASE("fast GGX: a guarded fast body when isotropic, the exact float-first body when anisotropic") {
-    LoweringPlan iso = fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
+TEST_CASE("fast GGX: the exact float-first body where it applies, else a guarded fast body when isotropic") {
+    // Schlick with f0 (or no Fresnel term): the exact kernel's float body.
+    for (const char* body : {"ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);", "ndf = ggx(0.3);"}) {
+        LoweringPlan p = fastPlan(body);
+        CHECK(p.batchBodies == BatchBodies::FloatFirst);
+        CHECK(p.batchBody.role == BodyRole::FloatGuarded);
+        REQUIRE(p.fallbackBody);
+        CHECK(p.fallbackBody->estimates);
+    }
+    // Schlick from eta is not the float-first body's: the guarded fast body.
+    LoweringPlan iso = fastPlan("ndf = ggx(0.3); fresnel = schlick(eta = 1.5);");
     CHECK(iso.batchBodies == BatchBodies::GuardedFast);
     CHECK(iso.batchBody.role == BodyRole::FastGuarded);
     CHECK(iso.batchBody.halfVector == HalfVectorForm::Estimated);  // f0 >= 1e-6
@@ -116,7 +125,8 @@ TEST_CASE("fast GGX: a guarded fast body when isotropic, the exact float-first b
     CHECK(planLowering(material("ndf = ggx(0.3);"), MathVariant::fast(), false).oneLaneZeroesByBranch);
     // Equal constant alphas are one alpha.
     CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3);").ndfIsotropic);
-    CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3);").batchBodies == BatchBodies::GuardedFast);
+    CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3); fresnel = schlick(eta = 1.5);").batchBodies ==
+          BatchBodies::GuardedFast);
     CHECK_FALSE(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5);").ndfIsotropic);
     // Anisotropic: the exact kernel's guarded float body (estimates and
     // short polynomials off), the plain fast body for its distrusted lanes.
@@ -142,13 +152,15 @@ TEST_CASE("fast GGX: a guarded fast body when isotropic, the exact float-first b
               .batchBodies == BatchBodies::Plain);
     CHECK(fastPlan("ndf = beckmann(alpha_x = 0.3, alpha_y = 0.5);").batchBodies == BatchBodies::Plain);
     // An f0 that can reach 0 keeps the cancellation-free 1 - cos and the F guard.
-    LoweringPlan lanes = fastPlan("input f0 = 0.04; ndf = ggx(0.3); fresnel = schlick(f0 = f0);");
+    LoweringPlan lanes = fastPlan("input eta = 1.5; ndf = ggx(0.3); fresnel = schlick(eta = eta);");
+    REQUIRE(lanes.batchBodies == BatchBodies::GuardedFast);
     CHECK(lanes.batchBody.halfVector == HalfVectorForm::Precise);
     CHECK(lanes.fresnel.rangeGuard);
 }
 
 TEST_CASE("float bodies sum the float directions with a normalization correction; double bodies normalize") {
-    LoweringPlan guarded = fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
+    LoweringPlan guarded = fastPlan("ndf = ggx(0.3); fresnel = schlick(eta = 1.5);");
+    REQUIRE(guarded.batchBodies == BatchBodies::GuardedFast);
     REQUIRE(guarded.fallbackBody);
     CHECK_FALSE(guarded.batchBody.correctedSums);
     CHECK(guarded.fallbackBody->correctedSums);
@@ -238,7 +250,7 @@ TEST_CASE("the half angle without the unit h: NDFs whose D takes wi + wo, with w
     LoweringPlan kelemen = exactPlan("ndf = ggx(0.3); masking = kelemen; fresnel = schlick(f0 = 0.04);");
     REQUIRE(kelemen.batchBodies == BatchBodies::FloatFirst);
     CHECK(kelemen.batchBody.halfVector == HalfVectorForm::Precise);
-    LoweringPlan guardedFast = fastPlan("ndf = ggx(0.3); fresnel = schlick(f0 = 0.04);");
+    LoweringPlan guardedFast = fastPlan("ndf = ggx(0.3); fresnel = schlick(eta = 1.5);");
     REQUIRE(guardedFast.batchBodies == BatchBodies::GuardedFast);
     CHECK(guardedFast.batchBody.halfVector == HalfVectorForm::Estimated);
 }

@@ -385,7 +385,8 @@ expect_rc 0 "ir --plan"
 expect_eq "$(printf '%s\n' "$out" | grep -E '^(batch-bodies|smith-lambda|flush-denormals):')" \
     "batch-bodies: float-first"$'\n'"smith-lambda: none"$'\n'"flush-denormals: no" "ir --plan: the decisions"
 run "$FACET" ir test.mat --simd --plan --math fast
-expect_eq "$(printf '%s\n' "$out" | grep -E '^batch-bodies:')" "batch-bodies: guarded-fast" "ir --plan --math fast"
+expect_eq "$(printf '%s\n' "$out" | grep -E '^(variant|batch-bodies|flush-denormals):')" \
+    "variant: fast"$'\n'"batch-bodies: float-first"$'\n'"flush-denormals: yes" "ir --plan --math fast"
 run "$FACET" ir test.mat --simd --plan --assume unit
 expect_eq "$(printf '%s\n' "$out" | grep -E '^trust-inputs:')" "trust-inputs: yes" "ir --plan --assume unit"
 run "$FACET" ir test.mat --plan --assume nothing
