@@ -327,7 +327,9 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     plan.sampling.compensationAlbedo = material.compensatesEnergy();
     plan.sampling.body = plan.scalarBody;
     plan.sampling.batchBody = plan.scalarBody;
-    if (plan.batchBodies == BatchBodies::FloatFirst && em.ndf.traits.floatFirstSampler) {
+    // Only exact kernels: a fast kernel samples in its plain body, which is
+    // float already and has no guards to pay for.
+    if (variant.precise && plan.batchBodies == BatchBodies::FloatFirst && em.ndf.traits.floatFirstSampler) {
         plan.sampling.batchBodies = BatchBodies::FloatFirst;
         plan.sampling.batchBody = plan.batchBody;
     }

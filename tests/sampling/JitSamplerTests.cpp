@@ -500,9 +500,10 @@ TEST_CASE("jit sampling: float-first SIMD sampler, its guards and its fallback l
         auto plain = compile(text, "backend=simd;width=8;math=exact;float_first=off");
         const facet::CheckedMaterial& m = floatFirst->material();
         CHECK(facet::planLowering(m, facet::MathVariant::exact(), true).sampling.batchBodies == BatchBodies::FloatFirst);
-        // Fast kernels take the exact kernel's float body where it applies,
-        // its sampler included.
-        CHECK(facet::planLowering(m, facet::MathVariant::fast(), true).sampling.batchBodies == BatchBodies::FloatFirst);
+        // Fast kernels take the exact kernel's float body for eval, but
+        // sample in their plain fast body.
+        CHECK(facet::planLowering(m, facet::MathVariant::fast(), true).batchBodies == BatchBodies::FloatFirst);
+        CHECK(facet::planLowering(m, facet::MathVariant::fast(), true).sampling.batchBodies == BatchBodies::Plain);
         facet::MathVariant doubleOnly = facet::MathVariant::exact();
         doubleOnly.floatFirst = false;
         CHECK(facet::planLowering(m, doubleOnly, true).sampling.batchBodies == BatchBodies::Plain);
