@@ -4,6 +4,7 @@
 #include "Builtins.h"
 #include "Diagnostics.h"
 
+#include <cmath>
 #include <fmt/format.h>
 
 namespace facet {
@@ -125,6 +126,13 @@ std::string printExpr(const Expr& e) {
     Printer p;
     p.visit(e);
     return p.out;
+}
+
+std::optional<long> smallIntegerConstant(const Expr& e) {
+    if (e.kind != ExprKind::Number) return std::nullopt;
+    double v = static_cast<const NumberExpr&>(e).value;
+    if (v != std::floor(v) || std::fabs(v) > 64) return std::nullopt;
+    return long(v);
 }
 
 }  // namespace facet

@@ -10,6 +10,7 @@
 #include "SourceLoc.h"
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -156,5 +157,10 @@ public:
 
 // Prints an expression in source syntax (fully parenthesized binary ops).
 std::string printExpr(const Expr& e);
+
+// The value of an integer-valued number literal with |k| <= 64: pow with
+// such an exponent is lowered as repeated multiplication, and the value
+// ranges (ValueRange.h) follow that.
+std::optional<long> smallIntegerConstant(const Expr& e);
 
 }  // namespace facet

@@ -134,12 +134,6 @@ bool sameValue(const Expr& a, const Expr& b) {
     return na.binding == nb.binding && na.index == nb.index && na.binding != BindingKind::Unresolved;
 }
 
-std::optional<long> integerExponent(const Expr& e) {
-    if (e.kind != ExprKind::Number) return std::nullopt;
-    double v = static_cast<const NumberExpr&>(e).value;
-    if (v != std::floor(v) || std::fabs(v) > 64) return std::nullopt;
-    return long(v);
-}
 
 }  // namespace
 
@@ -195,7 +189,7 @@ ValueRange ValueRanges::of(const Expr& e) const {
                 case BinaryOp::Mul: return sameValue(*bin.lhs, *bin.rhs) ? square(l) : mul(l, of(*bin.rhs));
                 case BinaryOp::Div: return div(l, of(*bin.rhs));
                 case BinaryOp::Pow:
-                    if (auto k = integerExponent(*bin.rhs)) return powInt(l, *k);
+                    if (auto k = smallIntegerConstant(*bin.rhs)) return powInt(l, *k);
                     return builtin(BuiltinFn::Pow, {l, of(*bin.rhs)});
             }
             break;
@@ -204,7 +198,7 @@ ValueRange ValueRanges::of(const Expr& e) const {
             const auto& call = static_cast<const CallExpr&>(e);
             if (!call.function) return ValueRange::any();
             if (call.function->id == BuiltinFn::Pow)
-                if (auto k = integerExponent(*call.args.at(1).value)) return powInt(of(*call.args[0].value), *k);
+                if (auto k = smallIntegerConstant(*call.args.at(1).value)) return powInt(of(*call.args[0].value), *k);
             std::vector<ValueRange> args;
             for (const Argument& a : call.args) args.push_back(of(*a.value));
             return builtin(call.function->id, args);

@@ -20,7 +20,6 @@
 #include "Material.h"
 
 #include <cmath>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,7 +33,6 @@ struct ValueRange {
     static ValueRange exactly(double v);
     static ValueRange between(double lo, double hi) { return {lo, hi, false}; }
 
-    bool finite() const { return std::isfinite(lo) && std::isfinite(hi); }
     // Every value, rounded to float, is finite.
     bool withinFloat() const;
     // The values clamped to [lo, hi] as the lowering clamps a parameter

@@ -72,13 +72,6 @@ const char* specularSamplingName(SpecularSampling s) {
     return "?";
 }
 
-std::optional<long> smallIntegerConstant(const Expr& e) {
-    if (e.kind != ExprKind::Number) return std::nullopt;
-    double v = static_cast<const NumberExpr&>(e).value;
-    if (v != std::floor(v) || std::fabs(v) > 64) return std::nullopt;
-    return long(v);
-}
-
 namespace {
 
 // Whether the NDF's two alphas are one: one alpha (the checker's flag;

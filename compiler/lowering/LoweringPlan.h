@@ -235,8 +235,4 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
 bool walterLambdaApplies(const CheckedMaterial& material);
 bool schlickDielectricApplies(const CheckedMaterial& material);
 
-// The value of an integer-valued number literal with |k| <= 64 (pow with
-// such an exponent is lowered as repeated multiplication).
-std::optional<long> smallIntegerConstant(const Expr& e);
-
 }  // namespace facet
