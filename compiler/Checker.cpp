@@ -26,7 +26,7 @@ const CheckedInput* CheckedMaterial::findInput(std::string_view n) const {
     return nullptr;
 }
 
-const ModelUse& CheckedMaterial::use(ModelSlot slot) const {
+ModelUse& CheckedMaterial::use(ModelSlot slot) {
     switch (slot) {
         case ModelSlot::Ndf: return ndf;
         case ModelSlot::Masking: return masking;
@@ -36,6 +36,8 @@ const ModelUse& CheckedMaterial::use(ModelSlot slot) const {
     }
     internal_error << "bad slot";
 }
+
+const ModelUse& CheckedMaterial::use(ModelSlot slot) const { return const_cast<CheckedMaterial&>(*this).use(slot); }
 
 ModelSlot CheckedMaterial::slotOf(const ModelUse& u) const {
     for (int s = 0; s < kModelSlotCount; ++s)
@@ -148,7 +150,7 @@ public:
                                                 "one, e.g. 'ndf = ggx(0.3);'",
                                                 decl_.name));
         for (int s = 0; s < kModelSlotCount; ++s) {
-            ModelUse& use = slotUse(ModelSlot(s));
+            ModelUse& use = out_.use(ModelSlot(s));
             if (!use.model && s != int(ModelSlot::Ndf)) {
                 use.model = findModel(ModelSlot(s), "none");
                 use.loc = decl_.loc;
@@ -279,16 +281,6 @@ private:
         out_.lets.push_back({let.loc, let.name, let.value});
     }
 
-    ModelUse& slotUse(ModelSlot slot) {
-        switch (slot) {
-            case ModelSlot::Ndf: return out_.ndf;
-            case ModelSlot::Masking: return out_.masking;
-            case ModelSlot::Fresnel: return out_.fresnel;
-            case ModelSlot::Energy: return out_.energy;
-            case ModelSlot::Diffuse: return out_.diffuse;
-        }
-        internal_error << "bad slot";
-    }
 
     void checkModelStmt(const ModelStmt& stmt, std::array<const ModelStmt*, kModelSlotCount>& seen) {
         const char* slotName = modelSlotName(stmt.slot);
@@ -314,7 +306,7 @@ private:
         use.loc = stmt.modelLoc;
         use.model = model;
         use.args.assign(model->canonical.size(), nullptr);
-        if (matchArguments(stmt, *model, use)) slotUse(stmt.slot) = std::move(use);
+        if (matchArguments(stmt, *model, use)) out_.use(stmt.slot) = std::move(use);
     }
 
     // Picks the form of `model` that the written arguments fit and fills the

@@ -55,6 +55,7 @@ struct CheckedMaterial {
     bool compensatesEnergy() const { return energy.model && energyEntry(*energy.model).compensates; }
 
     const CheckedInput* findInput(std::string_view name) const;
+    ModelUse& use(ModelSlot slot);
     const ModelUse& use(ModelSlot slot) const;
     // The slot of `use`, one of this material's own uses.
     ModelSlot slotOf(const ModelUse& use) const;
