@@ -109,10 +109,9 @@ void plan(PipelineRun& run, const PipelineControl& control, const PipelineTarget
         int width = run.options.width ? run.options.width : target.naturalWidth;
         run.lowering = loweringOptionsFor(run.options, run.energyTable.get(), run.simd, width);
     }
-    if (!target.jit) run.lowering.x86Target = target.machine->getTargetTriple().isX86();
     internal_assert(!run.specialized.compensatesEnergy() || run.lowering.energyTable)
         << "energy compensation planned without its table";
-    run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.x86Target, run.lowering.trustInputs);
+    run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.trustInputs);
 }
 
 void lower(PipelineRun& run, const PipelineControl& control) {

@@ -14,7 +14,6 @@
 
 #include <llvm/IR/Constants.h>
 #include <llvm/IR/IRBuilder.h>
-#include <llvm/IR/IntrinsicsX86.h>
 #include <llvm/IR/MDBuilder.h>
 #include <llvm/IR/Verifier.h>
 #include <llvm/Support/raw_ostream.h>
@@ -52,52 +51,6 @@ void addKernelAttributes(llvm::Function* fn, int width, const BodyPlan& body) {
     fn->addFnAttr("min-legal-vector-width", bits);
     fn->addFnAttr("prefer-vector-width", bits);
 }
-
-// Fast mode runs with subnormals flushed to zero (x86: MXCSR FTZ and DAZ
-// for the duration of the call, restored on return), as -ffast-math code
-// does. A subnormal operand or result costs a microcode assist of ~100
-// cycles, and fast kernels produce them routinely in NDF and Smith tails.
-// Exact mode keeps IEEE subnormals: a float-subnormal n.w is a valid input
-// there. The plan decides (LoweringPlan::flushDenormals).
-// LDMXCSR serializes the FP pipeline: the pair costs ~11 ns, a sixth of a
-// one-lane call. Hosts that run with FTZ and DAZ set themselves (renderers
-// commonly do) skip both writes: the kernel then runs under the same bits.
-class DenormalFlush {
-public:
-    DenormalFlush(llvm::IRBuilder<>& b, llvm::Function* fn, const LoweringPlan& plan) : b_(b) {
-        if (!plan.flushDenormals) return;
-        fn->addFnAttr("denormal-fp-math", "preserve-sign,preserve-sign");
-        saved_ = b.CreateAlloca(b.getInt32Ty(), nullptr, "mxcsr.saved");
-        llvm::Value* flushed = b.CreateAlloca(b.getInt32Ty(), nullptr, "mxcsr.flushed");
-        b.CreateIntrinsic(llvm::Intrinsic::x86_sse_stmxcsr, {}, {saved_});
-        llvm::Value* bits = b.CreateLoad(b.getInt32Ty(), saved_);
-        llvm::Value* ftzDaz = b.getInt32(0x8040);  // FTZ (bit 15) | DAZ (bit 6)
-        needed_ = b.CreateICmpNE(b.CreateAnd(bits, ftzDaz), ftzDaz, "mxcsr.needed");
-        b.CreateStore(b.CreateOr(bits, ftzDaz), flushed);
-        conditionally([&] { b.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {flushed}); });
-    }
-    // Emits the restore at the current insertion point (before each return).
-    void restore() {
-        if (saved_) conditionally([&] { b_.CreateIntrinsic(llvm::Intrinsic::x86_sse_ldmxcsr, {}, {saved_}); });
-    }
-
-private:
-    // Emits `write` in a block of its own, run only where needed_.
-    template <typename F>
-    void conditionally(F&& write) {
-        llvm::Function* fn = b_.GetInsertBlock()->getParent();
-        auto* writeBlock = llvm::BasicBlock::Create(fn->getContext(), "mxcsr.write", fn);
-        auto* done = llvm::BasicBlock::Create(fn->getContext(), "mxcsr.done", fn);
-        b_.CreateCondBr(needed_, writeBlock, done);
-        b_.SetInsertPoint(writeBlock);
-        write();
-        b_.CreateBr(done);
-        b_.SetInsertPoint(done);
-    }
-    llvm::IRBuilder<>& b_;
-    llvm::Value* saved_ = nullptr;
-    llvm::Value* needed_ = nullptr;
-};
 
 // The lane body of an entry point: the values of its output streams and
 // the invalid mask, from its input streams (float or <W x float> lanes) and
@@ -160,7 +113,6 @@ LaneOutputs emitBodies(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type*
     preciseFn->addFnAttr(llvm::Attribute::NoInline);
     preciseFn->addFnAttr(llvm::Attribute::Cold);
     preciseFn->addFnAttr(llvm::Attribute::OptimizeNone);
-    if (plan.flushDenormals) preciseFn->addFnAttr("denormal-fp-math", "preserve-sign,preserve-sign");
     {
         llvm::IRBuilder<> pb(llvm::BasicBlock::Create(ctx, "entry", preciseFn));
         std::vector<llvm::Value*> pin, pslots;
@@ -240,7 +192,6 @@ llvm::Function* emitScalarFunction(const KernelContext& k, llvm::Module& module,
                                       llvm::Function::ExternalLinkage, name, module);
     addKernelAttributes(fn, 1, body);
     b.SetInsertPoint(llvm::BasicBlock::Create(ctx, "entry", fn));
-    DenormalFlush flush(b, fn, k.plan);
     std::vector<llvm::Value*> in;
     for (int g = 0; g < groupsIn; ++g)
         for (int i = 0; i < 3; ++i) in.push_back(b.CreateLoad(f32, b.CreateConstGEP1_32(f32, fn->getArg(unsigned(g)), i)));
@@ -258,7 +209,6 @@ llvm::Function* emitScalarFunction(const KernelContext& k, llvm::Module& module,
     for (int g = 0; g < groupsOut; ++g)
         for (int i = 0; i < shape.outputs[g]; ++i)
             b.CreateStore(r.values[next++], b.CreateConstGEP1_32(f32, fn->getArg(unsigned(groupsIn + 1 + g)), i));
-    flush.restore();
     // Under the host's promise (LoweringPlan::trustInputs) no lane is reported invalid.
     b.CreateRet(k.plan.trustInputs ? b.getInt32(0) : b.CreateZExt(r.invalid, b.getInt32Ty()));
     return fn;
@@ -323,12 +273,11 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
 
     b.SetInsertPoint(entry);
     // The stage buffers of the partial chunk (below), in the entry block:
-    // static allocas, whatever blocks DenormalFlush adds after it.
+    // static allocas.
     const int streams = shape.inStreams() + mat.slotCount;
     const int outStreams = shape.outStreams();
     llvm::Value* stageIn = b.CreateAlloca(vecTy, b.getInt32(streams), "stage.in");
     llvm::Value* stageOut = b.CreateAlloca(vecTy, b.getInt32(outStreams), "stage.out");
-    DenormalFlush flush(b, fn, k.plan);
     std::vector<llvm::Value*> inP, outP;
     for (int g = 0; g < groupsIn; ++g)
         for (int i = 0; i < 3; ++i)
@@ -480,9 +429,7 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
     b.CreateBr(header);
 
     b.SetInsertPoint(exit);
-    llvm::Value* result = count;
-    flush.restore();
-    b.CreateRet(result);
+    b.CreateRet(count);
 }
 
 // The eval batch entry; the sixth argument is the optional per-lane status

@@ -78,7 +78,7 @@ LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value
     if (body.checkOutput)
         markInvalid(fm.anyNanInfOrNegative({r.rgb[0], r.rgb[1], r.rgb[2]}));
     if (!body.guarded()) {
-        if (fm.width() == 1 && plan.oneLaneZeroesByBranch) {
+        if (fm.width() == 1) {
             zeroInvalidLaneByBranch(r.rgb);
         } else {
             for (Value*& x : r.rgb) x = fm.select(invalid_, fm.c(0.0), x);
@@ -92,10 +92,7 @@ LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value
 // One lane: the zeroing of an invalid lane as a branch weighted unlikely
 // and a phi, not a select. A select makes the stored value wait for the
 // output check at the end of the lane's longest chain; the predicted branch
-// does not (the weights keep SimplifyCFG from folding it back). Fast
-// kernels keep the select (LoweringPlan::oneLaneZeroesByBranch): their
-// MXCSR restore follows the branch, and LDMXCSR waits for it to resolve,
-// which costs far more than the select (docs/perf-log.md).
+// does not (the weights keep SimplifyCFG from folding it back).
 void LaneEmitter::zeroInvalidLaneByBranch(std::array<Value*, 3>& values) {
     llvm::LLVMContext& ctx = builder.getContext();
     llvm::Function* fn = builder.GetInsertBlock()->getParent();
@@ -246,9 +243,17 @@ LaneEmitter::CorrectedPair LaneEmitter::floatPairCorrections(const std::array<Va
 // are nearly opposite, and the float rounding of the renormalization would
 // then decide h (and so D, G and F) by itself. Float bodies (the plan's
 // correctedSums) sum the float inputs and correct for the normalization.
-LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo, bool wiSampled) {
+LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wiIn, const std::array<Value*, 3>& woIn,
+                                   bool wiSampled) {
     MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
+    std::array<Value*, 3> wi = wiIn, wo = woIn;
+    if (body.subnormalCosinesAsZero) {
+        // (A sampled wi is the body's own direction.)
+        auto asZero = [&](Value* z) { return fm.select(fm.lt(fm.abs(z), fm.c(FLT_MIN)), fm.c(0.0), z); };
+        if (!wiSampled) wi[2] = asZero(wi[2]);
+        wo[2] = asZero(wo[2]);
+    }
     std::array<Value*, 3> wiD, woD;
     std::array<Value*, 3> wiF{}, woF{};  // unit directions in float, where unitDirection() made them
     std::array<Value*, 3> hD, diff;

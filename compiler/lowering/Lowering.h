@@ -51,14 +51,6 @@ struct LoweringOptions {
     bool emitSampling = false;
     // The host's promise of valid inputs (assume=unit; LoweringPlan::trustInputs).
     bool trustInputs = false;
-    // Whether the target is x86, whose MXCSR fast kernels set to flush
-    // subnormals (LoweringPlan::flushDenormals). The host's by default; an
-    // ahead-of-time build for another target sets its own.
-#if defined(__x86_64__) || defined(__i386__)
-    bool x86Target = true;
-#else
-    bool x86Target = false;
-#endif
 };
 
 struct LoweredModule {
@@ -80,7 +72,7 @@ struct LoweredModule {
 };
 
 // `material` must be checked (and is usually specialized); `plan` is
-// planLowering(material, options.variant, options.x86Target). Throws
+// planLowering(material, options.variant, options.trustInputs). Throws
 // InternalError on a lowering bug (the module is verified before it is
 // returned). runKernelPipeline (runtime/Pipeline.h) is the caller.
 LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan& plan, const LoweringOptions& options,

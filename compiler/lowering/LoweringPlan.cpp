@@ -223,6 +223,7 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
     // The guards bound a guarded body's value (F times the lobe) unless a
     // diffuse term (the user's unbounded albedo) is added.
     body.checkOutput = !(body.guarded() && !em.diffuse.present());
+    body.subnormalCosinesAsZero = !inDouble && !body.guarded();
     return body;
 }
 
@@ -238,20 +239,13 @@ SpecularSampling plannedSpecularSampling(const CheckedMaterial& material) {
     return visible ? SpecularSampling::VisibleNormals : SpecularSampling::NdfNormals;
 }
 
-LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool x86Target,
-                          bool trustInputs) {
+LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs) {
     const MaterialEmitters em = termEmitters(material);
     LoweringPlan plan;
     plan.variant = variant;
     plan.trustInputs = trustInputs;
     plan.ndfIsotropic = ndfIsIsotropic(material.ndf);
     plan.compensatesEnergy = material.compensatesEnergy();
-    // Fast kernels run with subnormals flushed (MXCSR FTZ/DAZ), as
-    // -ffast-math code does: a subnormal costs a ~100-cycle assist, and
-    // fast kernels produce them routinely in NDF and Smith tails. Exact
-    // kernels keep IEEE subnormals.
-    plan.flushDenormals = !variant.precise && x86Target;
-    plan.oneLaneZeroesByBranch = !plan.flushDenormals;
 
     if (!material.masking.model->smith)
         plan.lambda = LambdaForm::None;
@@ -338,7 +332,8 @@ void printBody(std::ostringstream& os, const char* what, const BodyPlan& body) {
        << " estimates=" << (body.estimates ? "yes" : "no")
        << " short-polynomials=" << (body.shortPolynomials ? "yes" : "no")
        << " scale-masking-sums=" << (body.scaleMaskingSums ? "yes" : "no")
-       << " check-output=" << (body.checkOutput ? "yes" : "no") << "\n";
+       << " check-output=" << (body.checkOutput ? "yes" : "no")
+       << " subnormal-cosines-as-zero=" << (body.subnormalCosinesAsZero ? "yes" : "no") << "\n";
 }
 
 }  // namespace
@@ -363,8 +358,6 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
        << " exact-in-float=" << yesNo(plan.fresnel.exactInFloat) << " range-guard=" << yesNo(plan.fresnel.rangeGuard)
        << " at-most-one=" << yesNo(plan.fresnel.atMostOne) << " can-vanish=" << yesNo(plan.fresnel.canVanish) << "\n";
     os << "energy-compensation: " << yesNo(plan.compensatesEnergy) << "\n";
-    os << "flush-denormals: " << yesNo(plan.flushDenormals) << "\n";
-    os << "one-lane-zeroes-by-branch: " << yesNo(plan.oneLaneZeroesByBranch) << "\n";
     os << "trust-inputs: " << yesNo(plan.trustInputs) << "\n";
     for (int s = 0; s < kModelSlotCount; ++s) {
         const ModelUse& use = material.use(ModelSlot(s));

@@ -134,6 +134,16 @@ struct BodyPlan {
     // Whether the output needs the NaN/Inf/negative check: a guarded body
     // without a diffuse term has its value bounded by its guards.
     bool checkOutput = true;
+    // A float-subnormal n.wi or n.wo is read as 0: the plain fast bodies'
+    // float forms (the masking sums scaled by max(ci, co), the cosine
+    // products) are written for cosines that are 0 or normal, and a
+    // subnormal one would put 1/max(ci, co) at Inf. Reading them as 0 keeps
+    // the float-subnormal cosine the grazing direction that it is, at two
+    // compares a lane; flushing subnormals for the whole call (MXCSR) cost
+    // a serializing register write on entry and exit, 11-50 ns a call.
+    // Guarded bodies distrust small cosines anyway, and double bodies
+    // represent them.
+    bool subnormalCosinesAsZero = false;
 
     bool guarded() const { return role != BodyRole::Plain; }
 };
@@ -193,12 +203,6 @@ struct LoweringPlan {
     std::shared_ptr<const LambdaTable> lambdaTable;  // LambdaForm::Table: the material's table
     FresnelPlan fresnel;
     bool compensatesEnergy = false;
-    bool flushDenormals = false;  // fast kernels on x86: MXCSR FTZ/DAZ for the call
-    // A one-lane body zeroes an invalid lane by a branch weighted unlikely,
-    // not a select (LaneEmitter::zeroInvalidLaneByBranch); not where the
-    // kernel restores MXCSR after it, since LDMXCSR then waits for that
-    // branch to resolve.
-    bool oneLaneZeroesByBranch = false;
     // The host's promise (assume=unit): finite directions with |w| within
     // 1e-3 of 1, finite inputs, u in [0, 1). The kernel then drops the work
     // whose only purpose is to find lanes that break it: the direction,
@@ -216,11 +220,9 @@ struct LoweringPlan {
     const ParamPlan& param(ModelSlot slot, int p) const { return params.at(int(slot)).at(p); }
 };
 
-// `material` checked (and usually specialized). `x86Target`: the kernel's
-// target can flush subnormals through MXCSR. `trustInputs`: the host's
+// `material` checked (and usually specialized). `trustInputs`: the host's
 // promise of valid inputs (LoweringPlan::trustInputs).
-LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool x86Target,
-                          bool trustInputs = false);
+LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs = false);
 
 // How the specular lobe of `material` is sampled in IR (None: the kernel
 // has no compiled sampler), as planLowering() plans it for every variant.

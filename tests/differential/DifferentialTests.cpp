@@ -86,7 +86,7 @@ TEST_CASE("every shipped and corpus material agrees with the interpreter on ever
                 checkStats(stats, fmt::format("{} material {} backend {} width {}", path, m.name,
                                               backendName(run.backend), run.width));
             }
-            if (planLowering(m, MathVariant::exact(), true).batchBodies == BatchBodies::FloatFirst) {
+            if (planLowering(m, MathVariant::exact()).batchBodies == BatchBodies::FloatFirst) {
                 ++floatFirstMaterials;
                 DiagnosticEngine kd;
                 auto kernel = compiler.compileFile(path, m.name, optionsFor(Backend::Simd, 16, true), kd);
@@ -135,7 +135,7 @@ TEST_CASE("random materials agree across interpreter, scalar and SIMD") {
             FAIL_CHECK("random material " << i << " (" << rm.combination << ") width " << widths[i % 3] << ": "
                                           << why << "\n" << rm.text);
         }
-        if (planLowering(m, MathVariant::exact(), true).batchBodies == BatchBodies::FloatFirst) {
+        if (planLowering(m, MathVariant::exact()).batchBodies == BatchBodies::FloatFirst) {
             ++floatFirstCount;
             auto floatFirst = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Simd, widths[i % 3], true, kQuick), kd);
             REQUIRE_MESSAGE(floatFirst, kd.str() << rm.text);

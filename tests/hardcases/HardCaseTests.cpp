@@ -139,9 +139,9 @@ struct MaterialResult {
 
 // The float evaluation of the formula on the sample (the kernels' float
 // inputs, converted exactly), in fast mode's floating-point environment:
-// fast kernels flush subnormals (x86 MXCSR FTZ/DAZ, docs/numerics.md), so a
-// float-subnormal cosine is 0 to both, and the comparison measures the
-// formulas and approximations, not that documented flushing.
+// fast kernels read a float-subnormal cosine as 0 (docs/numerics.md), and
+// so does the float formula under FTZ/DAZ: the comparison measures the
+// formulas and approximations, not that documented choice.
 std::vector<EvalResult<float>> evaluateInFloat(const Interpreter<float>& interp, const std::vector<HardCase>& cases) {
 #if defined(__x86_64__)
     struct FlushSubnormals {

@@ -247,9 +247,9 @@ TEST_CASE("assume=unit: the option, its canonical text and its plan") {
     DiagnosticEngine d;
     CheckedProgram p = loadProgramText("material m { input r = 0.5 in 0 .. 1; ndf = ggx(r * r); }", "m.mat", d);
     REQUIRE(p.materials.size() == 1);
-    LoweringPlan plan = planLowering(p.materials[0], MathVariant::exact(), true, true);
+    LoweringPlan plan = planLowering(p.materials[0], MathVariant::exact(), true);
     CHECK(plan.trustInputs);
     CHECK(printPlan(p.materials[0], plan).find("trust-inputs: yes") != std::string::npos);
-    CHECK(printPlan(p.materials[0], planLowering(p.materials[0], MathVariant::exact(), true)).find("trust-inputs: no") !=
+    CHECK(printPlan(p.materials[0], planLowering(p.materials[0], MathVariant::exact())).find("trust-inputs: no") !=
           std::string::npos);
 }

@@ -305,8 +305,8 @@ material plastic {
     const float* inputs[1] = {rough.data()};
     Compiler c;
     c.setCacheDir("");
-    // (Exact kernels: fast ones flush the subnormal 1e-40 to 0, a valid
-    // horizon lane there.)
+    // (Exact kernels: fast ones read the subnormal cosine 1e-40 as 0, a
+    // valid horizon lane there.)
     for (std::string backend : {"backend=interp", "backend=scalar", "backend=simd", "backend=simd;float_first=off"}) {
         CAPTURE(backend);
         auto k = compileWith(c, plastic, backend);

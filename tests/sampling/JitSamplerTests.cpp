@@ -363,7 +363,7 @@ TEST_CASE("jit sampling: bounded visible-normal weights and finite results on th
                     ndf, masking);
                 auto k = compile(text, std::string("backend=simd;math=") + math);
                 REQUIRE(k->samplerTier() == "jit");
-                REQUIRE(facet::planLowering(k->material(), facet::MathVariant::exact(), true).sampling.specular ==
+                REQUIRE(facet::planLowering(k->material(), facet::MathVariant::exact()).sampling.specular ==
                         facet::SpecularSampling::VisibleNormals);
                 ++kernels;
                 facet::Interpreter<double> interp(k->material(), k->energyTable());
@@ -499,14 +499,14 @@ TEST_CASE("jit sampling: float-first SIMD sampler, its guards and its fallback l
         auto floatFirst = compile(text, "backend=simd;width=8;math=exact");
         auto plain = compile(text, "backend=simd;width=8;math=exact;float_first=off");
         const facet::CheckedMaterial& m = floatFirst->material();
-        CHECK(facet::planLowering(m, facet::MathVariant::exact(), true).sampling.batchBodies == BatchBodies::FloatFirst);
+        CHECK(facet::planLowering(m, facet::MathVariant::exact()).sampling.batchBodies == BatchBodies::FloatFirst);
         // Fast kernels take the exact kernel's float body for eval, but
         // sample in their plain fast body.
-        CHECK(facet::planLowering(m, facet::MathVariant::fast(), true).batchBodies == BatchBodies::FloatFirst);
-        CHECK(facet::planLowering(m, facet::MathVariant::fast(), true).sampling.batchBodies == BatchBodies::Plain);
+        CHECK(facet::planLowering(m, facet::MathVariant::fast()).batchBodies == BatchBodies::FloatFirst);
+        CHECK(facet::planLowering(m, facet::MathVariant::fast()).sampling.batchBodies == BatchBodies::Plain);
         facet::MathVariant doubleOnly = facet::MathVariant::exact();
         doubleOnly.floatFirst = false;
-        CHECK(facet::planLowering(m, doubleOnly, true).sampling.batchBodies == BatchBodies::Plain);
+        CHECK(facet::planLowering(m, doubleOnly).sampling.batchBodies == BatchBodies::Plain);
 
         // Random wo over the hemisphere (down to n.wo ~ 1e-4) and u.
         std::mt19937_64 rng(21);

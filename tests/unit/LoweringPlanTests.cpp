@@ -30,8 +30,8 @@ CheckedMaterial material(const std::string& body) {
     return program.materials[0];
 }
 
-LoweringPlan exactPlan(const std::string& body) { return planLowering(material(body), MathVariant::exact(), true); }
-LoweringPlan fastPlan(const std::string& body) { return planLowering(material(body), MathVariant::fast(), true); }
+LoweringPlan exactPlan(const std::string& body) { return planLowering(material(body), MathVariant::exact()); }
+LoweringPlan fastPlan(const std::string& body) { return planLowering(material(body), MathVariant::fast()); }
 
 }  // namespace
 
@@ -39,7 +39,7 @@ TEST_SUITE("plan") {
 
 TEST_CASE("exact GGX with Schlick f0: a guarded float body and the double body for the rest") {
     CheckedMaterial m = material("input r = 0.5; ndf = ggx(r * r); masking = smith_height_correlated; fresnel = schlick(f0 = 0.04);");
-    LoweringPlan p = planLowering(m, MathVariant::exact(), true);
+    LoweringPlan p = planLowering(m, MathVariant::exact());
     CHECK(p.batchBodies == BatchBodies::FloatFirst);
     CHECK(p.batchBody.role == BodyRole::FloatGuarded);
     CHECK(p.batchBody.precise == Precision::Float);
@@ -52,8 +52,10 @@ TEST_CASE("exact GGX with Schlick f0: a guarded float body and the double body f
     CHECK(p.lambda == LambdaForm::RootSums);
     CHECK_FALSE(p.fresnel.rangeGuard);  // f0 = 0.04 >= 1e-6 at every angle
     CHECK(p.fresnel.atMostOne);
-    CHECK_FALSE(p.flushDenormals);
-    CHECK(p.oneLaneZeroesByBranch);  // exact: no MXCSR restore after the body
+    // Double bodies represent a float-subnormal cosine, the guarded body distrusts it.
+    CHECK_FALSE(p.batchBody.subnormalCosinesAsZero);
+    CHECK_FALSE(p.fallbackBody->subnormalCosinesAsZero);
+    CHECK_FALSE(p.scalarBody.subnormalCosinesAsZero);
     CHECK(printPlan(m, p).find("batch-bodies: float-first") != std::string::npos);
 }
 
@@ -94,7 +96,7 @@ TEST_CASE("no float-first body where float would lose accuracy or a table is rea
     CHECK(exactPlan("ndf = beckmann(0.3); masking = smith_separable;").batchBodies == BatchBodies::Plain);
     MathVariant doubleOnly = MathVariant::exact();
     doubleOnly.floatFirst = false;
-    CHECK(planLowering(material("ndf = ggx(0.3);"), doubleOnly, true).batchBodies == BatchBodies::Plain);
+    CHECK(planLowering(material("ndf = ggx(0.3);"), doubleOnly).batchBodies == BatchBodies::Plain);
 }
 
 TEST_CASE("a diffuse term keeps the output check of a guarded body") {
@@ -119,10 +121,12 @@ TEST_CASE("fast GGX: the exact float-first body where it applies, else a guarded
     CHECK(iso.batchBody.halfVector == HalfVectorForm::Estimated);  // f0 >= 1e-6
     CHECK_FALSE(iso.batchBody.scaleMaskingSums);
     CHECK(iso.scalarBody.scaleMaskingSums);
-    CHECK(iso.flushDenormals);
-    CHECK_FALSE(iso.oneLaneZeroesByBranch);
-    CHECK_FALSE(planLowering(material("ndf = ggx(0.3);"), MathVariant::fast(), false).flushDenormals);
-    CHECK(planLowering(material("ndf = ggx(0.3);"), MathVariant::fast(), false).oneLaneZeroesByBranch);
+    // Fast mode reads a float-subnormal cosine as 0 in its plain float
+    // bodies; its guarded body distrusts the lane.
+    CHECK(iso.scalarBody.subnormalCosinesAsZero);
+    CHECK_FALSE(iso.batchBody.subnormalCosinesAsZero);
+    REQUIRE(iso.fallbackBody);
+    CHECK(iso.fallbackBody->subnormalCosinesAsZero);
     // Equal constant alphas are one alpha.
     CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3);").ndfIsotropic);
     CHECK(fastPlan("ndf = ggx(alpha_x = 0.3, alpha_y = 0.3); fresnel = schlick(eta = 1.5);").batchBodies ==
@@ -139,16 +143,17 @@ TEST_CASE("fast GGX: the exact float-first body where it applies, else a guarded
     REQUIRE(aniso.fallbackBody);
     CHECK(aniso.fallbackBody->estimates);
     CHECK(aniso.fallbackBody->precise == Precision::Float);
-    CHECK(aniso.flushDenormals);
+    CHECK(aniso.fallbackBody->subnormalCosinesAsZero);
+    CHECK_FALSE(aniso.batchBody.subnormalCosinesAsZero);
     // ... but not with float_first=off, nor for a tolerance's model substitution,
     // nor where the exact kernel has no float-first body (Beckmann).
     MathVariant noFloatFirst = MathVariant::fast();
     noFloatFirst.floatFirst = false;
-    CHECK(planLowering(material("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5);"), noFloatFirst, true).batchBodies ==
+    CHECK(planLowering(material("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5);"), noFloatFirst).batchBodies ==
           BatchBodies::Plain);
     MathVariant schlick = MathVariant::fast();
     schlick.schlickDielectric = true;
-    CHECK(planLowering(material("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5); fresnel = dielectric(1.5);"), schlick, true)
+    CHECK(planLowering(material("ndf = ggx(alpha_x = 0.3, alpha_y = 0.5); fresnel = dielectric(1.5);"), schlick)
               .batchBodies == BatchBodies::Plain);
     CHECK(fastPlan("ndf = beckmann(alpha_x = 0.3, alpha_y = 0.5);").batchBodies == BatchBodies::Plain);
     // An f0 that can reach 0 keeps the cancellation-free 1 - cos and the F guard.
@@ -267,16 +272,16 @@ TEST_CASE("the Smith Lambda form and the model substitutions") {
     CHECK(st.lambdaTable->name() == "student_t_g1.8");
     MathVariant walter = MathVariant::exact();
     walter.walterLambda = true;
-    CHECK(planLowering(material("ndf = beckmann(0.3); masking = smith_separable;"), walter, true).lambda ==
+    CHECK(planLowering(material("ndf = beckmann(0.3); masking = smith_separable;"), walter).lambda ==
           LambdaForm::WalterFit);
-    CHECK(planLowering(material("ndf = ggx(0.3); masking = smith_separable;"), walter, true).lambda ==
+    CHECK(planLowering(material("ndf = ggx(0.3); masking = smith_separable;"), walter).lambda ==
           LambdaForm::RootSums);
     CHECK(walterLambdaApplies(material("ndf = blinn_phong(20); masking = smith_separable;")));
     CHECK_FALSE(walterLambdaApplies(material("ndf = ggx(0.3); masking = smith_separable;")));
     CHECK_FALSE(walterLambdaApplies(material("ndf = beckmann(0.3); masking = kelemen;")));
     MathVariant schlick = MathVariant::exact();
     schlick.schlickDielectric = true;
-    LoweringPlan p = planLowering(material("ndf = ggx(0.3); fresnel = dielectric(1.5);"), schlick, true);
+    LoweringPlan p = planLowering(material("ndf = ggx(0.3); fresnel = dielectric(1.5);"), schlick);
     CHECK(p.fresnel.substituteSchlick);
     CHECK_FALSE(p.fresnel.exactInFloat);
     CHECK(schlickDielectricApplies(material("ndf = ggx(0.3); fresnel = dielectric(1.5);")));

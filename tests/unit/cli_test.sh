@@ -382,11 +382,15 @@ expect_first_line "$err" "facet: --set: material 'test' has no input 'nosuch'" "
 # ir --plan: the lowering plan of the material, one decision per line.
 run "$FACET" ir test.mat --simd --plan
 expect_rc 0 "ir --plan"
-expect_eq "$(printf '%s\n' "$out" | grep -E '^(batch-bodies|smith-lambda|flush-denormals):')" \
-    "batch-bodies: float-first"$'\n'"smith-lambda: none"$'\n'"flush-denormals: no" "ir --plan: the decisions"
+expect_eq "$(printf '%s\n' "$out" | grep -E '^(batch-bodies|smith-lambda):')" \
+    "batch-bodies: float-first"$'\n'"smith-lambda: none" "ir --plan: the decisions"
+expect_eq "$(printf '%s\n' "$out" | grep -E '^fallback-body:' | grep -o 'subnormal-cosines-as-zero=[a-z]*')" \
+    "subnormal-cosines-as-zero=no" "ir --plan: exact double body keeps subnormal cosines"
 run "$FACET" ir test.mat --simd --plan --math fast
-expect_eq "$(printf '%s\n' "$out" | grep -E '^(variant|batch-bodies|flush-denormals):')" \
-    "variant: fast"$'\n'"batch-bodies: float-first"$'\n'"flush-denormals: yes" "ir --plan --math fast"
+expect_eq "$(printf '%s\n' "$out" | grep -E '^(variant|batch-bodies):')" \
+    "variant: fast"$'\n'"batch-bodies: float-first" "ir --plan --math fast"
+expect_eq "$(printf '%s\n' "$out" | grep -E '^fallback-body:' | grep -o 'subnormal-cosines-as-zero=[a-z]*')" \
+    "subnormal-cosines-as-zero=yes" "ir --plan --math fast: the plain fast body reads subnormal cosines as 0"
 run "$FACET" ir test.mat --simd --plan --assume unit
 expect_eq "$(printf '%s\n' "$out" | grep -E '^trust-inputs:')" "trust-inputs: yes" "ir --plan --assume unit"
 run "$FACET" ir test.mat --plan --assume nothing
