@@ -134,13 +134,13 @@ struct BodyPlan {
     // Whether the output needs the NaN/Inf/negative check: a guarded body
     // without a diffuse term has its value bounded by its guards.
     bool checkOutput = true;
-    // A float-subnormal n.wi or n.wo is read as 0: the plain fast bodies'
-    // float forms (the masking sums scaled by max(ci, co), the cosine
-    // products) are written for cosines that are 0 or normal, and a
-    // subnormal one would put 1/max(ci, co) at Inf. Reading them as 0 keeps
-    // the float-subnormal cosine the grazing direction that it is, at two
-    // compares a lane; flushing subnormals for the whole call (MXCSR) cost
-    // a serializing register write on entry and exit, 11-50 ns a call.
+    // A float-subnormal n.wi or n.wo is read as 0, what DAZ would make of
+    // it: the plain fast bodies' float forms (the masking sums scaled by
+    // max(ci, co), the cosine products) are written for cosines that are 0
+    // or normal, and anisotropic student_t's went wrong on subnormal ones.
+    // Reading them as 0 costs a compare and a select per direction, where
+    // setting FTZ/DAZ for the call took two MXCSR writes, which serialize
+    // the FP pipeline (docs/perf-log.md).
     // Guarded bodies distrust small cosines anyway, and double bodies
     // represent them.
     bool subnormalCosinesAsZero = false;
