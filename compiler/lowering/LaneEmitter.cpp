@@ -63,7 +63,7 @@ void LaneEmitter::distrust(Value* cond) {
 
 LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value*, 3> wo,
                                       const std::vector<Value*>& slots) {
-    LaneGeometry geo = geometry(wi, wo);
+    LaneGeometry geo = geometry(readDirection(wi), readDirection(wo));
     lowerInputsAndLets(slots);
 
     MathEmitter& fm = floatMath_;
@@ -237,23 +237,22 @@ LaneEmitter::CorrectedPair LaneEmitter::floatPairCorrections(const std::array<Va
     return out;
 }
 
+std::array<Value*, 3> LaneEmitter::readDirection(const std::array<Value*, 3>& w) {
+    if (!body.subnormalCosinesAsZero) return w;
+    MathEmitter& fm = floatMath_;
+    return {w[0], w[1], fm.select(fm.lt(fm.abs(w[2]), fm.c(FLT_MIN)), fm.c(0.0), w[2])};
+}
+
 // SPEC 2: non-finite or non-unit directions are invalid lanes; valid ones
 // are renormalized. Normalization and the half vector are computed in the
 // precise type (double in exact mode): wi + wo cancels when the directions
 // are nearly opposite, and the float rounding of the renormalization would
 // then decide h (and so D, G and F) by itself. Float bodies (the plan's
 // correctedSums) sum the float inputs and correct for the normalization.
-LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wiIn, const std::array<Value*, 3>& woIn,
+LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo,
                                    bool wiSampled) {
     MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
-    std::array<Value*, 3> wi = wiIn, wo = woIn;
-    if (body.subnormalCosinesAsZero) {
-        // (A sampled wi is the body's own direction.)
-        auto asZero = [&](Value* z) { return fm.select(fm.lt(fm.abs(z), fm.c(FLT_MIN)), fm.c(0.0), z); };
-        if (!wiSampled) wi[2] = asZero(wi[2]);
-        wo[2] = asZero(wo[2]);
-    }
     std::array<Value*, 3> wiD, woD;
     std::array<Value*, 3> wiF{}, woF{};  // unit directions in float, where unitDirection() made them
     std::array<Value*, 3> hD, diff;

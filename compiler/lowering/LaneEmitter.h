@@ -251,6 +251,10 @@ public:
 
 private:
     llvm::Type* boolType();
+    // A direction as the body reads it: a float-subnormal z is 0 where the
+    // plan says so (BodyPlan::subnormalCosinesAsZero). Every entry reads its
+    // input directions through it once, before anything else uses them.
+    std::array<llvm::Value*, 3> readDirection(const std::array<llvm::Value*, 3>& w);
     // `wiSampled`: wi is a float body's own sample (unit to float rounding).
     LaneGeometry geometry(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
                           bool wiSampled = false);

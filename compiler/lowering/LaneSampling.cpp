@@ -238,12 +238,13 @@ HalfNormal halfNormal(MathEmitter& pm, const Vec& wi, const Vec& wo) {
 
 }  // namespace
 
-LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woIn, const Vec& u, const std::vector<Value*>& slots) {
+LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woArg, const Vec& u, const std::vector<Value*>& slots) {
     MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
     llvm::IRBuilder<>& b = builder;
     const SamplingPlan& sp = plan.sampling;
     internal_assert(sp.specular != SpecularSampling::None) << "a sampler without a specular technique";
+    const Vec woIn = readDirection(woArg);
     Vec wo;
     if (body.correctedSums) {
         Value* corr = unitCorrection(woIn);
@@ -376,8 +377,8 @@ LaneEmitter::PdfResult LaneEmitter::emitPdf(const Vec& wiIn, const Vec& woIn, co
     MathEmitter& pm = preciseMath_;
     internal_assert(plan.sampling.specular != SpecularSampling::None) << "a pdf without a specular technique";
     Vec wiF{}, woF{};
-    Vec wi = unitDirection(wiIn, wiF);
-    Vec wo = unitDirection(woIn, woF);
+    Vec wi = unitDirection(readDirection(wiIn), wiF);
+    Vec wo = unitDirection(readDirection(woIn), woF);
     lowerInputsAndLets(slots);
 
     SamplingTerms t = samplingTerms(wo);

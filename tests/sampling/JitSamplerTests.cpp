@@ -565,3 +565,77 @@ TEST_CASE("jit sampling: float-first SIMD sampler, its guards and its fallback l
         }
     }
 }
+
+// Fast kernels read a float-subnormal n.wo or n.wi as 0, in eval and in
+// the sampler alike: a lane whose wo.z is 7.2e-43 or 3e-39 gives the bits
+// of the same lane with wo.z = 0 (at the horizon: no sample and no
+// density), everywhere the sampler reads wo: the frame it draws in, the
+// density and f; the same for wi.z in the density.
+TEST_CASE("jit sampling: fast samplers read a float-subnormal cosine as 0") {
+    const char* materials[] = {
+        "material t { input roughness = 0.3; ndf = ggx(roughness); masking = smith_height_correlated; "
+        "fresnel = schlick(0.04); diffuse = lambert(0.5); }",
+        "material t { ndf = ggx(alpha_x = 0.2, alpha_y = 0.05); masking = smith_height_correlated; "
+        "fresnel = dielectric(eta = 1.5); }"};
+    for (const char* text : materials) {
+        for (const char* options : {"backend=simd;width=8;math=fast", "backend=simd;width=16;math=fast",
+                                    "backend=scalar;math=fast"}) {
+            INFO(text, "\n", options);
+            auto k = compile(text, options);
+            const facet::LoweringPlan plan = facet::planLowering(k->material(), facet::MathVariant::fast());
+            CHECK(plan.sampling.body.subnormalCosinesAsZero);
+            std::mt19937_64 rng(28);
+            std::uniform_real_distribution<double> uniform(0, 1);
+            Lanes subnormal(viewAt(45), 301, rng);
+            const float tiny[2] = {7.2e-43f, 3e-39f};
+            for (int64_t i = 0; i < subnormal.size(); ++i) {
+                V3 w = viewAt(89 * uniform(rng), 2 * kPi * uniform(rng));
+                subnormal.wo[0][i] = float(w.x), subnormal.wo[1][i] = float(w.y), subnormal.wo[2][i] = float(w.z);
+                if (i % 3 == 0) {
+                    // A unit direction whose z is subnormal.
+                    double phi = 2 * kPi * uniform(rng);
+                    subnormal.wo[0][i] = float(std::cos(phi)), subnormal.wo[1][i] = float(std::sin(phi));
+                    subnormal.wo[2][i] = tiny[(i / 3) % 2];
+                }
+            }
+            Lanes zero = subnormal;
+            for (int64_t i = 0; i < zero.size(); i += 3) zero.wo[2][i] = 0;
+            CHECK(subnormal.sample(*k) == zero.sample(*k));
+            int sampledSubnormal = 0;
+            for (int64_t i = 0; i < subnormal.size(); ++i) {
+                INFO("lane ", i, " wo.z ", subnormal.wo[2][i]);
+                CHECK(subnormal.pdf[i] == zero.pdf[i]);
+                for (int c = 0; c < 3; ++c) {
+                    CHECK(subnormal.wi[c][i] == zero.wi[c][i]);
+                    CHECK(subnormal.weight[c][i] == zero.weight[c][i]);
+                }
+                sampledSubnormal += i % 3 == 0 && subnormal.pdf[i] > 0;
+            }
+            CHECK(sampledSubnormal == 0);
+            // The density: lanes with wo.z subnormal (those above) and
+            // lanes with a normal wo and wi.z subnormal, against the same
+            // lanes with 0.
+            std::array<std::vector<float>, 3> wiTiny, wiZero;
+            for (int64_t i = 0; i < subnormal.size(); ++i) {
+                V3 v = viewAt(89 * uniform(rng), 2 * kPi * uniform(rng));
+                const float w[3] = {float(v.x), float(v.y), float(v.z)};
+                for (int c = 0; c < 3; ++c) wiTiny[c].push_back(w[c]), wiZero[c].push_back(w[c]);
+                if (i % 3 == 1) wiTiny[2][i] = tiny[i % 2], wiZero[2][i] = 0;
+            }
+            std::vector<float> pdfTiny(subnormal.size(), -1), pdfZero(subnormal.size(), -1);
+            auto pointers = [](const std::array<std::vector<float>, 3>& w) {
+                return std::array<const float*, 3>{w[0].data(), w[1].data(), w[2].data()};
+            };
+            CHECK(k->pdfBatch(subnormal.size(), pointers(wiTiny).data(), pointers(subnormal.wo).data(), nullptr,
+                              pdfTiny.data()) == k->pdfBatch(subnormal.size(), pointers(wiZero).data(),
+                                                             pointers(zero.wo).data(), nullptr, pdfZero.data()));
+            int positive = 0;
+            for (int64_t i = 0; i < subnormal.size(); ++i) {
+                INFO("pdf lane ", i);
+                CHECK(pdfTiny[i] == pdfZero[i]);
+                positive += pdfZero[i] > 0;
+            }
+            CHECK(positive > 0);
+        }
+    }
+}
