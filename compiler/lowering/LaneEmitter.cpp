@@ -249,8 +249,7 @@ std::array<Value*, 3> LaneEmitter::readDirection(const std::array<Value*, 3>& w)
 // are nearly opposite, and the float rounding of the renormalization would
 // then decide h (and so D, G and F) by itself. Float bodies (the plan's
 // correctedSums) sum the float inputs and correct for the normalization.
-LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo,
-                                   bool wiSampled) {
+LaneGeometry LaneEmitter::geometry(const std::array<Value*, 3>& wi, const std::array<Value*, 3>& wo, bool wiSampled) {
     MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
     std::array<Value*, 3> wiD, woD;

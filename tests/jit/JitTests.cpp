@@ -274,9 +274,9 @@ TEST_CASE("a SIMD kernel's one-lane eval equals its batch lane, with few and wit
 TEST_CASE("fast kernels read a float-subnormal cosine as 0, leave MXCSR alone, and give a flushing host the same bits") {
     // The plain fast bodies read a float-subnormal n.wi or n.wo as 0
     // (BodyPlan::subnormalCosinesAsZero), as a host's FTZ/DAZ would, rather
-    // than setting FTZ/DAZ for every call. With neither, the hard-case test
-    // found anisotropic student_t at such a mirror pair (wi = (x, y, 7.2e-43),
-    // wo = (-x, -y, 7.2e-43)) 2.8e5 times the reference in fast mode.
+    // than setting FTZ/DAZ for every call. With neither, fast anisotropic
+    // student_t at such a mirror pair (wi = (x, y, 7.2e-43), wo = (-x, -y,
+    // 7.2e-43)) comes out 2.8e5 times the reference.
     Compiler compiler;
     const unsigned host = _mm_getcsr();
     // The control bits; the exception flags (bits 0-5) are sticky status
