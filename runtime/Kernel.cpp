@@ -13,6 +13,7 @@
 #include "ReferenceComparison.h"
 #include "Sampling.h"
 #include "TableCache.h"
+#include "TierUp.h"
 
 #include <llvm/Config/llvm-config.h>
 #include <llvm/IR/LLVMContext.h>
@@ -322,59 +323,6 @@ struct KernelCode {
         tierUpPending = false;
         settled.notify_all();
     }
-};
-
-// One background thread per Compiler running tier-up jobs in order. A job
-// is called with closing = false normally, and with closing = true when the
-// Compiler is being destroyed: then it does only work whose result outlives
-// the Compiler (see Compiler::tierUp). A Compiler may be a static that
-// exit() destroys; FacetJit::warmUp() keeps LLVM's state alive until then,
-// and Facet's own process-wide state is never destroyed (Immortal.h).
-class TierUpWorker {
-public:
-    using Job = std::function<void(bool closing)>;
-    void post(Job job) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        jobs_.push_back(std::move(job));
-        if (!thread_.joinable()) thread_ = std::thread([this] { loop(); });
-        wake_.notify_one();
-    }
-    // Blocks until every job posted so far has finished.
-    void drain() {
-        std::unique_lock<std::mutex> lock(mutex_);
-        idle_.wait(lock, [this] { return jobs_.empty() && !busy_; });
-    }
-    ~TierUpWorker() {
-        {
-            std::lock_guard<std::mutex> lock(mutex_);
-            closing_ = true;
-            wake_.notify_one();
-        }
-        if (thread_.joinable()) thread_.join();
-    }
-
-private:
-    void loop() {
-        std::unique_lock<std::mutex> lock(mutex_);
-        for (;;) {
-            wake_.wait(lock, [this] { return closing_ || !jobs_.empty(); });
-            if (jobs_.empty()) return;  // closing, and nothing left
-            Job job = std::move(jobs_.front());
-            jobs_.pop_front();
-            busy_ = true;
-            bool closing = closing_;
-            lock.unlock();
-            job(closing);
-            lock.lock();
-            busy_ = false;
-            idle_.notify_all();
-        }
-    }
-    std::mutex mutex_;
-    std::condition_variable wake_, idle_;
-    std::deque<Job> jobs_;
-    bool busy_ = false, closing_ = false;
-    std::thread thread_;
 };
 
 Kernel::~Kernel() = default;
@@ -810,7 +758,7 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
         auto job = std::make_shared<TierUpJob>(TierUpJob{kernel->code_, kernel->material_, kernel->energyTable_,
                                                          lowering, prefix, key, cachePath, options.cache,
                                                          CachedKernel{"", cached->variant, cached->measuredError}});
-        tierUpWorker_->post([this, job](bool closing) { tierUp(*job, closing); });
+        tierUpWorker_->post([this, job](TierUpWorker::Run run) { tierUp(*job, run); });
     }
     kernel->compileMillis_ = millisSince(start);
     return kernel;
@@ -824,10 +772,15 @@ double threadCpuMillis() {
 }
 }  // namespace
 
-void Compiler::tierUp(const TierUpJob& job, bool closing) {
+void Compiler::tierUp(const TierUpJob& job, TierUpWorker::Run run) {
     std::shared_ptr<KernelCode> code = job.code.lock();
+    if (run == TierUpWorker::Run::Abandoned) {
+        if (code) code->settle("not optimized: the process forked before its tier-up ran", 0);
+        return;
+    }
     // A released kernel's optimized code is still worth having in a cache;
     // once the Compiler is closing, only in the disk cache, which outlives it.
+    const bool closing = run == TierUpWorker::Run::Closing;
     const bool forDisk = job.cache == CompileOptions::Cache::On && !job.cachePath.empty();
     const bool wanted = closing ? forDisk : code || job.cache != CompileOptions::Cache::Off;
     if (!wanted) {

@@ -32,6 +32,7 @@
 #include "Lowering.h"
 #include "Material.h"
 #include "Specialize.h"
+#include "TierUp.h"
 
 #include <cstdint>
 #include <map>
@@ -49,7 +50,6 @@ struct KernelCode;
 struct PipelineRun;
 struct PipelineControl;
 struct PipelineTarget;
-class TierUpWorker;
 class EnergyTable;
 class TableCache;
 class CacheDirectory;
@@ -147,7 +147,7 @@ public:
     // n lanes, SoA (facet.h). Returns the number of invalid lanes (their rgb
     // is 0), 0 for n = 0 and -1 for n < 0. `status`, when not null, receives
     // one byte per lane: 0 valid, 1 invalid (a non-finite or non-unit
-    // direction, a non-finite input, a model parameter not finite in float,
+    // direction, a non-finite input it reads, a model parameter not finite in float,
     // or a result float cannot hold) -- on every backend alike; compiled
     // kernels under assume=unit return 0 and a status of 0s.
     int64_t evalBatch(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
@@ -158,7 +158,7 @@ public:
     // and u[2] place the direction) and gives the mixture's pdf at wi and
     // weight = f (n.wi) / pdf; pdf() is that density for any wi. sample()
     // returns false and pdf() 0 for an invalid lane: a non-finite or
-    // non-unit direction, u outside [0, 1), a non-finite input, or a result
+    // non-unit direction, u outside [0, 1), a non-finite input it reads, or a result
     // float cannot hold; its outputs are 0. With n.wo <= 0 there is no
     // sample (wi = 0, pdf = 0, weight = 0, a valid lane); a sample below
     // the horizon is valid with weight 0 and its pdf reported.
@@ -313,7 +313,7 @@ private:
         CompileOptions::Cache cache;
         CachedKernel record;  // variant name and measured error, for the caches
     };
-    void tierUp(const TierUpJob& job, bool closing);
+    void tierUp(const TierUpJob& job, TierUpWorker::Run run);
 
     std::shared_ptr<FacetJit> jit_;
     std::shared_ptr<CacheDirectory> cache_;  // kernel objects; tables/ below it

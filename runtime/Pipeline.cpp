@@ -1,6 +1,8 @@
 // Pipeline: runs the stages of a kernel compile in order (Pipeline.h).
 #include "Pipeline.h"
 
+#include "CompileStack.h"
+
 #include "Checker.h"
 #include "Diagnostics.h"
 #include "Specialize.h"
@@ -149,9 +151,11 @@ bool runKernelPipeline(PipelineRun& run, const PipelineControl& control, const P
                 if (!specialize(run, tables, diags)) return false;
                 break;
             case PipelineStage::Planned: plan(run, control, target); break;
-            case PipelineStage::Lowered: lower(run, control); break;
-            case PipelineStage::Optimized: optimize(run, target); break;
-            case PipelineStage::Emitted: emit(run, target); break;
+            // LLVM's stages recurse as deep as the material is long: on a
+            // stack of known size, whatever thread the host calls from.
+            case PipelineStage::Lowered: onCompileStack([&] { lower(run, control); }); break;
+            case PipelineStage::Optimized: onCompileStack([&] { optimize(run, target); }); break;
+            case PipelineStage::Emitted: onCompileStack([&] { emit(run, target); }); break;
         }
         run.reached = next;
         if (control.afterStage) control.afterStage(next, run);
