@@ -32,6 +32,9 @@ struct BuiltinFunction {
     // promoted), float otherwise.
     bool makesRgb;
     const char* signature;  // for diagnostics, e.g. "clamp(x, lo, hi)"
+    // Float operations per channel its lowering emits, weighted by what they
+    // cost LLVM to compile (the checker's budget, ComputeCost.h).
+    long cost;
 };
 
 const std::vector<BuiltinFunction>& builtinFunctions();

@@ -1,6 +1,7 @@
 // Checker: resolution, typing and material rules (see Checker.h).
 #include "Checker.h"
 
+#include "ComputeCost.h"
 #include "ExprEval.h"
 #include "KullaConty.h"
 #include "LambdaTable.h"
@@ -60,6 +61,41 @@ std::vector<double> CheckedMaterial::defaultSlots() const {
     for (const CheckedInput& in : inputs)
         for (int i = 0; i < in.slotCount(); ++i) slots[in.firstSlot + i] = in.defaultValue[i];
     return slots;
+}
+
+CheckedMaterial::Reads CheckedMaterial::readByModels() const {
+    Reads read{std::vector<bool>(inputs.size(), false), std::vector<bool>(lets.size(), false)};
+    // Names an expression uses; lets are followed once each (a let only
+    // names lets defined before it, so the walk ends).
+    std::vector<const Expr*> pending;
+    for (int s = 0; s < kModelSlotCount; ++s)
+        for (const ExprPtr& arg : use(ModelSlot(s)).args)
+            if (arg) pending.push_back(arg.get());
+    while (!pending.empty()) {
+        const Expr& e = *pending.back();
+        pending.pop_back();
+        switch (e.kind) {
+            case ExprKind::Number: break;
+            case ExprKind::Name: {
+                const auto& n = static_cast<const NameExpr&>(e);
+                if (n.binding == BindingKind::Input) read.inputs.at(size_t(n.index)) = true;
+                else if (n.binding == BindingKind::Let && !read.lets.at(size_t(n.index))) {
+                    read.lets[size_t(n.index)] = true;
+                    pending.push_back(lets[size_t(n.index)].value.get());
+                }
+                break;
+            }
+            case ExprKind::Unary: pending.push_back(static_cast<const UnaryExpr&>(e).operand.get()); break;
+            case ExprKind::Binary:
+                pending.push_back(static_cast<const BinaryExpr&>(e).lhs.get());
+                pending.push_back(static_cast<const BinaryExpr&>(e).rhs.get());
+                break;
+            case ExprKind::Call:
+                for (const Argument& a : static_cast<const CallExpr&>(e).args) pending.push_back(a.value.get());
+                break;
+        }
+    }
+    return read;
 }
 
 const CheckedMaterial* CheckedProgram::find(std::string_view name) const {
@@ -160,6 +196,8 @@ public:
         if (out_.compensatesEnergy() && seen[int(ModelSlot::Ndf)] && out_.ndf.model &&
             diags_.diagnostics().size() == errorsBefore && !diags_.full())
             if (auto why = kullaContyUnsupported(out_)) diags_.error(why->loc, why->message);  // KullaConty.h
+        if (diags_.diagnostics().size() == errorsBefore && !diags_.full())
+            if (auto why = exceedsComputeBudget(out_)) diags_.error(why->loc, why->message);
         if (seen[int(ModelSlot::Ndf)] && out_.ndf.model && out_.masking.model && out_.masking.model->smith &&
             ndfEntry(*out_.ndf.model).tabulatedLambda && diags_.diagnostics().size() == errorsBefore && !diags_.full()) {
             SourceLoc loc = out_.masking.loc;

@@ -263,7 +263,7 @@ ResolvedMaterial<Real> Interpreter<Real>::resolve(const Real* slots) const {
         v.rgb = in.type == ValueType::Rgb;
         for (int ch = 0; ch < in.slotCount(); ++ch) {
             Real x = slots ? slots[in.firstSlot + ch] : Real(in.defaultValue[ch]);
-            if (!finite(x)) r.valid = false;
+            if (!finite(x) && read_.inputs[i]) r.valid = false;
             if (in.hasRange) x = x < Real(in.lo) ? Real(in.lo) : (x > Real(in.hi) ? Real(in.hi) : x);
             v.c[ch] = x;
         }
@@ -275,7 +275,8 @@ ResolvedMaterial<Real> Interpreter<Real>::resolve(const Real* slots) const {
         internal_assert(n.binding != BindingKind::Unresolved) << "unresolved name " << n.name;
         return n.binding == BindingKind::Input ? inputs.at(n.index) : lets.at(n.index);
     };
-    for (const CheckedLet& let : m.lets) lets.push_back(evaluateExpr<Real>(*let.value, lookup));
+    for (size_t i = 0; i < m.lets.size(); ++i)
+        lets.push_back(read_.lets[i] ? evaluateExpr<Real>(*m.lets[i].value, lookup) : Value<Real>{});
 
     // A model argument, clamped to its catalog domain: NaN is invalid;
     // clamping happens before the finiteness test so that e.g.

@@ -103,14 +103,15 @@ public:
     // builds its table in memory on first use (~0.5 s).
     explicit Interpreter(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> energyTable = nullptr)
         : material_(material),
+          read_(material.readByModels()),
           energy_(material.compensatesEnergy()
                       ? std::make_shared<EnergyTableSlot>(energyTableKey(material), std::move(energyTable))
                       : nullptr) {}
 
     // Evaluates every let and model argument for the given slot values
     // (material().slotCount of them; null means all defaults). Inputs are
-    // clamped to their declared ranges; a non-finite input or parameter
-    // makes the result invalid.
+    // clamped to their declared ranges; a non-finite input that the material
+    // reads, or a non-finite parameter, makes the result invalid.
     ResolvedMaterial<Real> resolve(const Real* slots) const;
 
     // Full evaluation with the SPEC section 2 conventions: directions that
@@ -129,6 +130,7 @@ public:
 
 private:
     const CheckedMaterial& material_;
+    CheckedMaterial::Reads read_;  // what the models read: nothing else is evaluated
     std::shared_ptr<EnergyTableSlot> energy_;  // kulla_conty only
 };
 

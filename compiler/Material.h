@@ -63,6 +63,14 @@ struct CheckedMaterial {
     std::string slotName(int slot) const;
     // Default values of all slots, in slot order.
     std::vector<double> defaultSlots() const;
+    // Which inputs and lets (in their vectors' order) the model arguments
+    // read, directly or through lets. What nothing reads cannot change f:
+    // every evaluator skips it, so that a non-finite value in an unread
+    // input does not invalidate the lane and compiled kernels never load it.
+    struct Reads {
+        std::vector<bool> inputs, lets;
+    };
+    Reads readByModels() const;
 };
 
 // All materials of one file, checked.

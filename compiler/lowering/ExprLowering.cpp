@@ -27,8 +27,13 @@ void LaneEmitter::lowerInputsAndLets(const std::vector<Value*>& slots) {
     MathEmitter& fm = floatMath_;
     MathEmitter& em = expressionMath();
     inputs_.clear();
-    for (const CheckedInput& in : material.inputs) {
+    for (size_t i = 0; i < material.inputs.size(); ++i) {
+        const CheckedInput& in = material.inputs[i];
         LVal v;
+        if (!plan.reads.inputs[i]) {  // never loaded (KernelEntries), never referenced
+            inputs_.push_back(v);
+            continue;
+        }
         v.rgb = in.type == ValueType::Rgb;
         for (int ch = 0; ch < in.slotCount(); ++ch) {
             Value* x = slots.at(in.firstSlot + ch);
@@ -41,7 +46,8 @@ void LaneEmitter::lowerInputsAndLets(const std::vector<Value*>& slots) {
         inputs_.push_back(v);
     }
     lets_.clear();
-    for (const CheckedLet& let : material.lets) lets_.push_back(lower(*let.value));
+    for (size_t i = 0; i < material.lets.size(); ++i)
+        lets_.push_back(plan.reads.lets[i] ? lower(*material.lets[i].value) : LVal{});
 }
 
 // x^k for a small integer k, by repeated squaring.

@@ -100,7 +100,12 @@ LaneOutputs emitBodies(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type*
     // and leaves the outputs bit-identical and batches of untrusted lanes
     // as fast as before (docs/perf-log.md).
     const size_t outputs = fl.values.size();
-    std::vector<llvm::Type*> argTypes(in.size() + slots.size(), laneTy);
+    // Its arguments: the lane's inputs and the slots the material reads
+    // (null in `slots` for the others).
+    std::vector<size_t> passed;
+    for (size_t s = 0; s < slots.size(); ++s)
+        if (slots[s]) passed.push_back(s);
+    std::vector<llvm::Type*> argTypes(in.size() + passed.size(), laneTy);
     llvm::Type* maskTy = fl.invalid->getType();
     std::vector<llvm::Type*> resultTypes(outputs, laneTy);
     resultTypes.push_back(maskTy);
@@ -115,9 +120,9 @@ LaneOutputs emitBodies(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type*
     preciseFn->addFnAttr(llvm::Attribute::OptimizeNone);
     {
         llvm::IRBuilder<> pb(llvm::BasicBlock::Create(ctx, "entry", preciseFn));
-        std::vector<llvm::Value*> pin, pslots;
+        std::vector<llvm::Value*> pin, pslots(slots.size(), nullptr);
         for (size_t a = 0; a < in.size(); ++a) pin.push_back(preciseFn->getArg(unsigned(a)));
-        for (size_t s = 0; s < slots.size(); ++s) pslots.push_back(preciseFn->getArg(unsigned(in.size() + s)));
+        for (size_t p = 0; p < passed.size(); ++p) pslots[passed[p]] = preciseFn->getArg(unsigned(in.size() + p));
         LaneEmitter preciseLanes(k.material, plan, *fallback, k.options.energyTable, pb, laneTy, module);
         BodyLanes pr = emitBody(preciseLanes, pin, pslots);
         llvm::Value* agg = llvm::UndefValue::get(resultTy);
@@ -133,7 +138,7 @@ LaneOutputs emitBodies(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type*
 
     b.SetInsertPoint(precise);
     std::vector<llvm::Value*> args(in.begin(), in.end());
-    args.insert(args.end(), slots.begin(), slots.end());
+    for (size_t s : passed) args.push_back(slots[s]);
     llvm::CallInst* call = b.CreateCall(preciseFn, args);
     call->setCallingConv(llvm::CallingConv::Fast);
     std::vector<llvm::Value*> mixed;
@@ -202,7 +207,8 @@ llvm::Function* emitScalarFunction(const KernelContext& k, llvm::Module& module,
         std::vector<double> d = mat.defaultSlots();
         auto* defaults = defaultsArray(module, std::vector<float>(d.begin(), d.end()), name + ".defaults");
         llvm::Value* base = b.CreateSelect(b.CreateIsNull(inP), defaults, inP);
-        for (int s = 0; s < mat.slotCount; ++s) slots.push_back(b.CreateLoad(f32, b.CreateConstGEP1_32(f32, base, s)));
+        for (int s = 0; s < mat.slotCount; ++s)
+            slots.push_back(k.plan.slotRead(mat, s) ? b.CreateLoad(f32, b.CreateConstGEP1_32(f32, base, s)) : nullptr);
     }
     LaneOutputs r = lanes(b, f32, in, slots);
     size_t next = 0;
@@ -272,9 +278,14 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
     auto* exit = llvm::BasicBlock::Create(ctx, "exit", fn);
 
     b.SetInsertPoint(entry);
+    // The slots the material reads: an unread one is never loaded, so that
+    // a material's unused inputs cost nothing (no stream, no register).
+    std::vector<int> readSlots;
+    for (int s = 0; s < mat.slotCount; ++s)
+        if (k.plan.slotRead(mat, s)) readSlots.push_back(s);
     // The stage buffers of the partial chunk (below), in the entry block:
     // static allocas.
-    const int streams = shape.inStreams() + mat.slotCount;
+    const int streams = shape.inStreams() + int(readSlots.size());
     const int outStreams = shape.outStreams();
     llvm::Value* stageIn = b.CreateAlloca(vecTy, b.getInt32(streams), "stage.in");
     llvm::Value* stageOut = b.CreateAlloca(vecTy, b.getInt32(outStreams), "stage.out");
@@ -293,7 +304,7 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
     // constant array of defaults when inputs or inputs[s] is NULL).
     std::vector<llvm::Value*> slotBase, slotStep;
     std::vector<double> defaults = mat.defaultSlots();
-    for (int s = 0; s < mat.slotCount; ++s) {
+    for (int s : readSlots) {
         auto* dflt = defaultsArray(module, std::vector<float>(W, float(defaults[s])), name + ".default" + std::to_string(s));
         llvm::Value* inputsNull = b.CreateIsNull(inA);
         llvm::Value* slotPtrAddr = b.CreateSelect(inputsNull, dflt, b.CreateConstGEP1_32(ptr, inA, s));
@@ -339,9 +350,9 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
             streamPtr.push_back(b.CreateGEP(f32, inP[size_t(3 * g + c)], i));
             padding.push_back(shape.inputs[g][c]);
         }
-    for (int s = 0; s < mat.slotCount; ++s) {
-        streamPtr.push_back(b.CreateGEP(f32, slotBase[s], b.CreateMul(i, slotStep[s])));
-        padding.push_back(float(defaults[s]));
+    for (size_t r = 0; r < readSlots.size(); ++r) {
+        streamPtr.push_back(b.CreateGEP(f32, slotBase[r], b.CreateMul(i, slotStep[r])));
+        padding.push_back(float(defaults[size_t(readSlots[r])]));
     }
     auto* stageBlock = llvm::BasicBlock::Create(ctx, "stage", fn);
     auto* compute = llvm::BasicBlock::Create(ctx, "compute", fn);
@@ -373,11 +384,11 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
         src.back()->addIncoming(streamPtr[s], bodyEntry);
         src.back()->addIncoming(stagePtr[s], stageBlock);
     }
-    std::vector<llvm::Value*> in, slots, out;
+    std::vector<llvm::Value*> in, slots(size_t(mat.slotCount), nullptr), out;
     for (int s = 0; s < streams; ++s) {
         llvm::Value* v = b.CreateAlignedLoad(vecTy, src[s], llvm::Align(4));
         if (s < shape.inStreams()) in.push_back(v);
-        else slots.push_back(v);
+        else slots[size_t(readSlots[size_t(s - shape.inStreams())])] = v;
     }
     for (int c = 0; c < outStreams; ++c)
         out.push_back(b.CreateSelect(partial, b.CreateConstGEP1_32(vecTy, stageOut, c), b.CreateGEP(f32, outP[c], i)));

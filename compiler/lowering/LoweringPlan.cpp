@@ -3,6 +3,8 @@
 #include "LoweringPlan.h"
 
 #include "Diagnostics.h"
+
+#include <algorithm>
 #include "Specialize.h"
 #include "TermEmitters.h"
 
@@ -239,6 +241,15 @@ SpecularSampling plannedSpecularSampling(const CheckedMaterial& material) {
     return visible ? SpecularSampling::VisibleNormals : SpecularSampling::NdfNormals;
 }
 
+bool LoweringPlan::slotRead(const CheckedMaterial& material, int slot) const {
+    for (size_t i = 0; i < material.inputs.size(); ++i) {
+        const CheckedInput& in = material.inputs[i];
+        if (slot >= in.firstSlot && slot < in.firstSlot + in.slotCount()) return reads.inputs.at(i);
+    }
+    internal_error << "slot " << slot << " of no input";
+    return false;
+}
+
 LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs) {
     const MaterialEmitters em = termEmitters(material);
     LoweringPlan plan;
@@ -246,6 +257,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     plan.trustInputs = trustInputs;
     plan.ndfIsotropic = ndfIsIsotropic(material.ndf);
     plan.compensatesEnergy = material.compensatesEnergy();
+    plan.reads = material.readByModels();
 
     if (!material.masking.model->smith)
         plan.lambda = LambdaForm::None;
@@ -359,6 +371,9 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
        << " at-most-one=" << yesNo(plan.fresnel.atMostOne) << " can-vanish=" << yesNo(plan.fresnel.canVanish) << "\n";
     os << "energy-compensation: " << yesNo(plan.compensatesEnergy) << "\n";
     os << "trust-inputs: " << yesNo(plan.trustInputs) << "\n";
+    auto count = [](const std::vector<bool>& v) { return std::count(v.begin(), v.end(), true); };
+    os << "reads: inputs " << count(plan.reads.inputs) << " of " << plan.reads.inputs.size() << ", lets "
+       << count(plan.reads.lets) << " of " << plan.reads.lets.size() << "\n";
     for (int s = 0; s < kModelSlotCount; ++s) {
         const ModelUse& use = material.use(ModelSlot(s));
         for (int p = 0; p < int(plan.params[s].size()); ++p) {

@@ -214,6 +214,11 @@ struct LoweringPlan {
     // two-body kernels; so its outputs are bit-identical to the default's
     // there.
     bool trustInputs = false;
+    // What the model arguments read (CheckedMaterial::readByModels): only
+    // those inputs are loaded and tested, only those lets lowered.
+    CheckedMaterial::Reads reads;
+    // Whether slot s (CheckedMaterial's flat slot index) is read.
+    bool slotRead(const CheckedMaterial& material, int slot) const;
     SamplingPlan sampling;
     // By ModelSlot, then the catalog's canonical parameter index.
     std::array<std::vector<ParamPlan>, kModelSlotCount> params;

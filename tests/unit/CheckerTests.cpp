@@ -6,12 +6,15 @@
 // facet_input_count / facet_input_name and the CSV columns of `facet eval`),
 // so their order and names ("tint.r") are pinned here exactly.
 #include "Checker.h"
+#include "ComputeCost.h"
 #include "Interpreter.h"
 #include "TestUtil.h"
 
 #include <doctest/doctest.h>
 
 #include <atomic>
+#include <cmath>
+#include <fmt/format.h>
 #include <string>
 #include <thread>
 #include <vector>
@@ -308,3 +311,67 @@ TEST_CASE("two compilations in one process do not interfere") {
 }
 
 }  // TEST_SUITE
+
+TEST_CASE("compute budget: what a material computes is bounded, at the statement that passes it") {
+    // A let chain: 20 for reading r, then one addition per let.
+    auto chain = [](int lets) {
+        std::string body = "input r = 0.5 in 0 .. 1;\nlet a0 = r;\n";
+        for (int i = 1; i < lets; ++i) body += fmt::format("let a{} = a{} + 1e-6;\n", i, i - 1);
+        return inMaterial(body + fmt::format("ndf = ggx(a{});", lets - 1));
+    };
+    CHECK(checkErrors(chain(3900)).empty());
+    std::vector<std::string> errors = checkErrors(chain(100000));
+    REQUIRE(errors.size() == 1);
+    // 20 + 3980 = 4000 at a3980; a3981 passes it (inMaterial puts the body on line 2).
+    CHECK(errors[0].rfind("t.mat:3984:", 0) == 0);
+    CHECK(errors[0].find("material 'm' computes too much to compile: at let 'a3981' its inputs, lets and model "
+                         "arguments already cost more than 4000 float operations") != std::string::npos);
+
+    // An rgb mix costs three per channel; exp 100, pow 200, x^k with a small integer k 8.
+    CHECK(computeCost(*mustCheck(inMaterial("let c = mix(rgb(1, 2, 3), rgb(0, 0, 0), 0.5); ndf = ggx(0.3);"))
+                           .materials[0].lets[0].value) == 9);
+    const CheckedMaterial costs =
+        mustCheck(inMaterial("input t = 0.5; let e = exp(t); let p = pow(t, 1.5); let q = t ^ 3; let s = -t;"
+                             "ndf = ggx(0.3);"))
+            .materials[0];
+    CHECK(computeCost(*costs.lets[0].value) == 100);
+    CHECK(computeCost(*costs.lets[1].value) == 200);
+    CHECK(computeCost(*costs.lets[2].value) == 8);
+    CHECK(computeCost(*costs.lets[3].value) == 1);
+
+    // Each input read counts 20: 201 inputs read are refused at the 201st.
+    std::string many, sums = "let s0 = u0;\n";
+    for (int i = 0; i < 201; ++i) many += fmt::format("input u{} = 0.5;\n", i);
+    for (int i = 1; i < 201; ++i) sums += fmt::format("let s{} = s{} + u{};\n", i, i - 1, i);
+    errors = checkErrors(inMaterial(many + sums + "ndf = ggx(clamp(s200, 0.01, 1));"));
+    REQUIRE(errors.size() == 1);
+    CHECK(errors[0].find("at input 'u200'") != std::string::npos);
+
+    // What the models do not read costs nothing: 10000 unused inputs and a
+    // dead let chain past the budget are accepted.
+    std::string unused;
+    for (int i = 0; i < 10000; ++i) unused += fmt::format("input u{} = 0.5;\n", i);
+    CHECK(checkErrors(inMaterial(unused + "ndf = ggx(0.3);")).empty());
+    std::string dead = "input r = 0.5;\nlet d0 = r;\n";
+    for (int i = 1; i < 5000; ++i) dead += fmt::format("let d{} = d{} * 2;\n", i, i - 1);
+    CHECK(checkErrors(inMaterial(dead + "ndf = ggx(0.3);")).empty());
+}
+
+TEST_CASE("readByModels: the inputs and lets the model arguments reach, through lets") {
+    const CheckedMaterial m = mustCheck(inMaterial("input a = 0.5; input b = rgb(1, 1, 1); input unused = 1;\n"
+                                                   "let x = a * 2; let y = x + b; let dead = unused + a;\n"
+                                                   "ndf = ggx(0.3); diffuse = lambert(y);"))
+                                  .materials[0];
+    CheckedMaterial::Reads reads = m.readByModels();
+    CHECK(reads.inputs == std::vector<bool>{true, true, false});
+    CHECK(reads.lets == std::vector<bool>{true, true, false});
+    // The interpreter agrees: a NaN in the unread input leaves the lane valid,
+    // a NaN in a read one does not.
+    Interpreter<double> interp(m);
+    const double wi[3] = {0, 0, 1}, wo[3] = {0.6, 0, 0.8};
+    double slots[5] = {0.5, 1, 1, 1, std::nan("")};
+    CHECK(interp.eval(wi, wo, slots).valid);
+    slots[0] = std::nan("");
+    slots[4] = 1;
+    CHECK(!interp.eval(wi, wo, slots).valid);
+}

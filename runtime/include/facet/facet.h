@@ -24,7 +24,9 @@ typedef struct facet_kernel facet_kernel;
    codegen=tiered|quick|optimized (default tiered: the kernel returned runs
    quickly emitted code, and a background thread of the library swaps in
    the optimized code, which computes the same values, about 5-15 ms
-   later; optimized: compile returns only once that code is linked),
+   later; optimized: compile returns only once that code is linked; fork()
+   waits for a tier-up that is running, and in the child the kernels whose
+   tier-up had not run keep their quick code),
    assume=unit|none (unit: the host promises finite directions with |w|
    within 1e-3 of 1, finite inputs and u in [0, 1);
    compiled kernels then skip the work that only detects invalid lanes,
@@ -56,8 +58,10 @@ void facet_eval(const facet_kernel* k, const float wi[3], const float wo[3], con
    caller holding a value beyond float (say 1e39 for an input in 0 .. 1)
    clamps it in double before converting it to float.
    Returns the number of invalid lanes (non-finite or non-unit directions,
-   non-finite inputs, a model parameter not finite in float, or a result
-   float cannot hold); their rgb is 0, on every backend alike.
+   non-finite inputs the material reads, a model parameter not finite in
+   float, or a result float cannot hold); their rgb is 0, on every backend
+   alike. An input the material never reads is never loaded: its value,
+   finite or not, changes nothing.
    Returns -1 -- never a lane count -- for a NULL kernel, n < 0, or a NULL
    wi, wo or rgb (or a NULL entry of one); facet_last_error() then says
    which. n = 0 returns 0 (the pointers are not read). */
