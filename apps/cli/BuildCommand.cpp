@@ -11,14 +11,17 @@
 // has no compiled sampler gets an object without sampler symbols, a header
 // saying PREFIX_HAS_SAMPLER 0, and a note on stderr. Outputs are written to temporary
 // files in their own directory and renamed into place once both are
-// complete, so a failed build leaves no partial file. Exit codes: 0 ok,
+// complete, so a failed build leaves no partial file. An output goes only
+// to a new path or over a regular file, never over the material file or
+// the other output (OutputFile.h: outputProblem). Exit codes: 0 ok,
 // 2 usage (bad options, an unknown target, CPU or feature, an output that
-// cannot be written, as for `facet eval --out`), 65 a material file error
-// (including a material the file does not have).
+// cannot be written, as for `facet eval --out`, or may not be), 65 a
+// material file error (including a material the file does not have).
 #include "Checker.h"
 #include "Commands.h"
 #include "Kernel.h"
 #include "MaterialFile.h"
+#include "OutputFile.h"
 #include "Specialize.h"
 
 #include <llvm/ADT/StringExtras.h>
@@ -39,6 +42,11 @@ namespace facet {
 namespace {
 
 struct BuildUsageError {
+    std::string message;
+};
+
+// An output that must not be written (OutputFile.h: outputProblem).
+struct BuildOutputError {
     std::string message;
 };
 
@@ -266,8 +274,19 @@ BuildOptions parseBuildArgs(const std::vector<std::string>& args) {
     return opt;
 }
 
+// Throws BuildOutputError when an output is not a new path or an existing
+// regular file, or is the material file or the other output.
+void checkOutputPaths(const BuildOptions& opt) {
+    std::string problem = outputProblem("facet build", opt.out,
+                                        {{opt.file, "the material file"}, {opt.header, "the header"}});
+    if (problem.empty() && !opt.header.empty())
+        problem = outputProblem("facet build", opt.header, {{opt.file, "the material file"}});
+    if (!problem.empty()) throw BuildOutputError{problem};
+}
+
 int runBuild(const std::vector<std::string>& args) {
     BuildOptions opt = parseBuildArgs(args);
+    checkOutputPaths(opt);
     // The option string of the C/C++ API, so that the kernel is the one
     // facet_compile_file builds with the same options.
     std::string spec = "backend=" + opt.backend;
@@ -340,6 +359,8 @@ int runBuild(const std::vector<std::string>& args) {
         header.emplace(opt.header);
         error = header->write(headerText(opt, *aot, target, optionText, llvm::toHex(digest, true)));
     }
+    // Again just before the renames: the paths may have changed during the compilation.
+    if (error.empty()) checkOutputPaths(opt);
     if (error.empty()) error = object.commit();
     if (error.empty() && header) error = header->commit();
     if (!error.empty()) {
@@ -356,6 +377,9 @@ int cmdBuild(const std::vector<std::string>& args) {
         return runBuild(args);
     } catch (const BuildUsageError& e) {
         std::fprintf(stderr, "facet: %s\n", e.message.c_str());
+        return kExitUsage;
+    } catch (const BuildOutputError& e) {
+        std::fprintf(stderr, "facet: error: %s\n", e.message.c_str());
         return kExitUsage;
     }
 }

@@ -50,6 +50,44 @@ expect 2 "file/g.o: error: cannot write: Not a directory" "$gold" -o "$work/file
 # The object can be written, the header cannot: neither appears.
 expect 2 "file/g.h: error: cannot write: Not a directory" "$gold" -o "$o" --header "$work/file/g.h"
 
+# Outputs go only to new paths or over regular files: a FIFO, a directory,
+# a symlink (also one to /dev/null or to a directory) is refused as it is,
+# untouched and unread, and so is an output that is the material file or
+# the other output (by inode for existing files, by normalized path for new ones).
+expect_kept() {  # PATTERN ARGS...: exit 2, one line matching PATTERN, nothing new in $work/out
+  local pattern=$1 before got=0
+  shift
+  before=$(ls -la "$work/out")
+  "$facet" build "$@" 2>"$work/err" >/dev/null || got=$?
+  [ "$got" = 2 ] || fail "build $*: exit $got, expected 2 ($(cat "$work/err"))"
+  [ "$(wc -l <"$work/err")" = 1 ] || fail "build $*: expected one line on stderr: $(cat "$work/err")"
+  grep -q -e "$pattern" "$work/err" || fail "build $*: stderr '$(cat "$work/err")' does not match '$pattern'"
+  [ "$(ls -la "$work/out")" = "$before" ] || fail "build $*: changed $work/out: $(ls -la "$work/out")"
+  echo "ok ($got): $(cat "$work/err")" | cut -c1-160
+}
+keep() { rm -rf "$work/out" && mkdir "$work/out"; }
+keep && mkfifo "$work/out/pipe.o"
+expect_kept "facet: error: .*/out/pipe.o is a FIFO, not a regular file; facet build writes its outputs only to new paths or regular files" "$gold" -o "$work/out/pipe.o"
+[ -p "$work/out/pipe.o" ] || fail "the FIFO output is no longer a FIFO"
+expect_kept "out/pipe.o is a FIFO" "$gold" -o "$o" --header "$work/out/pipe.o"
+keep && ln -s /dev/null "$work/out/null.o"
+expect_kept "facet: error: .*/out/null.o is a symbolic link, not a regular file" "$gold" -o "$work/out/null.o" --header "$h"
+[ -L "$work/out/null.o" ] && [ "$(readlink "$work/out/null.o")" = /dev/null ] || fail "the symlink to /dev/null was replaced"
+keep && mkdir "$work/out/dir.o" && ln -s dir.o "$work/out/dirlink.o"
+expect_kept "facet: error: .*/out/dir.o is a directory, not a regular file" "$gold" -o "$work/out/dir.o"
+expect_kept "facet: error: .*/out/dirlink.o is a symbolic link, not a regular file" "$gold" -o "$work/out/dirlink.o"
+keep && cp "$gold" "$work/out/in.mat" && ln "$work/out/in.mat" "$work/out/hard.o"
+expect_kept "facet: error: .*/out/in.mat is the same file as the material file .*/out/in.mat" "$work/out/in.mat" -o "$work/out/in.mat"
+expect_kept "out/hard.o is the same file as the material file" "$work/out/in.mat" -o "$work/out/hard.o"
+expect_kept "out/in.mat is the same file as the material file" "$work/out/in.mat" -o "$o" --header "$work/out/in.mat"
+cmp -s "$gold" "$work/out/in.mat" || fail "the material file was changed"
+# Outputs that do not exist yet: the same path spelled two ways.
+cd "$work/out"
+expect_kept "facet: error: ./x.o is the same file as the header x.o" "$gold" -o ./x.o --header x.o
+expect_kept "facet: error: x.h is the same file as the header .*/out/../out/x.h" "$gold" -o x.h --header "$work/out/../out/x.h"
+cd - >/dev/null
+keep
+
 # A failed build leaves an existing output as it was.
 echo previous >"$work/keep.o"
 "$facet" build "$gold" --target nowhere -o "$work/keep.o" 2>/dev/null && fail "unknown target accepted"
