@@ -7,6 +7,7 @@
 #include "Kernel.h"
 
 #include <string>
+#include <string_view>
 
 namespace facet {
 
@@ -20,6 +21,13 @@ struct AotHeaderSource {
 };
 
 std::string aotHeaderText(const AotHeaderSource& source, const AotKernel& aot, const AotTarget& target);
+
+// `text` as it may appear inside a C comment of the header: "*/" (and
+// "/*") never, "??" (trigraphs) never, and no byte that would break the
+// line or is not printable ASCII: newline, tab and CR as \n \t \r, other
+// control and non-ASCII bytes as \xNN, a backslash as \\. Whatever a
+// path, name or option holds, the comment cannot be ended or a line broken.
+std::string commentText(std::string_view text);
 
 // A number as the header and the options text print it (%.9g).
 std::string formatNumber(double v);

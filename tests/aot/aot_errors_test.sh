@@ -115,4 +115,22 @@ printf '#include "red.h"\nint main(void) { float n[3] = {0, 0, 1}, rgb[3]; red_e
 cc -std=c99 -pedantic -Wall -Wextra -Werror -I"$work" "$work/use.c" "$work/red.o" -lm -o "$work/use" && "$work/use" ||
   fail "red.h/red.o: a C99 program does not compile, link or evaluate"
 c++ -x c++ -std=c++17 -Wall -Werror -fsyntax-only -I"$work" "$work/use.c" || fail "red.h is not valid C++"
+
+# User text copied into the header's comment cannot end the comment or break
+# a line: a path with "*/" in it, one with a newline, tab, "??/" and UTF-8.
+inject="$work/x*/ int injected = 42; /*"
+odd="$work/nl"$'\n'" int injected = 42; é"$'\t'"??/"
+for dir in "$inject" "$odd"; do
+  mkdir -p "$dir"
+  cp "$gold" "$dir/gold.mat"
+  (cd "$dir" && "$facet" build "$dir/gold.mat" -o g.o --header g.h) || fail "build from '$dir' failed"
+  cc -std=c99 -Wall -Werror -fsyntax-only "$dir/g.h" || fail "the header built in '$dir' is not clean C99"
+  # -P: no line markers, which name the file (and so the path) outside any comment.
+  [ "$(cc -E -P "$dir/g.h" | grep -c 'injected = 42')" = 0 ] || fail "the path '$dir' escaped the header's comment"
+  # Every line of the leading comment is still one: "/*" or " *" first.
+  [ "$(awk 'NR == 1, /^ \*\/$/' "$dir/g.h" | grep -c -v -E '^(/\*| \*)')" = 0 ] ||
+    fail "the path '$dir' broke a line of the header's comment"
+done
+grep -q -F '/x* / int injected = 42; / * /gold.mat' "$inject/g.h" || fail "the '*/' path is not in the header as 'x* /'"
+grep -q -F '/nl\n int injected = 42; \xc3\xa9\t?\x3f//gold.mat' "$odd/g.h" || fail "the newline path is not escaped in the header"
 exit $failed
