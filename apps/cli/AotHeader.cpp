@@ -5,6 +5,7 @@
 
 #include <cctype>
 #include <fmt/format.h>
+#include <map>
 
 namespace facet {
 
@@ -28,11 +29,6 @@ std::string commentText(std::string_view text) {
 }
 
 namespace {
-
-std::string upper(std::string s) {
-    for (char& c : s) c = std::isalnum(static_cast<unsigned char>(c)) ? char(std::toupper(static_cast<unsigned char>(c))) : '_';
-    return s;
-}
 
 // The sampler's part of the header: PREFIX_HAS_SAMPLER, and where it is 1
 // the four sampling functions (facet.h's conventions without the kernel).
@@ -82,9 +78,32 @@ std::string samplerDeclarations(const std::string& p, const std::string& macro, 
 
 std::string formatNumber(double v) { return fmt::format("{:.9g}", v); }
 
+std::string slotMacro(const std::string& prefix, const std::string& slotName) {
+    std::string macro = prefix + "_SLOT_";
+    for (char c : slotName) macro += std::isalnum(static_cast<unsigned char>(c)) || c == '_' ? c : '_';
+    return macro;
+}
+
+std::string slotMacroClash(const std::string& prefix, const CheckedMaterial& m) {
+    std::map<std::string, std::pair<const CheckedInput*, int>> seen;  // macro -> input and slot
+    for (const CheckedInput& in : m.inputs)
+        for (int c = 0; c < in.slotCount(); ++c) {
+            const int slot = in.firstSlot + c;
+            auto [it, fresh] = seen.try_emplace(slotMacro(prefix, m.slotName(slot)), &in, slot);
+            if (fresh) continue;
+            const auto& [other, otherSlot] = it->second;
+            return fmt::format("inputs '{}' (slot {}) and '{}' (slot {}) would both be the header's macro {}; rename "
+                               "one, or bind one with --set",
+                               other->name, m.slotName(otherSlot), in.name, m.slotName(slot), it->first);
+        }
+    return "";
+}
+
 std::string aotHeaderText(const AotHeaderSource& opt, const AotKernel& aot, const AotTarget& target) {
+    // The prefix as given, in every macro and the include guard: prefixes
+    // (and input names) that differ only in case give distinct macros.
     const std::string& p = opt.prefix;
-    const std::string macro = upper(p);
+    const std::string& macro = p;
     const CheckedMaterial& m = aot.material;
     std::string h;
     // Every text in the comment below that a user chose (file, material and
@@ -148,7 +167,7 @@ std::string aotHeaderText(const AotHeaderSource& opt, const AotKernel& aot, cons
     h += fmt::format("#ifndef FACET_AOT_{}_H\n#define FACET_AOT_{}_H\n\n#include <stdint.h>\n\n", macro, macro);
     h += "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
     h += fmt::format("#define {}_INPUT_COUNT {}\n", macro, m.slotCount);
-    for (int s = 0; s < m.slotCount; ++s) h += fmt::format("#define {}_SLOT_{} {}\n", macro, upper(m.slotName(s)), s);
+    for (int s = 0; s < m.slotCount; ++s) h += fmt::format("#define {} {}\n", slotMacro(p, m.slotName(s)), s);
     h += "\n/* One direction pair. inputs: one value per slot, or NULL (all defaults).\n";
     h += "   A NULL wi, wo or rgb does nothing (rgb, if not NULL, is set to 0). */\n";
     h += fmt::format("void {}_eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]);\n\n", p);

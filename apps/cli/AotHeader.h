@@ -22,6 +22,15 @@ struct AotHeaderSource {
 
 std::string aotHeaderText(const AotHeaderSource& source, const AotKernel& aot, const AotTarget& target);
 
+// The header's macro for an input slot: PREFIX_SLOT_ and the slot's name
+// with '.' as '_' ("albedo.g" -> PREFIX_SLOT_albedo_g), case kept.
+std::string slotMacro(const std::string& prefix, const std::string& slotName);
+
+// Where two slots of `m` would have one macro (an rgb input tint's slot
+// tint.r and a float input tint_r), one line naming both inputs and the
+// macro; else "". The header cannot be written then.
+std::string slotMacroClash(const std::string& prefix, const CheckedMaterial& m);
+
 // `text` as it may appear inside a C comment of the header: "*/" (and
 // "/*") never, "??" (trigraphs) never, and no byte that would break the
 // line or is not printable ASCII: newline, tab and CR as \n \t \r, other

@@ -45,7 +45,8 @@ struct BuildUsageError {
     std::string message;
 };
 
-// An output that must not be written (OutputFile.h: outputProblem).
+// An output that must not be written (OutputFile.h: outputProblem), or a
+// header whose macros would clash (AotHeader.h: slotMacroClash).
 struct BuildOutputError {
     std::string message;
 };
@@ -61,11 +62,6 @@ bool isCIdentifier(const std::string& s) {
     for (char c : s)
         if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
     return true;
-}
-
-std::string upper(std::string s) {
-    for (char& c : s) c = std::isalnum(static_cast<unsigned char>(c)) ? char(std::toupper(static_cast<unsigned char>(c))) : '_';
-    return s;
 }
 
 // A file written next to its destination and renamed over it only by
@@ -216,12 +212,15 @@ int runBuild(const std::vector<std::string>& args) {
         std::fputs(diags.str().c_str(), stderr);
         return kExitMaterialError;
     }
+    if (!opt.header.empty())
+        if (std::string clash = slotMacroClash(opt.prefix, aot->material); !clash.empty())
+            throw BuildOutputError{clash};
     if (!aot->hasSampler)
         std::fprintf(stderr,
                      "facet: note: material %s has no compiled sampler (ndf %s, masking %s): the object has "
                      "%s_eval and %s_eval_batch only, and the header says %s_HAS_SAMPLER 0\n",
                      aot->material.name.c_str(), aot->material.ndf.model->name, aot->material.masking.model->name,
-                     opt.prefix.c_str(), opt.prefix.c_str(), upper(opt.prefix).c_str());
+                     opt.prefix.c_str(), opt.prefix.c_str(), opt.prefix.c_str());
     auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(printMaterial(aot->material)));
     std::string optionText = fmt::format("backend={};{};width={}", opt.backend,
                                          options.tolerance ? opt.math : "math=" + opt.math, aot->width);

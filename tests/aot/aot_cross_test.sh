@@ -38,7 +38,7 @@ for material in gold plastic brushed_metal; do
     { echo "FAIL $prefix.h does not record target aarch64, SIMD width 4"; failed=1; }
   undefined=$(aarch64-linux-gnu-nm -u "$work/$prefix.o" | awk '{print $2}')
   [ -z "$undefined" ] || { echo "FAIL $prefix.o needs symbols outside itself: $undefined"; failed=1; }
-  aarch64-linux-gnu-gcc -std=c99 -pedantic -Wall -Wextra -Werror -O2 -static -DAOT_PREFIX="$prefix" -DAOT_MACRO="${prefix^^}" \
+  aarch64-linux-gnu-gcc -std=c99 -pedantic -Wall -Wextra -Werror -O2 -static -DAOT_PREFIX="$prefix" \
     -include "$work/$prefix.h" "$source/tests/aot/aot_run.c" "$work/$prefix.o" -lm -o "$work/$prefix.run"
   qemu-aarch64 "$work/$prefix.run" "$work/$material.in" "$work/$prefix.out" || failed=1
   "$reference" against-interpreter "$mat" "$material" "backend=simd;math=exact" $random "$work/$prefix.out" || failed=1

@@ -106,8 +106,8 @@ grep -q 'gold_eval_batch:' "$work/g.s" && grep -q -E 'fmul[[:space:]]+v[0-9]+\.4
 
 # The header: plain C99 and C++, slots documented, bound inputs are not slots.
 "$facet" build "$source/materials/plastic.mat" --set roughness=0.3 --prefix red -o "$work/red.o" --header "$work/red.h"
-grep -q '#define RED_INPUT_COUNT 3' "$work/red.h" || fail "red.h: plastic with roughness bound has 3 slots"
-grep -q '#define RED_SLOT_ALBEDO_G 1' "$work/red.h" || fail "red.h: albedo.g is slot 1"
+grep -q '#define red_INPUT_COUNT 3' "$work/red.h" || fail "red.h: plastic with roughness bound has 3 slots"
+grep -q '#define red_SLOT_albedo_g 1' "$work/red.h" || fail "red.h: albedo.g is slot 1"
 grep -q 'options   backend=simd;math=exact;width=[0-9]*;set.roughness=0.3' "$work/red.h" || fail "red.h: options not recorded"
 grep -q 'hash      sha256 [0-9a-f]\{64\}' "$work/red.h" || fail "red.h: no material hash"
 grep -q 'Facet [0-9]' "$work/red.h" || fail "red.h: no Facet version"
@@ -115,6 +115,55 @@ printf '#include "red.h"\nint main(void) { float n[3] = {0, 0, 1}, rgb[3]; red_e
 cc -std=c99 -pedantic -Wall -Wextra -Werror -I"$work" "$work/use.c" "$work/red.o" -lm -o "$work/use" && "$work/use" ||
   fail "red.h/red.o: a C99 program does not compile, link or evaluate"
 c++ -x c++ -std=c++17 -Wall -Werror -fsyntax-only -I"$work" "$work/use.c" || fail "red.h is not valid C++"
+
+# Macros keep the prefix's and the inputs' case: prefixes Clash and clash and
+# inputs roughness and Roughness give distinct macros and include guards; an
+# rgb tint's tint.r beside a float tint_r would share one, which is refused.
+cat >"$work/clash.mat" <<'EOF'
+material Clash {
+    input roughness = 0.3 in 0 .. 1;
+    input Roughness = 0.5 in 0 .. 1;
+    ndf = ggx(roughness * Roughness);
+}
+material clash {
+    input tint = rgb(0.5, 0.6, 0.7);
+    input alpha = 0.2 in 0.01 .. 1;
+    ndf = ggx(alpha);
+    diffuse = lambert(tint);
+}
+material tinted {
+    input tint = rgb(1, 1, 1);
+    input tint_r = 0.5 in 0.01 .. 1;
+    ndf = ggx(tint_r);
+    diffuse = lambert(tint);
+}
+EOF
+"$facet" build "$work/clash.mat" --material Clash -o "$work/Clash.o" --header "$work/Clash.h"
+"$facet" build "$work/clash.mat" --material clash -o "$work/clash.o" --header "$work/clash.h"
+cat >"$work/clash.c" <<'EOF'
+#include "Clash.h"
+#include "clash.h"
+#include <stdio.h>
+int main(void) {
+    float n[3] = {0, 0, 1}, a[3], b[3];
+    Clash_eval(n, n, NULL, a);
+    clash_eval(n, n, NULL, b);
+    printf("%d %d %d %d %d %d %d %d\n", Clash_INPUT_COUNT, Clash_SLOT_roughness, Clash_SLOT_Roughness, clash_INPUT_COUNT,
+           clash_SLOT_tint_r, clash_SLOT_tint_g, clash_SLOT_tint_b, clash_SLOT_alpha);
+    return Clash_HAS_SAMPLER == 1 && clash_HAS_SAMPLER == 1 && a[0] > 0 && b[0] > 0 ? 0 : 1;
+}
+EOF
+if cc -std=c99 -pedantic -Wall -Wextra -Werror -I"$work" "$work/clash.c" "$work/Clash.o" "$work/clash.o" -lm -o "$work/clash"; then
+  got=$("$work/clash") || fail "Clash and clash: an eval gave 0 or a header says no sampler"
+  [ "$got" = "2 0 1 4 0 1 2 3" ] || fail "Clash and clash: macros are '$got', expected '2 0 1 4 0 1 2 3'"
+else
+  fail "Clash.h and clash.h together do not compile"
+fi
+expect 2 "facet: error: inputs 'tint' (slot tint.r) and 'tint_r' (slot tint_r) would both be the header's macro tinted_SLOT_tint_r" \
+  "$work/clash.mat" --material tinted -o "$o" --header "$h"
+"$facet" build "$work/clash.mat" --material tinted --set tint_r=0.3 -o "$work/tinted.o" --header "$work/tinted.h" ||
+  fail "tinted with tint_r bound (no clash left) failed"
+grep -q '^#define tinted_SLOT_tint_b 2$' "$work/tinted.h" || fail "tinted.h: tint.b is not slot 2"
 
 # User text copied into the header's comment cannot end the comment or break
 # a line: a path with "*/" in it, one with a newline, tab, "??/" and UTF-8.

@@ -45,11 +45,11 @@ for material in gold plastic brushed_metal satin_gaussian; do
       echo "FAIL $prefix.o exports '$exported', expected '$expected'"
       failed=1
     fi
-    if ! grep -q "^#define ${prefix^^}_HAS_SAMPLER $has_sampler\$" "$work/$prefix.h"; then
-      echo "FAIL $prefix.h does not say ${prefix^^}_HAS_SAMPLER $has_sampler"
+    if ! grep -q "^#define ${prefix}_HAS_SAMPLER $has_sampler\$" "$work/$prefix.h"; then
+      echo "FAIL $prefix.h does not say ${prefix}_HAS_SAMPLER $has_sampler"
       failed=1
     fi
-    "$cc" -std=c99 -pedantic -Wall -Wextra -Werror -O2 -DAOT_PREFIX="$prefix" -DAOT_MACRO="${prefix^^}" -include "$work/$prefix.h" \
+    "$cc" -std=c99 -pedantic -Wall -Wextra -Werror -O2 -DAOT_PREFIX="$prefix" -include "$work/$prefix.h" \
       "$source/tests/aot/aot_run.c" "$work/$prefix.o" -lm -o "$work/$prefix.run"
     "$work/$prefix.run" "$work/$material.in" "$work/$prefix.out" || failed=1
     "$reference" same-as-jit "$mat" "$material" "$options" $random "$work/$prefix.out" || failed=1

@@ -1,6 +1,7 @@
 /* aot_run.c: a plain C99 host of one ahead-of-time compiled material, linked
    only against the object `facet build` wrote and libm. Compiled once per
-   object with -DAOT_PREFIX=name -DAOT_MACRO=NAME -include name.h.
+   object with -DAOT_PREFIX=name -include name.h (the header's macros are
+   name_INPUT_COUNT, name_HAS_SAMPLER: the prefix as given).
 
      aot_run INPUTS.bin OUTPUTS.bin
 
@@ -24,12 +25,12 @@
 #define AOT_CAT(a, b) AOT_CAT2(a, b)
 #define AOT_EVAL AOT_CAT(AOT_PREFIX, _eval)
 #define AOT_EVAL_BATCH AOT_CAT(AOT_PREFIX, _eval_batch)
-#define AOT_INPUT_COUNT_OF(p) AOT_CAT(p, _INPUT_COUNT)
+#define AOT_INPUT_COUNT AOT_CAT(AOT_PREFIX, _INPUT_COUNT)
 #define AOT_SAMPLE AOT_CAT(AOT_PREFIX, _sample)
 #define AOT_SAMPLE_BATCH AOT_CAT(AOT_PREFIX, _sample_batch)
 #define AOT_PDF AOT_CAT(AOT_PREFIX, _pdf)
 #define AOT_PDF_BATCH AOT_CAT(AOT_PREFIX, _pdf_batch)
-#define AOT_HAS_SAMPLER AOT_CAT(AOT_MACRO, _HAS_SAMPLER)
+#define AOT_HAS_SAMPLER AOT_CAT(AOT_PREFIX, _HAS_SAMPLER)
 
 static int failures = 0;
 #define EXPECT(cond, ...)                                        \
@@ -189,9 +190,9 @@ int main(int argc, char** argv) {
         fprintf(stderr, "%s: not an input file of facet_aot_reference\n", argv[1]);
         return 1;
     }
-    if (slots != AOT_INPUT_COUNT_OF(AOT_MACRO)) {
+    if (slots != AOT_INPUT_COUNT) {
         fprintf(stderr, "%s: %d input slots, the header says %d\n", argv[1], (int)slots,
-                AOT_INPUT_COUNT_OF(AOT_MACRO));
+                AOT_INPUT_COUNT);
         return 1;
     }
     lanes = malloc(sizeof(float) * (size_t)n * (size_t)(9 + slots));
