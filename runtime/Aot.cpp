@@ -212,8 +212,9 @@ public:
     //                         const float* const* inputs, outputs...):
     // an output group of three floats per lane is an array of three
     // streams (float* const out[3]), one of one float a stream (float* out).
-    // -1 for n < 0 or a NULL array or array entry (SPEC section 4), 0 for
-    // n = 0, else the number of invalid lanes.
+    // -1 for n < 0, 0 for n = 0 whatever the pointers (as the C API: SPEC
+    // section 4), -1 for a NULL array or array entry, else the number of
+    // invalid lanes.
     void batch(const char* suffix, const KernelFamily& family) {
         const unsigned outGroups = unsigned(family.outputs.size());
         std::vector<llvm::Type*> args(4 + outGroups, ptr_);
@@ -228,23 +229,25 @@ public:
             if (family.outputs[g] == 3) arrays.push_back(out.back());
         }
         auto* reject = llvm::BasicBlock::Create(ctx_, "reject", fn);
-        auto* entries = llvm::BasicBlock::Create(ctx_, "check.entries", fn);
         auto* checkEmpty = llvm::BasicBlock::Create(ctx_, "check.empty", fn);
         auto* empty = llvm::BasicBlock::Create(ctx_, "empty", fn);
+        auto* arraysGiven = llvm::BasicBlock::Create(ctx_, "check.arrays", fn);
+        auto* entries = llvm::BasicBlock::Create(ctx_, "check.entries", fn);
         auto* run = llvm::BasicBlock::Create(ctx_, "run", fn);
-        b_.CreateCondBr(b_.CreateOr(b_.CreateICmpSLT(n, llvm::ConstantInt::get(i64_, 0)), anyNull(required)), reject,
-                        entries);
+        b_.CreateCondBr(b_.CreateICmpSLT(n, llvm::ConstantInt::get(i64_, 0)), reject, checkEmpty);
         b_.SetInsertPoint(reject);
         b_.CreateRet(llvm::ConstantInt::get(i64_, -1));
+        b_.SetInsertPoint(checkEmpty);
+        b_.CreateCondBr(b_.CreateICmpEQ(n, llvm::ConstantInt::get(i64_, 0)), empty, arraysGiven);
+        b_.SetInsertPoint(empty);
+        b_.CreateRet(llvm::ConstantInt::get(i64_, 0));
+        b_.SetInsertPoint(arraysGiven);
+        b_.CreateCondBr(anyNull(required), reject, entries);
         b_.SetInsertPoint(entries);
         std::vector<llvm::Value*> streams;
         for (llvm::Value* array : arrays)
             for (unsigned c = 0; c < 3; ++c) streams.push_back(b_.CreateLoad(ptr_, b_.CreateConstGEP1_32(ptr_, array, c)));
-        b_.CreateCondBr(anyNull(streams), reject, checkEmpty);
-        b_.SetInsertPoint(checkEmpty);
-        b_.CreateCondBr(b_.CreateICmpEQ(n, llvm::ConstantInt::get(i64_, 0)), empty, run);
-        b_.SetInsertPoint(empty);
-        b_.CreateRet(llvm::ConstantInt::get(i64_, 0));
+        b_.CreateCondBr(anyNull(streams), reject, run);
         b_.SetInsertPoint(run);
         if (family.batch) {
             std::vector<llvm::Value*> callArgs = {n, in[0], in[1], inputs};

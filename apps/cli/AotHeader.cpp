@@ -64,8 +64,8 @@ std::string samplerDeclarations(const std::string& p, const std::string& macro, 
     h += fmt::format("float {}_pdf(const float wi[3], const float wo[3], const float* inputs);\n\n", p);
     h += "/* SoA: wo[0..2], u[0..2], wi[0..2], weight[0..2] each point to n floats, pdf\n";
     h += "   to n floats; inputs as in the eval batch. Return the number of invalid\n";
-    h += "   lanes, 0 for n = 0, -1 for n < 0 or a NULL array (or a NULL entry of\n";
-    h += "   one). */\n";
+    h += "   lanes, 0 for n = 0 (whatever the pointers), -1 for n < 0 or a NULL\n";
+    h += "   array (or a NULL entry of one). */\n";
     h += fmt::format("int64_t {}_sample_batch(int64_t n, const float* const wo[3], const float* const u[3],\n", p);
     h += indent + "const float* const* inputs, float* const wi[3], float* pdf,\n";
     h += indent + "float* const weight[3]);\n";
@@ -173,8 +173,9 @@ std::string aotHeaderText(const AotHeaderSource& opt, const AotKernel& aot, cons
     h += fmt::format("void {}_eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]);\n\n", p);
     h += "/* SoA batch: wi[0..2], wo[0..2], rgb[0..2] each point to n floats; inputs is\n";
     h += "   NULL (all defaults) or inputs[s] points to n floats (or is NULL: that slot's\n";
-    h += "   default). Returns the number of invalid lanes (their rgb is 0), 0 for n = 0,\n";
-    h += "   -1 for n < 0 or a NULL wi, wo or rgb (or a NULL entry of one). */\n";
+    h += "   default). Returns the number of invalid lanes (their rgb is 0), 0 for n = 0\n";
+    h += "   (whatever the pointers), -1 for n < 0 or a NULL wi, wo or rgb (or a NULL\n";
+    h += "   entry of one). */\n";
     h += fmt::format("int64_t {}_eval_batch(int64_t n, const float* const wi[3], const float* const wo[3],\n", p);
     h += std::string(p.size() + 20, ' ') + "const float* const* inputs, float* const rgb[3]);\n\n";
     h += samplerDeclarations(p, macro, aot);

@@ -102,6 +102,7 @@ static int runSampler(FILE* out, int64_t n, int slots, const float* const wi[3],
 
     /* The argument conventions (facet_sample_batch, facet_pdf_batch, facet_sample, facet_pdf). */
     EXPECT(AOT_SAMPLE_BATCH(0, wo, u, NULL, swi, sb + 3 * n, sweight) == 0, "sample: n = 0 must return 0");
+    EXPECT(AOT_SAMPLE_BATCH(0, NULL, NULL, NULL, NULL, NULL, NULL) == 0, "sample: n = 0 with NULL arrays must return 0");
     EXPECT(AOT_SAMPLE_BATCH(-1, wo, u, NULL, swi, sb + 3 * n, sweight) == -1, "sample: n < 0 must return -1");
     EXPECT(AOT_SAMPLE_BATCH(n, NULL, u, NULL, swi, sb + 3 * n, sweight) == -1, "sample: NULL wo must return -1");
     EXPECT(AOT_SAMPLE_BATCH(n, wo, NULL, NULL, swi, sb + 3 * n, sweight) == -1, "sample: NULL u must return -1");
@@ -121,6 +122,7 @@ static int runSampler(FILE* out, int64_t n, int slots, const float* const wi[3],
         EXPECT(AOT_PDF_BATCH(n, holed, wo, NULL, pb) == -1, "pdf: a NULL entry of wi must return -1");
     }
     EXPECT(AOT_PDF_BATCH(0, wi, wo, NULL, pb) == 0, "pdf: n = 0 must return 0");
+    EXPECT(AOT_PDF_BATCH(0, NULL, NULL, NULL, NULL) == 0, "pdf: n = 0 with NULL arrays must return 0");
     EXPECT(AOT_PDF_BATCH(-1, wi, wo, NULL, pb) == -1, "pdf: n < 0 must return -1");
     EXPECT(AOT_PDF_BATCH(n, NULL, wo, NULL, pb) == -1, "pdf: NULL wi must return -1");
     EXPECT(AOT_PDF_BATCH(n, wi, NULL, NULL, pb) == -1, "pdf: NULL wo must return -1");
@@ -250,6 +252,13 @@ int main(int argc, char** argv) {
 
     /* The argument conventions (SPEC section 4). */
     EXPECT(AOT_EVAL_BATCH(0, wi, wo, NULL, rgb) == 0, "n = 0 must return 0");
+    EXPECT(AOT_EVAL_BATCH(0, NULL, NULL, NULL, NULL) == 0, "n = 0 with NULL arrays must return 0");
+    {
+        const float* holed[3];
+        holed[0] = wi[0], holed[1] = NULL, holed[2] = wi[2];
+        EXPECT(AOT_EVAL_BATCH(0, holed, wo, NULL, rgb) == 0, "n = 0 with a NULL entry of wi must return 0");
+        EXPECT(AOT_EVAL_BATCH(n, holed, wo, NULL, rgb) == -1, "a NULL entry of wi must return -1");
+    }
     EXPECT(AOT_EVAL_BATCH(-1, wi, wo, NULL, rgb) == -1, "n < 0 must return -1");
     EXPECT(AOT_EVAL_BATCH(n, NULL, wo, NULL, rgb) == -1, "NULL wi must return -1");
     EXPECT(AOT_EVAL_BATCH(n, wi, NULL, NULL, rgb) == -1, "NULL wo must return -1");
