@@ -35,6 +35,35 @@ expect 2 "unknown CPU 'pentium9' for aarch64 (CPUs: .*cortex-a72" "$gold" --targ
 expect 2 "unknown CPU 'cortex-a72' for x86_64 (CPUs: .*skylake" "$gold" --cpu cortex-a72 -o "$o"
 expect 2 "unknown feature '+avx9' for x86_64 .*avx2" "$gold" --features +avx9 -o "$o"
 expect 2 "unknown feature 'neon' for aarch64 (write +NAME or -NAME" "$gold" --target aarch64-linux-gnu --features neon -o "$o"
+# Targets, CPUs and features Facet cannot serve are refused before LLVM
+# generates code (it used to abort, report an internal error or print raw
+# LLVM errors): other architectures, 32-bit pointers, x86 CPUs without
+# 64-bit mode, features leaving no SSE2 (x86_64) or no FP (aarch64).
+served="it builds for x86_64 and aarch64 (little-endian, 64-bit pointers)"
+for t in amdgcn-amd-amdhsa hexagon ve xcore bpf i686-linux-gnu aarch64_be-linux-gnu; do
+  expect 2 "facet: error: target '$t' (.*) is not one Facet builds for; $served" "$gold" --target $t -o "$o" --header "$h"
+done
+expect 2 "facet: error: target 'x86_64-linux-gnux32' has 32-bit pointers" "$gold" --target x86_64-linux-gnux32 -o "$o"
+expect 2 "facet: error: target 'aarch64-linux-gnu_ilp32' has 32-bit pointers" "$gold" --target aarch64-linux-gnu_ilp32 -o "$o"
+x86=""
+[ "$(uname -m)" = x86_64 ] || x86="--target x86_64-linux-gnu"
+for cpu in pentium i386 i686 pentium4; do
+  expect 2 "facet: error: CPU '$cpu' for x86_64 cannot run 64-bit code" "$gold" $x86 --cpu $cpu -o "$o"
+done
+expect 2 "facet: error: CPU '.*' for x86_64 with features '-64bit-mode' cannot run 64-bit code" "$gold" $x86 --features -64bit-mode -o "$o"
+for f in -sse2 -sse +x87,-sse2; do
+  expect 2 "facet: error: CPU '.*' for x86_64 with features '$f' has no SSE2" "$gold" $x86 --features $f -o "$o"
+done
+expect 2 "with features '+soft-float' uses soft-float, which passes floats in integer registers" "$gold" $x86 --features +soft-float -o "$o"
+expect 2 "CPU 'x86-64' for x86_64 with features '+avx512f,-evex512' has avx512f without evex512 or avx512vl" \
+  "$gold" --target x86_64-linux-gnu --cpu x86-64 --features +avx512f,-evex512 -o "$o"
+expect 2 "CPU 'generic' for aarch64 with features '-fp-armv8' has no floating point" "$gold" --target aarch64-linux-gnu --features -fp-armv8 -o "$o"
+expect 2 "CPU 'generic' for aarch64 with features '+reserve-x18,+reserve-x3' reserves x3 (feature reserve-x3), an argument register" \
+  "$gold" --target aarch64-linux-gnu --features +reserve-x18,+reserve-x3 -o "$o"
+other=aarch64-linux-gnu
+[ "$(uname -m)" = x86_64 ] || other=x86_64-linux-gnu
+expect 2 "facet: error: --cpu native means this machine's CPU (.*), and target '$other' is another architecture" \
+  "$gold" --target $other --cpu native -o "$o"
 expect 65 "no material named 'silver' in .*gold.mat (materials: gold)" "$gold" --material silver -o "$o" --header "$h"
 printf 'material broken {\n    ndf = ggx(;\n}\n' >"$work/broken.mat"
 expect 65 "broken.mat:2:" "$work/broken.mat" -o "$o"
