@@ -72,11 +72,12 @@ public:
     ~PendingFile() {
         if (!tmp_.empty()) ::unlink(tmp_.c_str());
     }
-    // Writes the whole content to the temporary file; "" or an error message.
+    // Writes the whole content to the temporary file; "" or an error message
+    // ("cannot write PATH: REASON", as writeOutput's).
     std::string write(const std::string& content) {
         std::string templ = path_ + ".tmpXXXXXX";
         int fd = ::mkstemp(templ.data());
-        if (fd < 0) return fmt::format("{}: error: cannot write: {}", path_, std::strerror(errno));
+        if (fd < 0) return fmt::format("cannot write {}: {}", path_, std::strerror(errno));
         tmp_ = templ;
         size_t done = 0;
         while (done < content.size()) {
@@ -85,7 +86,7 @@ public:
             if (n <= 0) {
                 int err = errno;
                 ::close(fd);
-                return fmt::format("{}: error: cannot write: {}", path_, std::strerror(err));
+                return fmt::format("cannot write {}: {}", path_, std::strerror(err));
             }
             done += size_t(n);
         }
@@ -95,12 +96,12 @@ public:
         bool modeSet = ::fchmod(fd, 0666 & ~mask) == 0;
         int err = errno;
         if (::close(fd) != 0 || !modeSet)
-            return fmt::format("{}: error: cannot write: {}", path_, std::strerror(modeSet ? errno : err));
+            return fmt::format("cannot write {}: {}", path_, std::strerror(modeSet ? errno : err));
         return "";
     }
     std::string commit() {
         if (::rename(tmp_.c_str(), path_.c_str()) != 0)
-            return fmt::format("{}: error: cannot write: {}", path_, std::strerror(errno));
+            return fmt::format("cannot write {}: {}", path_, std::strerror(errno));
         tmp_.clear();
         return "";
     }
@@ -242,7 +243,7 @@ int runBuild(const std::vector<std::string>& args) {
     if (error.empty()) error = object.commit();
     if (error.empty() && header) error = header->commit();
     if (!error.empty()) {
-        std::fprintf(stderr, "%s\n", error.c_str());
+        std::fprintf(stderr, "facet: error: %s\n", error.c_str());
         return kExitUsage;
     }
     return kExitOk;
