@@ -32,7 +32,7 @@ namespace {
 
 // The sampler's part of the header: PREFIX_HAS_SAMPLER, and where it is 1
 // the four sampling functions (facet.h's conventions without the kernel).
-std::string samplerDeclarations(const std::string& p, const std::string& macro, const AotKernel& aot) {
+std::string samplerDeclarations(const std::string& p, const AotKernel& aot) {
     const CheckedMaterial& m = aot.material;
     std::string h;
     if (!aot.hasSampler) {
@@ -44,7 +44,7 @@ std::string samplerDeclarations(const std::string& p, const std::string& macro, 
         h += fmt::format("   {}_pdf or {}_pdf_batch.\n", p, p);
         h += "   libfacet's facet_sample samples such materials through its reference\n";
         h += "   sampler. */\n";
-        h += fmt::format("#define {}_HAS_SAMPLER 0\n\n", macro);
+        h += fmt::format("#define {}_HAS_SAMPLER 0\n\n", p);
         return h;
     }
     const std::string indent(p.size() + 22, ' ');
@@ -58,7 +58,7 @@ std::string samplerDeclarations(const std::string& p, const std::string& macro, 
     h += fmt::format("   weight = 0. {}_sample returns 1 for an invalid lane (a NULL wo or u is\n", p);
     h += fmt::format("   one), else 0, and does not write a NULL output. {}_pdf returns 0 for an\n", p);
     h += "   invalid lane or a NULL wi or wo. */\n";
-    h += fmt::format("#define {}_HAS_SAMPLER 1\n", macro);
+    h += fmt::format("#define {}_HAS_SAMPLER 1\n", p);
     h += fmt::format("int {}_sample(const float wo[3], const float u[3], const float* inputs, float wi[3],\n", p);
     h += std::string(p.size() + 12, ' ') + "float* pdf, float weight[3]);\n";
     h += fmt::format("float {}_pdf(const float wi[3], const float wo[3], const float* inputs);\n\n", p);
@@ -103,7 +103,6 @@ std::string aotHeaderText(const AotHeaderSource& opt, const AotKernel& aot, cons
     // The prefix as given, in every macro and the include guard: prefixes
     // (and input names) that differ only in case give distinct macros.
     const std::string& p = opt.prefix;
-    const std::string& macro = p;
     const CheckedMaterial& m = aot.material;
     std::string h;
     // Every text in the comment below that a user chose (file, material and
@@ -140,7 +139,7 @@ std::string aotHeaderText(const AotHeaderSource& opt, const AotKernel& aot, cons
     h += " * Self-contained: link the object built with this header and nothing else\n";
     h += " * (no libfacet, no LLVM, no table files; at most libm). The functions are\n";
     h += " * thread-safe and have the conventions of facet_eval / facet_eval_batch\n";
-    h += fmt::format(" * (and, where {}_HAS_SAMPLER is 1, facet_sample / facet_pdf) in\n", macro);
+    h += fmt::format(" * (and, where {}_HAS_SAMPLER is 1, facet_sample / facet_pdf) in\n", p);
     h += " * facet/facet.h: the BRDF f_r in 1/sr, rgb, without the cosine factor;\n";
     h += " * n = +z, wi (towards the light) and wo (towards the viewer) unit vectors\n";
     h += " * pointing away from the surface. A non-finite input or a direction whose\n";
@@ -152,7 +151,7 @@ std::string aotHeaderText(const AotHeaderSource& opt, const AotKernel& aot, cons
         h += " * Other inputs give undefined values (never a crash).\n";
     }
     h += " *\n";
-    h += fmt::format(" * Input slots ({}_INPUT_COUNT floats; an rgb input takes three, r g b).\n", macro);
+    h += fmt::format(" * Input slots ({}_INPUT_COUNT floats; an rgb input takes three, r g b).\n", p);
     h += " * Values outside a range are clamped to it.\n";
     if (m.slotCount == 0) h += " *   (none: every input is bound)\n";
     else h += " *   slot  name                    default       range\n";
@@ -164,9 +163,9 @@ std::string aotHeaderText(const AotHeaderSource& opt, const AotKernel& aot, cons
                              in.hasRange ? fmt::format("{} .. {}", formatNumber(in.lo), formatNumber(in.hi)) : "none");
         }
     h += " */\n";
-    h += fmt::format("#ifndef FACET_AOT_{}_H\n#define FACET_AOT_{}_H\n\n#include <stdint.h>\n\n", macro, macro);
+    h += fmt::format("#ifndef FACET_AOT_{}_H\n#define FACET_AOT_{}_H\n\n#include <stdint.h>\n\n", p, p);
     h += "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
-    h += fmt::format("#define {}_INPUT_COUNT {}\n", macro, m.slotCount);
+    h += fmt::format("#define {}_INPUT_COUNT {}\n", p, m.slotCount);
     for (int s = 0; s < m.slotCount; ++s) h += fmt::format("#define {} {}\n", slotMacro(p, m.slotName(s)), s);
     h += "\n/* One direction pair. inputs: one value per slot, or NULL (all defaults).\n";
     h += "   A NULL wi, wo or rgb does nothing (rgb, if not NULL, is set to 0). */\n";
@@ -178,9 +177,9 @@ std::string aotHeaderText(const AotHeaderSource& opt, const AotKernel& aot, cons
     h += "   entry of one). */\n";
     h += fmt::format("int64_t {}_eval_batch(int64_t n, const float* const wi[3], const float* const wo[3],\n", p);
     h += std::string(p.size() + 20, ' ') + "const float* const* inputs, float* const rgb[3]);\n\n";
-    h += samplerDeclarations(p, macro, aot);
+    h += samplerDeclarations(p, aot);
     h += "#ifdef __cplusplus\n}\n#endif\n\n";
-    h += fmt::format("#endif /* FACET_AOT_{}_H */\n", macro);
+    h += fmt::format("#endif /* FACET_AOT_{}_H */\n", p);
     return h;
 }
 
