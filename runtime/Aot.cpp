@@ -1,129 +1,20 @@
-// Aot: target machines from LLVM's registry, the C entry points of an
-// ahead-of-time object, and writing it out (see Aot.h).
+// Aot: the C entry points of an ahead-of-time object, and writing it out
+// (see Aot.h; the target machine is AotTarget.cpp's).
 #include "Aot.h"
 
 #include "Diagnostics.h"
 #include "Jit.h"
 
 #include <llvm/Bitcode/BitcodeWriter.h>
-#include <llvm/ExecutionEngine/Orc/JITTargetMachineBuilder.h>
 #include <llvm/IR/IRBuilder.h>
 #include <llvm/IR/LegacyPassManager.h>
 #include <llvm/IR/Verifier.h>
-#include <llvm/MC/MCSubtargetInfo.h>
-#include <llvm/MC/TargetRegistry.h>
-#include <llvm/Support/TargetSelect.h>
 #include <llvm/Support/raw_ostream.h>
-#include <llvm/TargetParser/Triple.h>
 
 #include <algorithm>
-#include <array>
-#include <fmt/format.h>
-#include <mutex>
 #include <vector>
 
 namespace facet {
-
-namespace {
-
-std::string joined(std::vector<std::string> names) {
-    std::sort(names.begin(), names.end());
-    names.erase(std::unique(names.begin(), names.end()), names.end());
-    std::string out;
-    for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-    return out;
-}
-
-// Every feature of `request` ("+name" or "-name", comma-separated) must be
-// one the target knows.
-std::string checkFeatures(const llvm::MCSubtargetInfo& info, const std::string& features) {
-    std::vector<std::string> known;
-    for (const llvm::SubtargetFeatureKV& f : info.getAllProcessorFeatures()) known.push_back(f.Key);
-    size_t start = 0;
-    while (start <= features.size()) {
-        size_t comma = features.find(',', start);
-        std::string item = features.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-        start = comma == std::string::npos ? features.size() + 1 : comma + 1;
-        if (item.empty()) continue;
-        std::string name = item.substr(1);
-        if ((item[0] != '+' && item[0] != '-') || std::find(known.begin(), known.end(), name) == known.end())
-            return fmt::format("unknown feature '{}' for {} (write +NAME or -NAME; features: {})", item,
-                               info.getTargetTriple().getArchName().str(), joined(known));
-    }
-    return "";
-}
-
-}  // namespace
-
-AotTarget createAotTarget(const AotTargetRequest& request, std::string& error) {
-    static std::once_flag initOnce;  // LLVM's target registry is process-wide by design
-    std::call_once(initOnce, [] {
-        llvm::InitializeAllTargetInfos();
-        llvm::InitializeAllTargets();
-        llvm::InitializeAllTargetMCs();
-        llvm::InitializeAllAsmPrinters();
-    });
-    AotTarget target;
-    error.clear();
-    if (request.triple.empty()) {
-        // The host as the JIT sees it, so that the object runs the JIT's code.
-        auto host = llvm::orc::JITTargetMachineBuilder::detectHost();
-        if (!host) {
-            error = "cannot detect the host: " + llvm::toString(host.takeError());
-            return target;
-        }
-        target.triple = host->getTargetTriple().str();
-        target.cpu = request.cpu.empty() ? host->getCPU() : request.cpu;
-        target.features = request.cpu.empty() ? host->getFeatures().getString() : "";
-    } else {
-        target.triple = llvm::Triple::normalize(request.triple);
-        target.cpu = request.cpu.empty() ? "generic" : request.cpu;
-    }
-    if (!request.features.empty()) target.features += (target.features.empty() ? "" : ",") + request.features;
-
-    std::string lookupError;
-    const llvm::Target* backend = llvm::TargetRegistry::lookupTarget(target.triple, lookupError);
-    llvm::Triple triple(target.triple);
-    if (!backend || triple.getArch() == llvm::Triple::UnknownArch) {
-        std::vector<std::string> names;
-        for (const llvm::Target& t : llvm::TargetRegistry::targets()) names.push_back(t.getName());
-        error = fmt::format("unknown target '{}' (this LLVM has: {}; e.g. aarch64-linux-gnu, x86_64-linux-gnu)",
-                            request.triple, joined(names));
-        return target;
-    }
-    std::unique_ptr<llvm::MCSubtargetInfo> info(backend->createMCSubtargetInfo(target.triple, "", ""));
-    if (!info) {
-        error = fmt::format("target '{}' has no subtarget information", target.triple);
-        return target;
-    }
-    if (!info->isCPUStringValid(target.cpu)) {
-        std::vector<std::string> cpus;
-        for (const llvm::SubtargetSubTypeKV& c : info->getAllProcessorDescriptions()) cpus.push_back(c.Key);
-        error = fmt::format("unknown CPU '{}' for {} (CPUs: {})", target.cpu, triple.getArchName().str(), joined(cpus));
-        return target;
-    }
-    if (std::string problem = checkFeatures(*info, request.features); !problem.empty()) {
-        error = problem;
-        return target;
-    }
-    // Position-independent (links into PIE executables and shared
-    // libraries) with the default code model; the JIT's in-process code
-    // differs only in how it addresses its constants.
-    target.machine.reset(backend->createTargetMachine(target.triple, target.cpu, target.features, llvm::TargetOptions(),
-                                                      llvm::Reloc::PIC_, std::nullopt,
-                                                      llvm::CodeGenOptLevel::Aggressive));
-    if (!target.machine) {
-        error = fmt::format("LLVM cannot create a target machine for {} ({})", target.triple, target.cpu);
-        return target;
-    }
-    // The width the JIT picks for the same features (FacetJit::hostVectorWidth).
-    const llvm::MCSubtargetInfo* sti = target.machine->getMCSubtargetInfo();
-    target.width = !triple.isX86()                  ? 4
-                   : sti->checkFeatures("+avx512f") ? 16
-                   : sti->checkFeatures("+avx2")    ? 8
-                                                    : 4;
-    return target;
-}
 
 namespace {
 
@@ -212,8 +103,9 @@ public:
     //                         const float* const* inputs, outputs...):
     // an output group of three floats per lane is an array of three
     // streams (float* const out[3]), one of one float a stream (float* out).
-    // -1 for n < 0 or a NULL array or array entry (SPEC section 4), 0 for
-    // n = 0, else the number of invalid lanes.
+    // -1 for n < 0, 0 for n = 0 whatever the pointers (as the C API: SPEC
+    // section 4), -1 for a NULL array or array entry, else the number of
+    // invalid lanes.
     void batch(const char* suffix, const KernelFamily& family) {
         const unsigned outGroups = unsigned(family.outputs.size());
         std::vector<llvm::Type*> args(4 + outGroups, ptr_);
@@ -228,23 +120,25 @@ public:
             if (family.outputs[g] == 3) arrays.push_back(out.back());
         }
         auto* reject = llvm::BasicBlock::Create(ctx_, "reject", fn);
-        auto* entries = llvm::BasicBlock::Create(ctx_, "check.entries", fn);
         auto* checkEmpty = llvm::BasicBlock::Create(ctx_, "check.empty", fn);
         auto* empty = llvm::BasicBlock::Create(ctx_, "empty", fn);
+        auto* arraysGiven = llvm::BasicBlock::Create(ctx_, "check.arrays", fn);
+        auto* entries = llvm::BasicBlock::Create(ctx_, "check.entries", fn);
         auto* run = llvm::BasicBlock::Create(ctx_, "run", fn);
-        b_.CreateCondBr(b_.CreateOr(b_.CreateICmpSLT(n, llvm::ConstantInt::get(i64_, 0)), anyNull(required)), reject,
-                        entries);
+        b_.CreateCondBr(b_.CreateICmpSLT(n, llvm::ConstantInt::get(i64_, 0)), reject, checkEmpty);
         b_.SetInsertPoint(reject);
         b_.CreateRet(llvm::ConstantInt::get(i64_, -1));
+        b_.SetInsertPoint(checkEmpty);
+        b_.CreateCondBr(b_.CreateICmpEQ(n, llvm::ConstantInt::get(i64_, 0)), empty, arraysGiven);
+        b_.SetInsertPoint(empty);
+        b_.CreateRet(llvm::ConstantInt::get(i64_, 0));
+        b_.SetInsertPoint(arraysGiven);
+        b_.CreateCondBr(anyNull(required), reject, entries);
         b_.SetInsertPoint(entries);
         std::vector<llvm::Value*> streams;
         for (llvm::Value* array : arrays)
             for (unsigned c = 0; c < 3; ++c) streams.push_back(b_.CreateLoad(ptr_, b_.CreateConstGEP1_32(ptr_, array, c)));
-        b_.CreateCondBr(anyNull(streams), reject, checkEmpty);
-        b_.SetInsertPoint(checkEmpty);
-        b_.CreateCondBr(b_.CreateICmpEQ(n, llvm::ConstantInt::get(i64_, 0)), empty, run);
-        b_.SetInsertPoint(empty);
-        b_.CreateRet(llvm::ConstantInt::get(i64_, 0));
+        b_.CreateCondBr(anyNull(streams), reject, run);
         b_.SetInsertPoint(run);
         if (family.batch) {
             std::vector<llvm::Value*> callArgs = {n, in[0], in[1], inputs};

@@ -6,7 +6,8 @@
 // runKernelCodegen in Jit.h); this file supplies the three things the JIT
 // does not need:
 //   - a target machine for a triple, CPU and features named on the command
-//     line, checked against LLVM's target registry;
+//     line, checked against LLVM's target registry and against what Facet
+//     builds for (AotTarget.cpp);
 //   - the C entry points PREFIX_eval / PREFIX_eval_batch, and where the
 //     module has the sampler's entry points PREFIX_sample / _sample_batch /
 //     _pdf / _pdf_batch, with the conventions of facet_eval, facet_sample
@@ -40,9 +41,14 @@ struct AotTarget {
     int width = 4;                      // the SIMD width the JIT would pick on this CPU (16 AVX-512F, 8 AVX2, else 4)
 };
 
-// On a user error (a target, CPU or feature LLVM does not know) returns a
-// target without machine and sets `error` to one line naming the ones it
-// knows.
+// On a user error returns a target without machine and sets `error` to
+// one line: a target, CPU or feature LLVM does not know (naming the ones
+// it knows), or one Facet cannot serve, refused before any code is
+// generated since LLVM aborts or fails on many: an architecture other than
+// x86_64 and aarch64, 32-bit pointers, an x86_64 CPU and features without
+// 64-bit mode or SSE2, with soft-float, or with avx512f but neither evex512
+// nor avx512vl; aarch64 without fp-armv8 or with x1-x7 reserved. cpu
+// "native" is this machine's CPU and features (its architecture only).
 AotTarget createAotTarget(const AotTargetRequest& request, std::string& error);
 
 // Adds PREFIX_eval and PREFIX_eval_batch over the lowered entry points,

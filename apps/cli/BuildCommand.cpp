@@ -11,18 +11,21 @@
 // has no compiled sampler gets an object without sampler symbols, a header
 // saying PREFIX_HAS_SAMPLER 0, and a note on stderr. Outputs are written to temporary
 // files in their own directory and renamed into place once both are
-// complete, so a failed build leaves no partial file. Exit codes: 0 ok,
+// complete, so a failed build leaves no partial file. An output goes only
+// to a new path or over a regular file, never over the material file or
+// the other output (OutputFile.h: outputProblem). Exit codes: 0 ok,
 // 2 usage (bad options, an unknown target, CPU or feature, an output that
-// cannot be written, as for `facet eval --out`), 65 a material file error
-// (including a material the file does not have).
+// cannot be written, as for `facet eval --out`, or may not be), 65 a
+// material file error (including a material the file does not have).
+#include "AotHeader.h"
 #include "Checker.h"
 #include "Commands.h"
 #include "Kernel.h"
 #include "MaterialFile.h"
+#include "OutputFile.h"
 #include "Specialize.h"
 
 #include <llvm/ADT/StringExtras.h>
-#include <llvm/Config/llvm-config.h>
 #include <llvm/Support/SHA256.h>
 
 #include <cerrno>
@@ -42,6 +45,12 @@ struct BuildUsageError {
     std::string message;
 };
 
+// An output that must not be written (OutputFile.h: outputProblem), or a
+// header whose macros would clash (AotHeader.h: slotMacroClash).
+struct BuildOutputError {
+    std::string message;
+};
+
 struct BuildOptions {
     std::string file, material, backend = "simd", math = "exact", width, prefix, out, header, emit = "obj", assume;
     std::vector<std::string> sets;  // NAME=VALUE
@@ -55,11 +64,6 @@ bool isCIdentifier(const std::string& s) {
     return true;
 }
 
-std::string upper(std::string s) {
-    for (char& c : s) c = std::isalnum(static_cast<unsigned char>(c)) ? char(std::toupper(static_cast<unsigned char>(c))) : '_';
-    return s;
-}
-
 // A file written next to its destination and renamed over it only by
 // commit(), so that nothing partial is ever seen under the final name.
 class PendingFile {
@@ -68,11 +72,12 @@ public:
     ~PendingFile() {
         if (!tmp_.empty()) ::unlink(tmp_.c_str());
     }
-    // Writes the whole content to the temporary file; "" or an error message.
+    // Writes the whole content to the temporary file; "" or an error message
+    // ("cannot write PATH: REASON", as writeOutput's).
     std::string write(const std::string& content) {
         std::string templ = path_ + ".tmpXXXXXX";
         int fd = ::mkstemp(templ.data());
-        if (fd < 0) return fmt::format("{}: error: cannot write: {}", path_, std::strerror(errno));
+        if (fd < 0) return fmt::format("cannot write {}: {}", path_, std::strerror(errno));
         tmp_ = templ;
         size_t done = 0;
         while (done < content.size()) {
@@ -81,7 +86,7 @@ public:
             if (n <= 0) {
                 int err = errno;
                 ::close(fd);
-                return fmt::format("{}: error: cannot write: {}", path_, std::strerror(err));
+                return fmt::format("cannot write {}: {}", path_, std::strerror(err));
             }
             done += size_t(n);
         }
@@ -91,12 +96,12 @@ public:
         bool modeSet = ::fchmod(fd, 0666 & ~mask) == 0;
         int err = errno;
         if (::close(fd) != 0 || !modeSet)
-            return fmt::format("{}: error: cannot write: {}", path_, std::strerror(modeSet ? errno : err));
+            return fmt::format("cannot write {}: {}", path_, std::strerror(modeSet ? errno : err));
         return "";
     }
     std::string commit() {
         if (::rename(tmp_.c_str(), path_.c_str()) != 0)
-            return fmt::format("{}: error: cannot write: {}", path_, std::strerror(errno));
+            return fmt::format("cannot write {}: {}", path_, std::strerror(errno));
         tmp_.clear();
         return "";
     }
@@ -105,128 +110,6 @@ private:
     std::string path_, tmp_;
 };
 
-std::string formatNumber(double v) { return fmt::format("{:.9g}", v); }
-
-// The sampler's part of the header: PREFIX_HAS_SAMPLER, and where it is 1
-// the four sampling functions (facet.h's conventions without the kernel).
-std::string samplerDeclarations(const std::string& p, const std::string& macro, const AotKernel& aot) {
-    const CheckedMaterial& m = aot.material;
-    std::string h;
-    if (!aot.hasSampler) {
-        h += fmt::format("/* No importance sampler: Facet has no compiled sampler for ndf {} under\n", m.ndf.model->name);
-        h += fmt::format("   masking {} (`facet ir --plan` shows sampling: specular=none), so this\n",
-                         m.masking.model->name);
-        h += fmt::format("   object has no {}_sample, {}_sample_batch,\n", p, p);
-        h += fmt::format("   {}_pdf or {}_pdf_batch.\n", p, p);
-        h += "   libfacet's facet_sample samples such materials through its reference\n";
-        h += "   sampler. */\n";
-        h += fmt::format("#define {}_HAS_SAMPLER 0\n\n", macro);
-        return h;
-    }
-    const std::string indent(p.size() + 22, ' ');
-    h += "/* Importance sampling, as facet_sample / facet_pdf and their batch calls in\n";
-    h += "   facet/facet.h. u: three uniform numbers in [0, 1) (u[0] picks the lobe,\n";
-    h += "   u[1] and u[2] place the direction). Outputs: wi, the whole mixture's pdf of\n";
-    h += "   wi per solid angle, weight = f (n.wi) / pdf per channel. n.wo <= 0: no\n";
-    h += "   sample (all 0, a valid lane); a sample below the horizon is valid with\n";
-    h += "   weight 0. An invalid lane (a non-finite or non-unit wo, u outside [0, 1),\n";
-    h += "   a non-finite input, a result float cannot hold) gives wi = 0, pdf = 0,\n";
-    h += fmt::format("   weight = 0. {}_sample returns 1 for an invalid lane (a NULL wo or u is\n", p);
-    h += fmt::format("   one), else 0, and does not write a NULL output. {}_pdf returns 0 for an\n", p);
-    h += "   invalid lane or a NULL wi or wo. */\n";
-    h += fmt::format("#define {}_HAS_SAMPLER 1\n", macro);
-    h += fmt::format("int {}_sample(const float wo[3], const float u[3], const float* inputs, float wi[3],\n", p);
-    h += std::string(p.size() + 12, ' ') + "float* pdf, float weight[3]);\n";
-    h += fmt::format("float {}_pdf(const float wi[3], const float wo[3], const float* inputs);\n\n", p);
-    h += "/* SoA: wo[0..2], u[0..2], wi[0..2], weight[0..2] each point to n floats, pdf\n";
-    h += "   to n floats; inputs as in the eval batch. Return the number of invalid\n";
-    h += "   lanes, 0 for n = 0, -1 for n < 0 or a NULL array (or a NULL entry of\n";
-    h += "   one). */\n";
-    h += fmt::format("int64_t {}_sample_batch(int64_t n, const float* const wo[3], const float* const u[3],\n", p);
-    h += indent + "const float* const* inputs, float* const wi[3], float* pdf,\n";
-    h += indent + "float* const weight[3]);\n";
-    h += fmt::format("int64_t {}_pdf_batch(int64_t n, const float* const wi[3], const float* const wo[3],\n", p);
-    h += std::string(p.size() + 19, ' ') + "const float* const* inputs, float* pdf);\n\n";
-    return h;
-}
-
-std::string headerText(const BuildOptions& opt, const AotKernel& aot, const AotTarget& target,
-                       const std::string& optionText, const std::string& materialHash) {
-    const std::string& p = opt.prefix;
-    const std::string macro = upper(p);
-    const CheckedMaterial& m = aot.material;
-    std::string h;
-    h += fmt::format("/* {}.h: the C interface of material '{}', compiled ahead of time by Facet.\n", p, m.name);
-    h += " *\n";
-    h += fmt::format(" * Generated by `facet build` (Facet {}, LLVM {}); do not edit.\n", FACET_VERSION,
-                     LLVM_VERSION_STRING);
-    h += fmt::format(" *   material  {} from {}\n", m.name, opt.file);
-    h += fmt::format(" *   hash      sha256 {} (the specialized material as Facet prints it)\n", materialHash);
-    h += fmt::format(" *   options   {}\n", optionText);
-    h += fmt::format(" *   variant   {}", aot.variant);
-    if (aot.measuredError >= 0) h += fmt::format(" (max relative error {:.3g} measured on the build host)", aot.measuredError);
-    h += "\n";
-    h += fmt::format(" *   target    {}, cpu {}, {}\n", target.triple, target.cpu,
-                     aot.width > 1 ? fmt::format("SIMD width {}", aot.width) : std::string("scalar kernel"));
-    // Only the enabled features: the host's list also names every disabled one.
-    std::string enabled;
-    size_t start = 0;
-    while (start < target.features.size()) {
-        size_t comma = target.features.find(',', start);
-        std::string f = target.features.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-        start = comma == std::string::npos ? target.features.size() : comma + 1;
-        if (f.empty() || f[0] != '+') continue;
-        size_t lineStart = enabled.rfind('\n');
-        size_t lineLength = enabled.size() - (lineStart == std::string::npos ? 0 : lineStart + 1);
-        if (!enabled.empty()) enabled += lineLength + f.size() > 80 ? ",\n *             " : ",";
-        enabled += f;
-    }
-    h += fmt::format(" *   features  {}\n", enabled.empty() ? "(the CPU's own)" : enabled);
-    h += " *\n";
-    h += " * Self-contained: link the object built with this header and nothing else\n";
-    h += " * (no libfacet, no LLVM, no table files; at most libm). The functions are\n";
-    h += " * thread-safe and have the conventions of facet_eval / facet_eval_batch\n";
-    h += fmt::format(" * (and, where {}_HAS_SAMPLER is 1, facet_sample / facet_pdf) in\n", macro);
-    h += " * facet/facet.h: the BRDF f_r in 1/sr, rgb, without the cosine factor;\n";
-    h += " * n = +z, wi (towards the light) and wo (towards the viewer) unit vectors\n";
-    h += " * pointing away from the surface. A non-finite input or a direction whose\n";
-    h += " * length is not 1 within 1e-3 gives 0 and counts as an invalid lane.\n";
-    if (opt.assume == "unit") {
-        h += " * Built with --assume unit: the caller promises finite unit directions\n";
-        h += " * (within 1e-3) and finite inputs; on those the outputs are the\n";
-        h += " * default build's, and the batch functions return 0.\n";
-        h += " * Other inputs give undefined values (never a crash).\n";
-    }
-    h += " *\n";
-    h += fmt::format(" * Input slots ({}_INPUT_COUNT floats; an rgb input takes three, r g b).\n", macro);
-    h += " * Values outside a range are clamped to it.\n";
-    if (m.slotCount == 0) h += " *   (none: every input is bound)\n";
-    else h += " *   slot  name                    default       range\n";
-    for (const CheckedInput& in : m.inputs)
-        for (int c = 0; c < in.slotCount(); ++c) {
-            int slot = in.firstSlot + c;
-            h += fmt::format(" *   {:<5} {:<23} {:<13} {}\n", slot, m.slotName(slot), formatNumber(in.defaultValue[c]),
-                             in.hasRange ? fmt::format("{} .. {}", formatNumber(in.lo), formatNumber(in.hi)) : "none");
-        }
-    h += " */\n";
-    h += fmt::format("#ifndef FACET_AOT_{}_H\n#define FACET_AOT_{}_H\n\n#include <stdint.h>\n\n", macro, macro);
-    h += "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
-    h += fmt::format("#define {}_INPUT_COUNT {}\n", macro, m.slotCount);
-    for (int s = 0; s < m.slotCount; ++s) h += fmt::format("#define {}_SLOT_{} {}\n", macro, upper(m.slotName(s)), s);
-    h += "\n/* One direction pair. inputs: one value per slot, or NULL (all defaults).\n";
-    h += "   A NULL wi, wo or rgb does nothing (rgb, if not NULL, is set to 0). */\n";
-    h += fmt::format("void {}_eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]);\n\n", p);
-    h += "/* SoA batch: wi[0..2], wo[0..2], rgb[0..2] each point to n floats; inputs is\n";
-    h += "   NULL (all defaults) or inputs[s] points to n floats (or is NULL: that slot's\n";
-    h += "   default). Returns the number of invalid lanes (their rgb is 0), 0 for n = 0,\n";
-    h += "   -1 for n < 0 or a NULL wi, wo or rgb (or a NULL entry of one). */\n";
-    h += fmt::format("int64_t {}_eval_batch(int64_t n, const float* const wi[3], const float* const wo[3],\n", p);
-    h += std::string(p.size() + 20, ' ') + "const float* const* inputs, float* const rgb[3]);\n\n";
-    h += samplerDeclarations(p, macro, aot);
-    h += "#ifdef __cplusplus\n}\n#endif\n\n";
-    h += fmt::format("#endif /* FACET_AOT_{}_H */\n", macro);
-    return h;
-}
 
 BuildOptions parseBuildArgs(const std::vector<std::string>& args) {
     BuildOptions opt;
@@ -266,8 +149,19 @@ BuildOptions parseBuildArgs(const std::vector<std::string>& args) {
     return opt;
 }
 
+// Throws BuildOutputError when an output is not a new path or an existing
+// regular file, or is the material file or the other output.
+void checkOutputPaths(const BuildOptions& opt) {
+    std::string problem = outputProblem("facet build", opt.out,
+                                        {{opt.file, "the material file"}, {opt.header, "the header"}});
+    if (problem.empty() && !opt.header.empty())
+        problem = outputProblem("facet build", opt.header, {{opt.file, "the material file"}});
+    if (!problem.empty()) throw BuildOutputError{problem};
+}
+
 int runBuild(const std::vector<std::string>& args) {
     BuildOptions opt = parseBuildArgs(args);
+    checkOutputPaths(opt);
     // The option string of the C/C++ API, so that the kernel is the one
     // facet_compile_file builds with the same options.
     std::string spec = "backend=" + opt.backend;
@@ -319,12 +213,15 @@ int runBuild(const std::vector<std::string>& args) {
         std::fputs(diags.str().c_str(), stderr);
         return kExitMaterialError;
     }
+    if (!opt.header.empty())
+        if (std::string clash = slotMacroClash(opt.prefix, aot->material); !clash.empty())
+            throw BuildOutputError{clash};
     if (!aot->hasSampler)
         std::fprintf(stderr,
                      "facet: note: material %s has no compiled sampler (ndf %s, masking %s): the object has "
                      "%s_eval and %s_eval_batch only, and the header says %s_HAS_SAMPLER 0\n",
                      aot->material.name.c_str(), aot->material.ndf.model->name, aot->material.masking.model->name,
-                     opt.prefix.c_str(), opt.prefix.c_str(), upper(opt.prefix).c_str());
+                     opt.prefix.c_str(), opt.prefix.c_str(), opt.prefix.c_str());
     auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(printMaterial(aot->material)));
     std::string optionText = fmt::format("backend={};{};width={}", opt.backend,
                                          options.tolerance ? opt.math : "math=" + opt.math, aot->width);
@@ -338,12 +235,15 @@ int runBuild(const std::vector<std::string>& args) {
     std::string error = object.write(aot->output);
     if (error.empty() && !opt.header.empty()) {
         header.emplace(opt.header);
-        error = header->write(headerText(opt, *aot, target, optionText, llvm::toHex(digest, true)));
+        error = header->write(
+            aotHeaderText({opt.prefix, opt.file, opt.assume, optionText, llvm::toHex(digest, true)}, *aot, target));
     }
+    // Again just before the renames: the paths may have changed during the compilation.
+    if (error.empty()) checkOutputPaths(opt);
     if (error.empty()) error = object.commit();
     if (error.empty() && header) error = header->commit();
     if (!error.empty()) {
-        std::fprintf(stderr, "%s\n", error.c_str());
+        std::fprintf(stderr, "facet: error: %s\n", error.c_str());
         return kExitUsage;
     }
     return kExitOk;
@@ -356,6 +256,9 @@ int cmdBuild(const std::vector<std::string>& args) {
         return runBuild(args);
     } catch (const BuildUsageError& e) {
         std::fprintf(stderr, "facet: %s\n", e.message.c_str());
+        return kExitUsage;
+    } catch (const BuildOutputError& e) {
+        std::fprintf(stderr, "facet: error: %s\n", e.message.c_str());
         return kExitUsage;
     }
 }

@@ -1,4 +1,4 @@
-// OutputFile: checked writes of command outputs (OutputFile.h).
+// OutputFile: checked writes of command outputs, and the paths they may go to (OutputFile.h).
 #include "OutputFile.h"
 
 #include "CacheFiles.h"
@@ -6,6 +6,9 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fmt/format.h>
+#include <sys/stat.h>
 
 namespace facet {
 
@@ -30,6 +33,56 @@ bool writeOutput(const std::string& path, const std::string& text) {
         return false;
     }
     return true;
+}
+
+namespace {
+
+const char* nodeKind(mode_t mode) {
+    if (S_ISLNK(mode)) return "a symbolic link";
+    if (S_ISDIR(mode)) return "a directory";
+    if (S_ISFIFO(mode)) return "a FIFO";
+    if (S_ISSOCK(mode)) return "a socket";
+    if (S_ISBLK(mode)) return "a block device";
+    if (S_ISCHR(mode)) return "a character device";
+    return "a special file";
+}
+
+// A path that names no file yet, in the one form two spellings of it share:
+// absolute, with the part of it that exists resolved (symlinked directories,
+// "..") and the rest lexically normal ("./x.o" and "x.o").
+std::string normalizedPath(const std::string& path) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::path absolute = fs::absolute(path, ec);
+    if (ec) return fs::path(path).lexically_normal().string();
+    fs::path resolved = fs::weakly_canonical(absolute, ec);
+    return (ec ? absolute.lexically_normal() : resolved).string();
+}
+
+}  // namespace
+
+std::string outputProblem(const std::string& command, const std::string& out, const std::vector<OtherPath>& others) {
+    struct stat outStat {};
+    // lstat: the output itself, not what a symlink there points to.
+    const bool outExists = ::lstat(out.c_str(), &outStat) == 0;
+    if (outExists && !S_ISREG(outStat.st_mode))
+        return fmt::format("{} is {}, not a regular file; {} writes its outputs only to new paths or regular files", out,
+                           nodeKind(outStat.st_mode), command);
+    for (const OtherPath& other : others) {
+        if (other.path.empty()) continue;
+        bool same = false;
+        if (outExists) {
+            struct stat otherStat {};
+            same = ::stat(other.path.c_str(), &otherStat) == 0 && otherStat.st_dev == outStat.st_dev &&
+                   otherStat.st_ino == outStat.st_ino;
+        } else {
+            same = normalizedPath(out) == normalizedPath(other.path);
+        }
+        if (same)
+            return fmt::format("{} is the same file as {} {}; {} does not write an output over {}", out, other.role,
+                               other.path, command, other.role);
+    }
+    return "";
 }
 
 bool finishStandardOutput() {

@@ -1,9 +1,11 @@
 // OutputFile: how `facet` commands write what they produce, every write and
 // close checked, so that a full disk or a closed pipe is an error naming the
-// file (exit 1), never a truncated file presented as success.
+// file (exit 1), never a truncated file presented as success; and which
+// paths a command may write its outputs to at all.
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace facet {
 
@@ -14,5 +16,22 @@ bool writeOutput(const std::string& path, const std::string& text);
 // Flushes and checks standard output after a command printed to it with
 // stdio; false (and the one-line error) when any of it was lost.
 bool finishStandardOutput();
+
+// A path the command reads or writes besides the output being checked,
+// with what it is to the user ("the material file", "the header").
+struct OtherPath {
+    std::string path, role;
+};
+
+// Why `command` must not write an output to `out`, as one line without the
+// "facet: error: " prefix, or "" when it may. Outputs that are replaced by
+// renaming a complete file over them may only go to a new path or over an
+// existing regular file: a rename over a symlink, FIFO, socket or device
+// would replace that node by a regular file (as root, /dev/null itself), and
+// one over a directory fails late. `out` must also be none of `others`:
+// existing files are compared by device and inode (hard links, `./x` and
+// `x`, symlinked directories), paths that do not exist yet by their
+// normalized absolute form with the existing part of them resolved.
+std::string outputProblem(const std::string& command, const std::string& out, const std::vector<OtherPath>& others);
 
 }  // namespace facet

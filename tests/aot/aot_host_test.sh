@@ -8,7 +8,9 @@
 # facet_aot_reference requires its outputs to be the JIT kernel's bit for bit.
 # satin_gaussian (gaussian's sampler inverts its CDF by Newton steps in IR)
 # in SIMD exact only.
-# Also: the objects reference no symbol outside themselves but libm's.
+# Also: the objects reference no symbol outside themselves but libm's; and
+# gold built for other x86_64 CPUs and features that facet build accepts
+# (--cpu native, x86-64, -x87, ...) runs correctly on this host.
 set -euo pipefail
 build=$1 source=$2
 facet=$build/bin/facet reference=$build/tests/aot/facet_aot_reference
@@ -45,14 +47,46 @@ for material in gold plastic brushed_metal satin_gaussian; do
       echo "FAIL $prefix.o exports '$exported', expected '$expected'"
       failed=1
     fi
-    if ! grep -q "^#define ${prefix^^}_HAS_SAMPLER $has_sampler\$" "$work/$prefix.h"; then
-      echo "FAIL $prefix.h does not say ${prefix^^}_HAS_SAMPLER $has_sampler"
+    if ! grep -q "^#define ${prefix}_HAS_SAMPLER $has_sampler\$" "$work/$prefix.h"; then
+      echo "FAIL $prefix.h does not say ${prefix}_HAS_SAMPLER $has_sampler"
       failed=1
     fi
-    "$cc" -std=c99 -pedantic -Wall -Wextra -Werror -O2 -DAOT_PREFIX="$prefix" -DAOT_MACRO="${prefix^^}" -include "$work/$prefix.h" \
+    "$cc" -std=c99 -pedantic -Wall -Wextra -Werror -O2 -DAOT_PREFIX="$prefix" -include "$work/$prefix.h" \
       "$source/tests/aot/aot_run.c" "$work/$prefix.o" -lm -o "$work/$prefix.run"
     "$work/$prefix.run" "$work/$material.in" "$work/$prefix.out" || failed=1
     "$reference" same-as-jit "$mat" "$material" "$options" $random "$work/$prefix.out" || failed=1
   done
 done
+
+# Other x86_64 CPUs and features that `facet build` accepts give objects that
+# run correctly here: --cpu native is the JIT's own CPU, so bit for bit the
+# JIT's outputs; the others (a baseline CPU, -x87, an AVX-512 CPU with AVX
+# turned off, no FMA or SSE4.1) are checked against the double interpreter
+# as the aarch64 objects are. The AVX-512 CPU only where this host has the
+# non-AVX extensions that CPU implies.
+if [ "$(uname -m)" = x86_64 ]; then
+  mat=$source/materials/gold.mat small=2000
+  "$reference" inputs "$mat" gold "" $small "$work/gold_small.in"
+  variants=("native|--cpu native" "base|--cpu x86-64" "nox87|--features -x87" "nofma|--features -fma,-sse4.1")
+  flags=" $(grep -m1 '^flags' /proc/cpuinfo) "
+  has_all=1
+  # /proc/cpuinfo names LZCNT abm.
+  for f in bmi1 bmi2 movbe adx abm popcnt sse4_2 rdseed clflushopt; do [[ $flags == *" $f "* ]] || has_all=0; done
+  [ $has_all = 1 ] && variants+=("skxnoavx|--cpu skylake-avx512 --features -avx")
+  for variant in "${variants[@]}"; do
+    prefix=gold_${variant%%|*} args=${variant#*|}
+    if ! "$facet" build "$mat" $args --prefix "$prefix" -o "$work/$prefix.o" --header "$work/$prefix.h"; then
+      echo "FAIL facet build $args"
+      failed=1
+      continue
+    fi
+    "$cc" -std=c99 -O2 -DAOT_PREFIX="$prefix" -include "$work/$prefix.h" "$source/tests/aot/aot_run.c" \
+      "$work/$prefix.o" -lm -o "$work/$prefix.run"
+    "$work/$prefix.run" "$work/gold_small.in" "$work/$prefix.out" || { echo "FAIL $prefix ($args) did not run"; failed=1; continue; }
+    mode=against-interpreter
+    [ "${variant%%|*}" = native ] && mode=same-as-jit
+    "$reference" $mode "$mat" gold "backend=simd;math=exact" $small "$work/$prefix.out" ||
+      { echo "FAIL $prefix ($args): $mode"; failed=1; }
+  done
+fi
 exit $failed

@@ -1,6 +1,7 @@
 /* aot_run.c: a plain C99 host of one ahead-of-time compiled material, linked
    only against the object `facet build` wrote and libm. Compiled once per
-   object with -DAOT_PREFIX=name -DAOT_MACRO=NAME -include name.h.
+   object with -DAOT_PREFIX=name -include name.h (the header's macros are
+   name_INPUT_COUNT, name_HAS_SAMPLER: the prefix as given).
 
      aot_run INPUTS.bin OUTPUTS.bin
 
@@ -24,12 +25,12 @@
 #define AOT_CAT(a, b) AOT_CAT2(a, b)
 #define AOT_EVAL AOT_CAT(AOT_PREFIX, _eval)
 #define AOT_EVAL_BATCH AOT_CAT(AOT_PREFIX, _eval_batch)
-#define AOT_INPUT_COUNT_OF(p) AOT_CAT(p, _INPUT_COUNT)
+#define AOT_INPUT_COUNT AOT_CAT(AOT_PREFIX, _INPUT_COUNT)
 #define AOT_SAMPLE AOT_CAT(AOT_PREFIX, _sample)
 #define AOT_SAMPLE_BATCH AOT_CAT(AOT_PREFIX, _sample_batch)
 #define AOT_PDF AOT_CAT(AOT_PREFIX, _pdf)
 #define AOT_PDF_BATCH AOT_CAT(AOT_PREFIX, _pdf_batch)
-#define AOT_HAS_SAMPLER AOT_CAT(AOT_MACRO, _HAS_SAMPLER)
+#define AOT_HAS_SAMPLER AOT_CAT(AOT_PREFIX, _HAS_SAMPLER)
 
 static int failures = 0;
 #define EXPECT(cond, ...)                                        \
@@ -101,6 +102,7 @@ static int runSampler(FILE* out, int64_t n, int slots, const float* const wi[3],
 
     /* The argument conventions (facet_sample_batch, facet_pdf_batch, facet_sample, facet_pdf). */
     EXPECT(AOT_SAMPLE_BATCH(0, wo, u, NULL, swi, sb + 3 * n, sweight) == 0, "sample: n = 0 must return 0");
+    EXPECT(AOT_SAMPLE_BATCH(0, NULL, NULL, NULL, NULL, NULL, NULL) == 0, "sample: n = 0 with NULL arrays must return 0");
     EXPECT(AOT_SAMPLE_BATCH(-1, wo, u, NULL, swi, sb + 3 * n, sweight) == -1, "sample: n < 0 must return -1");
     EXPECT(AOT_SAMPLE_BATCH(n, NULL, u, NULL, swi, sb + 3 * n, sweight) == -1, "sample: NULL wo must return -1");
     EXPECT(AOT_SAMPLE_BATCH(n, wo, NULL, NULL, swi, sb + 3 * n, sweight) == -1, "sample: NULL u must return -1");
@@ -120,6 +122,7 @@ static int runSampler(FILE* out, int64_t n, int slots, const float* const wi[3],
         EXPECT(AOT_PDF_BATCH(n, holed, wo, NULL, pb) == -1, "pdf: a NULL entry of wi must return -1");
     }
     EXPECT(AOT_PDF_BATCH(0, wi, wo, NULL, pb) == 0, "pdf: n = 0 must return 0");
+    EXPECT(AOT_PDF_BATCH(0, NULL, NULL, NULL, NULL) == 0, "pdf: n = 0 with NULL arrays must return 0");
     EXPECT(AOT_PDF_BATCH(-1, wi, wo, NULL, pb) == -1, "pdf: n < 0 must return -1");
     EXPECT(AOT_PDF_BATCH(n, NULL, wo, NULL, pb) == -1, "pdf: NULL wi must return -1");
     EXPECT(AOT_PDF_BATCH(n, wi, NULL, NULL, pb) == -1, "pdf: NULL wo must return -1");
@@ -189,9 +192,9 @@ int main(int argc, char** argv) {
         fprintf(stderr, "%s: not an input file of facet_aot_reference\n", argv[1]);
         return 1;
     }
-    if (slots != AOT_INPUT_COUNT_OF(AOT_MACRO)) {
+    if (slots != AOT_INPUT_COUNT) {
         fprintf(stderr, "%s: %d input slots, the header says %d\n", argv[1], (int)slots,
-                AOT_INPUT_COUNT_OF(AOT_MACRO));
+                AOT_INPUT_COUNT);
         return 1;
     }
     lanes = malloc(sizeof(float) * (size_t)n * (size_t)(9 + slots));
@@ -249,6 +252,13 @@ int main(int argc, char** argv) {
 
     /* The argument conventions (SPEC section 4). */
     EXPECT(AOT_EVAL_BATCH(0, wi, wo, NULL, rgb) == 0, "n = 0 must return 0");
+    EXPECT(AOT_EVAL_BATCH(0, NULL, NULL, NULL, NULL) == 0, "n = 0 with NULL arrays must return 0");
+    {
+        const float* holed[3];
+        holed[0] = wi[0], holed[1] = NULL, holed[2] = wi[2];
+        EXPECT(AOT_EVAL_BATCH(0, holed, wo, NULL, rgb) == 0, "n = 0 with a NULL entry of wi must return 0");
+        EXPECT(AOT_EVAL_BATCH(n, holed, wo, NULL, rgb) == -1, "a NULL entry of wi must return -1");
+    }
     EXPECT(AOT_EVAL_BATCH(-1, wi, wo, NULL, rgb) == -1, "n < 0 must return -1");
     EXPECT(AOT_EVAL_BATCH(n, NULL, wo, NULL, rgb) == -1, "NULL wi must return -1");
     EXPECT(AOT_EVAL_BATCH(n, wi, NULL, NULL, rgb) == -1, "NULL wo must return -1");

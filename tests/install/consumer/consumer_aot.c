@@ -14,7 +14,7 @@ int main(void) {
     float atNormal, back;
     test_material_eval(n, n, NULL, rgb);
     printf("%.9g\n", rgb[0]);
-#if !TEST_MATERIAL_HAS_SAMPLER
+#if !test_material_HAS_SAMPLER
     fputs("test_material.h says the object has no sampler\n", stderr);
     return 1;
 #else
