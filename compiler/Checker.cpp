@@ -659,6 +659,12 @@ std::optional<std::string> readSourceFile(const std::string& path, std::string& 
         text.append(buffer, size_t(got));
     }
     ::close(fd);
+    // A FIFO with no writer reads as empty at once (opened without
+    // blocking, so that it cannot hang): say so rather than "no material".
+    if (text.empty() && S_ISFIFO(st.st_mode)) {
+        error = "is a FIFO (named pipe) and nothing was written to it";
+        return std::nullopt;
+    }
     return text;
 }
 

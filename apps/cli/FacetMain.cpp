@@ -12,6 +12,7 @@
 #include "Commands.h"
 #include "CsvTable.h"
 #include "Interpreter.h"
+#include "SamplingSetup.h"
 #include "Kernel.h"
 #include "MaterialFile.h"
 #include "OutputFile.h"
@@ -221,6 +222,12 @@ int cmdEval(const std::vector<std::string>& args) {
     // Output: built in memory and written at the end, every write checked;
     // a file that cannot even be created is a usage error, found first.
     if (!opt.out.empty()) {
+        if (std::string why = sameFileProblem("facet eval", opt.out,
+                                              {{opt.file, "the material file"}, {opt.in, "the input CSV"}});
+            !why.empty()) {
+            std::fprintf(stderr, "facet: error: %s\n", why.c_str());
+            return kExitUsage;
+        }
         FILE* probe = std::fopen(opt.out.c_str(), "w");
         if (!probe) {
             std::fprintf(stderr, "%s: error: cannot open for writing\n", opt.out.c_str());
@@ -269,10 +276,10 @@ int cmdEval(const std::vector<std::string>& args) {
     }
     std::vector<std::array<double, 3>> results(rows, {0, 0, 0});
     if (compileOptions.backend == Backend::Interp) {
-        Interpreter<double> interp(*material);
+        std::unique_ptr<Interpreter<double>> interp = referenceInterpreter(*material);
         for (size_t r = 0; r < rows; ++r) {
             if (!problems[r].empty()) continue;
-            EvalResult<double> res = interp.eval(&dirs[r][0], &dirs[r][3], rowSlots[r].data());
+            EvalResult<double> res = interp->eval(&dirs[r][0], &dirs[r][3], rowSlots[r].data());
             if (!res.valid) problems[r] = "a model parameter is not finite for this row's inputs";
             else results[r] = {res.rgb[0], res.rgb[1], res.rgb[2]};
         }

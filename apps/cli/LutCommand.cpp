@@ -8,6 +8,7 @@
 // pair must be one a table exists for (not ward; constant gtr gamma and
 // schlick_smith k).
 #include "Commands.h"
+#include "OutputFile.h"
 
 #include "Checker.h"
 #include "Interpreter.h"
@@ -55,6 +56,8 @@ int cmdLut(const std::vector<std::string>& args) {
     }
     if (file.empty()) return usage("no material file given");
     if (out.empty()) return usage("-o TABLES.exr is required");
+    if (std::string why = sameFileProblem("facet lut", out, {{file, "the material file"}}); !why.empty())
+        return usage(why);
 
     NamedMaterial named = loadNamedMaterial(file, material);
     if (named.fileErrors) return kExitMaterialError;

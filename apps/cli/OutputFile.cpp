@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fmt/format.h>
 #include <sys/stat.h>
+#include <fcntl.h>
+#include <unistd.h>
 
 namespace facet {
 
@@ -64,10 +66,15 @@ std::string normalizedPath(const std::string& path) {
 std::string outputProblem(const std::string& command, const std::string& out, const std::vector<OtherPath>& others) {
     struct stat outStat {};
     // lstat: the output itself, not what a symlink there points to.
-    const bool outExists = ::lstat(out.c_str(), &outStat) == 0;
-    if (outExists && !S_ISREG(outStat.st_mode))
+    if (::lstat(out.c_str(), &outStat) == 0 && !S_ISREG(outStat.st_mode))
         return fmt::format("{} is {}, not a regular file; {} writes its outputs only to new paths or regular files", out,
                            nodeKind(outStat.st_mode), command);
+    return sameFileProblem(command, out, others);
+}
+
+std::string sameFileProblem(const std::string& command, const std::string& out, const std::vector<OtherPath>& others) {
+    struct stat outStat {};
+    const bool outExists = ::stat(out.c_str(), &outStat) == 0;
     for (const OtherPath& other : others) {
         if (other.path.empty()) continue;
         bool same = false;
@@ -83,6 +90,51 @@ std::string outputProblem(const std::string& command, const std::string& out, co
                                other.path, command, other.role);
     }
     return "";
+}
+
+OutputStream::OutputStream(std::string path) : path_(std::move(path)) {
+    if (path_.empty() || path_ == "-") {
+        std::fflush(stdout);  // what the command printed before comes first
+        fd_ = STDOUT_FILENO;
+        return;
+    }
+    fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd_ < 0) fail(errno);
+}
+
+OutputStream::~OutputStream() {
+    if (fd_ > STDOUT_FILENO) ::close(fd_);
+}
+
+bool OutputStream::fail(int err) {
+    if (!failed_) {
+        std::string name = fd_ == STDOUT_FILENO ? "standard output" : path_;
+        std::fprintf(stderr, "facet: error: cannot write %s: %s\n", name.c_str(), std::strerror(err ? err : EIO));
+    }
+    failed_ = true;
+    return false;
+}
+
+bool OutputStream::write(std::string_view text) {
+    if (failed_) return false;
+    while (!text.empty()) {
+        ssize_t n = ::write(fd_, text.data(), text.size());
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) return fail(n < 0 ? errno : EIO);
+        text.remove_prefix(size_t(n));
+    }
+    return true;
+}
+
+bool OutputStream::finish() {
+    if (failed_ || finished_) return !failed_;
+    finished_ = true;
+    if (fd_ > STDOUT_FILENO) {
+        int fd = fd_;
+        fd_ = -1;
+        if (::close(fd) != 0) return fail(errno);
+    }
+    return true;
 }
 
 bool finishStandardOutput() {

@@ -6,6 +6,7 @@
 
 #include <string>
 #include <vector>
+#include <string_view>
 
 namespace facet {
 
@@ -33,5 +34,32 @@ struct OtherPath {
 // `x`, symlinked directories), paths that do not exist yet by their
 // normalized absolute form with the existing part of them resolved.
 std::string outputProblem(const std::string& command, const std::string& out, const std::vector<OtherPath>& others);
+// Only the second half: `out` is none of `others`. For outputs written in
+// place (`facet sample --out`, `facet eval --out`), which may go to a FIFO or
+// a device such as /dev/null, but never over the files the command reads.
+std::string sameFileProblem(const std::string& command, const std::string& out, const std::vector<OtherPath>& others);
+
+// An output written in pieces, for results too large to hold in memory
+// (`facet sample -n 100000000`): "" or "-" is standard output, anything
+// else the file, created or truncated when the stream opens. Each write is
+// checked; the first failure prints the one-line error and makes every
+// later call return false.
+class OutputStream {
+public:
+    explicit OutputStream(std::string path);
+    ~OutputStream();
+    OutputStream(const OutputStream&) = delete;
+    OutputStream& operator=(const OutputStream&) = delete;
+
+    bool write(std::string_view text);
+    // Flushes and closes; false when anything was lost.
+    bool finish();
+
+private:
+    bool fail(int err);
+    std::string path_;
+    int fd_ = -1;
+    bool failed_ = false, finished_ = false;
+};
 
 }  // namespace facet

@@ -27,6 +27,7 @@
 #include "ChiSquare.h"
 #include "Kernel.h"
 #include "MaterialFile.h"
+#include "OutputFile.h"
 #include "PdfPlot.h"
 #include "Plots.h"
 #include "Sampling.h"
@@ -137,12 +138,18 @@ RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
         else if (a == "--alpha") r.alphas = parseNumberList(a, value());
         else if (a == "--wo") r.wo = value();
         else if (a == "-n") r.samples = parseInteger(a, value(), 1, 100000000);
-        else if (a == "--seed") r.seed = uint64_t(parseInteger(a, value(), 0, 2147483647));
+        else if (a == "--seed") {
+            if (std::string why = parseSeed(a, value(), r.seed); !why.empty()) throw RenderUsageError{why};
+        }
         else if (!a.empty() && a[0] == '-') throw RenderUsageError{fmt::format("unknown option '{}'", a)};
         else if (r.file.empty()) r.file = a;
         else throw RenderUsageError{fmt::format("more than one material file ('{}' and '{}')", r.file, a)};
     }
     if (r.out.empty()) throw RenderUsageError{"-o OUT is required"};
+    if (std::string why = sameFileProblem("facet render", r.out,
+                                          {{r.file, "the material file"}, {r.compare, "the --compare file"}});
+        !why.empty())
+        throw RenderUsageError{why};
     if (!r.compare.empty() && r.plot != "ndf") throw RenderUsageError{"--compare goes with --plot ndf"};
     if (r.file.empty() && r.compare.empty()) throw RenderUsageError{"no material file given"};
     if (!r.thetaI.empty() && r.plot != "lobe") throw RenderUsageError{"--theta-i goes with --plot lobe"};
@@ -352,7 +359,7 @@ int pdfPlotCommand(const RenderArgs& r) {
     NamedMaterial named = loadRenderMaterial(r);
     const CheckedMaterial* m = named.material;
     if (!m) return kExitMaterialError;
-    std::unique_ptr<Interpreter<double>> sampler = referenceSampler(*m);
+    std::unique_ptr<Interpreter<double>> sampler = referenceInterpreter(*m);
 
     SphereGrid grid = SphereGrid::equalArea(kPdfPlotRows, kPdfPlotColumns);
     preview::SampleHistogram h;

@@ -23,10 +23,12 @@
 #include "Sampling.h"
 #include "SamplingSetup.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fmt/format.h>
+#include <optional>
 
 namespace facet {
 
@@ -37,6 +39,7 @@ constexpr const char* kSampleUsage =
     "                     [--backend interp|scalar|simd] [--math exact|fast]\n"
     "  wo: the unit view direction, pointing away from the surface (n = +z)\n";
 constexpr long kMaxSamples = 100000000;
+constexpr long kSampleChunk = 65536;
 
 struct SampleUsageError {
     std::string message;
@@ -48,14 +51,6 @@ long parseCount(const std::string& text) {
     if (end == text.c_str() || *end || n < 1 || n > kMaxSamples)
         throw SampleUsageError{fmt::format("-n expects a whole number from 1 to {}, got '{}'", kMaxSamples, text)};
     return n;
-}
-
-uint64_t parseSeed(const std::string& text) {
-    char* end = nullptr;
-    unsigned long long s = std::strtoull(text.c_str(), &end, 10);
-    if (end == text.c_str() || *end || text[0] == '-')
-        throw SampleUsageError{fmt::format("--seed expects a whole number from 0 to 2^64 - 1, got '{}'", text)};
-    return s;
 }
 
 int runSample(const std::vector<std::string>& args) {
@@ -72,7 +67,9 @@ int runSample(const std::vector<std::string>& args) {
             else if (a == "--backend") backend = v;
             else if (a == "--math") math = v;
             else if (a == "-n") count = parseCount(v);
-            else if (a == "--seed") seed = parseSeed(v);
+            else if (a == "--seed") {
+                if (std::string why = parseSeed(a, v, seed); !why.empty()) throw SampleUsageError{why};
+            }
             else if (a == "--material") material = v;
             else out = v;
         } else if (!a.empty() && a[0] == '-') {
@@ -90,6 +87,9 @@ int runSample(const std::vector<std::string>& args) {
     if (math != "exact" && math != "fast") throw SampleUsageError{fmt::format("--math '{}' is not exact or fast", math)};
     std::array<double, 3> view;
     if (std::string why = parseViewDirection("--wo", wo, view); !why.empty()) throw SampleUsageError{why};
+    if (!out.empty() && out != "-")
+        if (std::string why = sameFileProblem("facet sample", out, {{file, "the material file"}}); !why.empty())
+            throw SampleUsageError{why};
 
     NamedMaterial named = loadNamedMaterial(file, material);
     if (named.fileErrors) return kExitMaterialError;
@@ -97,11 +97,37 @@ int runSample(const std::vector<std::string>& args) {
     const CheckedMaterial* m = named.material;
     SampleUniforms uniforms(seed);
     auto uniform = [&] { return uniforms.next(); };
-    std::string csv = "wi_x,wi_y,wi_z,pdf,weight_r,weight_g,weight_b\n";
     std::array<double, 3> sum{};
     long below = 0, invalid = 0;
+    // The kernel first: a material that does not compile leaves the output
+    // untouched.
+    std::optional<Compiler> compiler;  // (a JIT: only for the compiled backends)
+    std::unique_ptr<Kernel> kernel;
+    if (backend != "interp") {
+        compiler.emplace();
+        CompileOptions options;
+        std::string problem = CompileOptions::parse(fmt::format("backend={};math={}", backend, math), options);
+        internal_assert(problem.empty()) << problem;
+        DiagnosticEngine diags;
+        kernel = compiler->compileMaterial(*m, options, diags);
+        if (!kernel) {
+            std::fputs(diags.str().c_str(), stderr);
+            return kExitMaterialError;
+        }
+        if (!kernel->samplerError().empty())
+            std::fprintf(stderr, "facet: warning: material %s: %s; sampling through the reference\n",
+                         m->name.c_str(), kernel->samplerError().c_str());
+        else if (kernel->samplerTier() != "jit")
+            std::fprintf(stderr, "facet: note: material %s has no compiled sampler (ndf %s); sampling through the "
+                                 "reference\n", m->name.c_str(), m->ndf.model->name);
+    }
+    OutputStream output(out);
+    if (!output.write("wi_x,wi_y,wi_z,pdf,weight_r,weight_g,weight_b\n")) return kExitFailed;
+    // Samples are drawn and written kSampleChunk at a time, so that memory
+    // stays the same whatever N is.
+    std::string csv;
     if (backend == "interp") {
-        std::unique_ptr<Interpreter<double>> interp = referenceSampler(*m);
+        std::unique_ptr<Interpreter<double>> interp = referenceInterpreter(*m);
         for (long i = 0; i < count; ++i) {
             double u[3] = {uniform(), uniform(), uniform()};
             SampleResult<double> s = interp->sample(view.data(), u, nullptr);
@@ -110,50 +136,45 @@ int runSample(const std::vector<std::string>& args) {
             for (int ch = 0; ch < 3; ++ch) sum[ch] += s.weight[ch];
             csv += fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}\n", s.wi.x, s.wi.y, s.wi.z,
                                s.pdf, s.weight[0], s.weight[1], s.weight[2]);
+            if ((i + 1) % kSampleChunk == 0 || i + 1 == count) {
+                if (!output.write(csv)) return kExitFailed;
+                csv.clear();
+            }
         }
     } else {
-        Compiler compiler;
-        CompileOptions options;
-        std::string problem = CompileOptions::parse(fmt::format("backend={};math={}", backend, math), options);
-        internal_assert(problem.empty()) << problem;
-        DiagnosticEngine diags;
-        std::unique_ptr<Kernel> kernel = compiler.compileMaterial(*m, options, diags);
-        if (!kernel) {
-            std::fputs(diags.str().c_str(), stderr);
-            return kExitMaterialError;
-        }
-        if (!kernel->samplerError().empty())
-            std::fprintf(stderr, "facet: warning: material %s: %s; sampling through the reference\n",
-                         m->name.c_str(), kernel->samplerError().c_str());
-        else if (kernel->samplerTier() != "jit" && options.backend != Backend::Interp)
-            std::fprintf(stderr, "facet: note: material %s has no compiled sampler (ndf %s); sampling through the "
-                                 "reference\n", m->name.c_str(), m->ndf.model->name);
         const float wo3[3] = {float(view[0]), float(view[1]), float(view[2])};
+        const size_t chunk = size_t(std::min<long>(count, kSampleChunk));
         std::array<std::vector<float>, 3> wos, us, wis, weights;
-        std::vector<float> pdfs(static_cast<size_t>(count));
+        std::vector<float> pdfs(chunk);
         for (int c = 0; c < 3; ++c) {
-            wos[c].assign(size_t(count), wo3[c]);
-            wis[c].resize(size_t(count)), weights[c].resize(size_t(count)), us[c].resize(size_t(count));
+            wos[c].assign(chunk, wo3[c]);
+            wis[c].resize(chunk), weights[c].resize(chunk), us[c].resize(chunk);
         }
-        // Floats below 1: a double u rounds down, never up to 1.
-        for (long i = 0; i < count; ++i)
-            for (int c = 0; c < 3; ++c) {
-                float f = float(uniform());
-                us[c][size_t(i)] = f < 1 ? f : std::nextafter(1.0f, 0.0f);
-            }
         const float* woP[3] = {wos[0].data(), wos[1].data(), wos[2].data()};
         const float* uP[3] = {us[0].data(), us[1].data(), us[2].data()};
         float* wiP[3] = {wis[0].data(), wis[1].data(), wis[2].data()};
         float* weightP[3] = {weights[0].data(), weights[1].data(), weights[2].data()};
-        invalid = long(kernel->sampleBatch(count, woP, uP, nullptr, wiP, pdfs.data(), weightP));
-        for (size_t i = 0; i < size_t(count); ++i) {
-            below += pdfs[i] > 0 && wis[2][i] <= 0;
-            for (int ch = 0; ch < 3; ++ch) sum[ch] += weights[ch][i];
-            csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", wis[0][i], wis[1][i], wis[2][i],
-                               pdfs[i], weights[0][i], weights[1][i], weights[2][i]);
+        for (long done = 0; done < count;) {
+            const size_t n = size_t(std::min<long>(count - done, long(chunk)));
+            // Floats below 1: a double u rounds down, never up to 1.
+            for (size_t i = 0; i < n; ++i)
+                for (int c = 0; c < 3; ++c) {
+                    float f = float(uniform());
+                    us[c][i] = f < 1 ? f : std::nextafter(1.0f, 0.0f);
+                }
+            invalid += long(kernel->sampleBatch(int64_t(n), woP, uP, nullptr, wiP, pdfs.data(), weightP));
+            csv.clear();
+            for (size_t i = 0; i < n; ++i) {
+                below += pdfs[i] > 0 && wis[2][i] <= 0;
+                for (int ch = 0; ch < 3; ++ch) sum[ch] += weights[ch][i];
+                csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", wis[0][i], wis[1][i],
+                                   wis[2][i], pdfs[i], weights[0][i], weights[1][i], weights[2][i]);
+            }
+            if (!output.write(csv)) return kExitFailed;
+            done += long(n);
         }
     }
-    if (!writeOutput(out, csv)) return kExitFailed;
+    if (!output.finish()) return kExitFailed;
     if (invalid > 0) {
         std::fprintf(stderr, "facet: sample: %ld of %ld samples are invalid (the material's default inputs are not "
                              "finite, or a result overflowed); their rows are zero\n", invalid, count);

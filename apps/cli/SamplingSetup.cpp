@@ -1,8 +1,11 @@
 // SamplingSetup: see SamplingSetup.h.
 #include "SamplingSetup.h"
 
+#include "CacheFiles.h"
+#include "LambdaTable.h"
 #include "TableCache.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -30,12 +33,29 @@ std::string parseViewDirection(const std::string& option, const std::string& tex
     return "";
 }
 
-std::unique_ptr<Interpreter<double>> referenceSampler(const CheckedMaterial& material) {
+std::string parseSeed(const std::string& option, const std::string& text, uint64_t& seed) {
+    const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
+    errno = 0;
+    char* end = nullptr;
+    unsigned long long s = digits ? std::strtoull(text.c_str(), &end, 10) : 0;
+    if (!digits || errno == ERANGE || *end)
+        return fmt::format("{} expects a whole number from 0 to 2^64 - 1 = 18446744073709551615, got '{}'", option,
+                           text);
+    seed = s;
+    return "";
+}
+
+std::unique_ptr<Interpreter<double>> referenceInterpreter(const CheckedMaterial& material) {
     std::shared_ptr<const EnergyTable> table;
-    if (material.compensatesEnergy()) {
-        TableCache tables;
-        table = tables.getFor(material);
-        if (!tables.refusal().empty()) std::fprintf(stderr, "facet: warning: %s\n", tables.refusal().c_str());
+    const bool lambda = usesTabulatedLambda(material);
+    if (material.compensatesEnergy() || lambda) {
+        // The kernels' arrangement (Compiler): tables/ below the cache root,
+        // one trust decision and one warning for the root.
+        TableCache tables(std::make_shared<CacheDirectory>(defaultCacheRoot()), "tables");
+        if (material.compensatesEnergy()) table = tables.getFor(material);
+        // The table stays resident in the process, where the interpreter's
+        // Lambda finds it (LambdaTable.h).
+        if (lambda) tables.lambdaFor(material);
     }
     return std::make_unique<Interpreter<double>>(material, table);
 }

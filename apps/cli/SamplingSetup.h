@@ -30,9 +30,15 @@ private:
     std::mt19937_64 rng_;
 };
 
-// The double interpreter of `material`, with its Kulla-Conty table from the
-// table cache where the material compensates energy (a cache that cannot be
-// used is reported on stderr and the table built in memory).
-std::unique_ptr<Interpreter<double>> referenceSampler(const CheckedMaterial& material);
+// --seed S: a whole number from 0 to 2^64 - 1, written in decimal. ""
+// with the value in `seed`, or the error message (a value beyond 2^64 - 1
+// is an error, never saturated).
+std::string parseSeed(const std::string& option, const std::string& text, uint64_t& seed);
+
+// The double interpreter of `material` as the commands' interp backend runs
+// it: its Kulla-Conty table and its tabulated Lambda, where it has them,
+// come from the table cache, as a compiled kernel's do (a cache that cannot
+// be used is reported on stderr, once, and the tables built in memory).
+std::unique_ptr<Interpreter<double>> referenceInterpreter(const CheckedMaterial& material);
 
 }  // namespace facet

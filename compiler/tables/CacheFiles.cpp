@@ -40,7 +40,8 @@ const char* fileKind(mode_t mode) {
     if (S_ISDIR(mode)) return "a directory";
     if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
     if (S_ISSOCK(mode)) return "a socket";
-    return "not a regular file";
+    if (S_ISREG(mode)) return "a regular file";
+    return "of an unknown kind";
 }
 
 // Why a file or directory with this status cannot be trusted, or "".
@@ -65,7 +66,7 @@ ReadOutcome readAt(int dirFd, const std::string& name, const std::string& displa
         return errno == ENOENT ? ReadOutcome::Missing : ReadOutcome::Failed;
     }
     if (!S_ISREG(before.st_mode)) {
-        why = fmt::format("{} is {}", display, fileKind(before.st_mode));
+        why = fmt::format("{} is {}, not a regular file", display, fileKind(before.st_mode));
         return ReadOutcome::Refused;
     }
     if (checkOwner) {
@@ -172,7 +173,10 @@ bool makeDirs(const std::string& path, std::string& why) {
 
 std::string defaultCacheRoot() {
     if (const char* dir = std::getenv("FACET_CACHE_DIR")) return dir;  // "" disables
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/facet";
+    // The XDG base directory specification: a relative path there is
+    // invalid and ignored (it would name a different directory in every
+    // working directory).
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && xdg[0] == '/') return std::string(xdg) + "/facet";
     if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/facet";
     return "";
 }
@@ -211,6 +215,8 @@ bool CacheDirectory::usable() const {
     return !root_.empty() && !refused_;
 }
 
+void CacheDirectory::notice(const std::string& message) const { warn_(message); }
+
 std::string CacheDirectory::warning() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return warning_;
@@ -235,7 +241,10 @@ int CacheDirectory::openTrustedDir(const std::string& sub, bool create, std::str
     Fd root(::open(root_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
     if (root.fd < 0) {
         missing = errno == ENOENT;
-        why = fmt::format("cannot open {}: {}", root_, errnoText(errno));
+        struct stat st;
+        why = errno == ENOTDIR && ::stat(root_.c_str(), &st) == 0
+                  ? fmt::format("{} is {}, not a directory", root_, fileKind(st.st_mode))
+                  : fmt::format("cannot open {}: {}", root_, errnoText(errno));
         return -1;
     }
     struct stat st;
@@ -255,7 +264,7 @@ int CacheDirectory::openTrustedDir(const std::string& sub, bool create, std::str
         struct stat lst;
         if (errno == ENOTDIR || errno == ELOOP)
             why = ::fstatat(root.fd, sub.c_str(), &lst, AT_SYMLINK_NOFOLLOW) == 0
-                      ? fmt::format("{} is {}", display, fileKind(lst.st_mode))
+                      ? fmt::format("{} is {}, not a directory", display, fileKind(lst.st_mode))
                       : fmt::format("{} is not a directory", display);
         else
             why = fmt::format("cannot open {}: {}", display, errnoText(errno));

@@ -29,7 +29,9 @@
 namespace facet {
 
 // The cache root: $FACET_CACHE_DIR if set (empty: no disk cache), else
-// $XDG_CACHE_HOME/facet, else $HOME/.cache/facet; "" when there is none.
+// $XDG_CACHE_HOME/facet (an absolute path; a relative one is ignored, as
+// the XDG base directory specification says), else $HOME/.cache/facet; ""
+// when there is none.
 std::string defaultCacheRoot();
 
 // Reads a whole regular file without following a final symlink and without
@@ -68,6 +70,9 @@ public:
 
     // The warning given, if any (for tests and tools).
     std::string warning() const;
+    // Reports something about a file of the cache through the warning sink
+    // without refusing the cache (a table that had to be rebuilt).
+    void notice(const std::string& message) const;
 
 private:
     // Opens root/sub as a trusted directory (creating it when `create`);

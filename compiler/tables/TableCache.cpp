@@ -316,6 +316,10 @@ void TableCache::missed(Event& ev, bool haveBytes, TableFileStatus status, const
     } else {
         ev.action = "rebuilt";
         ev.reason = std::string(tableFileStatusName(status)) + ": " + message;
+        // A rebuild costs seconds each time the file fails again, so it is
+        // never silent.
+        cache_->notice(fmt::format("table {} cannot be used ({}); rebuilding it and rewriting the file", ev.key,
+                                   ev.reason));
     }
 }
 

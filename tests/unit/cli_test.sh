@@ -363,6 +363,8 @@ expect_eq "$err" "adir.mat: error: is a directory, not a file" "a directory as m
 mkfifo fifo.mat
 run timeout 20 "$FACET" check fifo.mat
 expect_rc 65 "a FIFO nobody writes to as material file (no hang)"
+expect_first_line "$err" "fifo.mat: error: is a FIFO (named pipe) and nothing was written to it" \
+    "a FIFO nobody writes to: message"
 run "$FACET" check <(cat test.mat)
 expect_rc 0 "a pipe as material file"
 printf 'wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,wi_x\n0,0,1,0,0,1,0\n' >dupcol.csv
@@ -430,6 +432,51 @@ expect_rc 2 "unknown check option"
 run "$FACET" --help
 expect_rc 0 "--help"
 expect_first_line "$out" "usage: facet <command> [options]" "--help prints usage on stdout"
+
+# ---- outputs over inputs ---------------------------------------------------------
+cp test.mat keep.mat
+run "$FACET" eval keep.mat --in dirs.csv --out ./keep.mat
+expect_rc 2 "eval --out over the material file"
+expect_first_line "$err" "facet: error: ./keep.mat is the same file as the material file keep.mat; facet eval does not write an output over the material file" \
+    "eval over the material: message"
+run "$FACET" eval test.mat --in dirs.csv --out dirs.csv
+expect_rc 2 "eval --out over the input CSV"
+run "$FACET" lut keep.mat -o keep.mat
+expect_rc 2 "lut -o over the material file"
+cmp -s test.mat keep.mat || fail "a refused output changed the material file"
+
+# ---- the table cache -------------------------------------------------------------
+# The interp backend reads and writes the tables the kernels use: the first
+# run leaves them in the cache, a corrupt one is rebuilt with a warning
+# saying why, and a cache root that is a regular file is named as such.
+cat >kc.mat <<'MAT'
+material kc { ndf = gtr(0.4, 2); masking = smith_separable; fresnel = schlick(0.04); energy = kulla_conty; }
+MAT
+mkdir -m 700 cache
+FACET_CACHE_DIR=$PWD/cache run "$FACET" eval kc.mat --in dirs.csv --out kc1.csv
+expect_rc 0 "interp with tables"
+checks=$((checks + 1))
+[ -f cache/tables/kc_gtr_g2_smith_separable.exr ] && [ -f cache/tables/lambda_gtr_g2.bin ] ||
+    fail "the interp backend left no tables in the cache: $(ls -R cache)"
+printf 'garbage' | dd of=cache/tables/lambda_gtr_g2.bin bs=1 seek=100 conv=notrunc 2>/dev/null
+FACET_CACHE_DIR=$PWD/cache run "$FACET" eval kc.mat --in dirs.csv --out kc2.csv
+expect_rc 0 "interp with a corrupt table"
+expect_first_line "$err" "facet: warning: table lambda_gtr_g2 cannot be used (corrupt: $PWD/cache/tables/lambda_gtr_g2.bin: bad header line 'stegarbage5'); rebuilding it and rewriting the file" \
+    "a rebuilt table is reported"
+cmp -s kc1.csv kc2.csv || fail "the rebuilt table gave other values"
+FACET_CACHE_DIR=$PWD/cache run "$FACET" eval kc.mat --in dirs.csv --out kc3.csv
+expect_eq "$err" "" "the rewritten table is used without a word"
+touch not-a-dir
+FACET_CACHE_DIR=$PWD/not-a-dir run "$FACET" eval kc.mat --in dirs.csv --out kc4.csv
+expect_rc 0 "a cache root that is a file"
+expect_eq "$err" "facet: warning: not using the cache in $PWD/not-a-dir: $PWD/not-a-dir is a regular file, not a directory; running without a disk cache" \
+    "a cache root that is a file: one warning naming it"
+# A relative XDG_CACHE_HOME is ignored (the XDG base directory
+# specification): the cache goes to $HOME/.cache/facet, not ./rel.
+mkdir home
+(unset FACET_CACHE_DIR; HOME=$PWD/home XDG_CACHE_HOME=rel run "$FACET" eval kc.mat --in dirs.csv --out kc5.csv)
+checks=$((checks + 1))
+[ ! -e rel ] && [ -d home/.cache/facet/tables ] || fail "a relative XDG_CACHE_HOME was used: $(ls)"
 
 echo "cli_test: $checks checks, $failures failed"
 [ "$failures" -eq 0 ]
