@@ -34,7 +34,16 @@ class EntryEmitter {
 public:
     EntryEmitter(llvm::Module& module, const CheckedMaterial& material, const std::string& prefix)
         : module_(module), ctx_(module.getContext()), b_(ctx_), material_(material), prefix_(prefix),
-          ptr_(b_.getPtrTy()), i64_(b_.getInt64Ty()), f32_(b_.getFloatTy()) {}
+          ptr_(b_.getPtrTy()), i64_(b_.getInt64Ty()), f32_(b_.getFloatTy()) {
+        // The kernels load only the slots a model argument depends on
+        // (LoweringPlan::reads); the entry points pass on only those, so a
+        // material with thousands of unused inputs costs nothing per lane.
+        const CheckedMaterial::Reads reads = material.readByModels();
+        slotRead_.assign(size_t(material.slotCount), false);
+        for (size_t k = 0; k < material.inputs.size(); ++k)
+            for (int s = 0; s < material.inputs[k].slotCount(); ++s)
+                slotRead_[size_t(material.inputs[k].firstSlot + s)] = reads.inputs[k];
+    }
 
     // void PREFIX_eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]):
     // as facet_eval, a NULL direction gives rgb = 0 (if rgb is not NULL).
@@ -168,11 +177,13 @@ private:
         for (int c = 0; c < count; ++c)
             b_.CreateStore(llvm::ConstantFP::get(f32_, 0.0), b_.CreateConstGEP1_32(f32_, dst, unsigned(c)));
     }
-    // An array of `count` pointers on the stack, element k = base + k floats.
-    llvm::Value* pointerArray(llvm::Value* base, int count, const char* name) {
+    // An array of `count` pointers on the stack, element k = base + k floats;
+    // with `only`, the elements it marks (the others are never read).
+    llvm::Value* pointerArray(llvm::Value* base, int count, const char* name, const std::vector<bool>* only = nullptr) {
         llvm::Value* array = b_.CreateAlloca(ptr_, b_.getInt32(unsigned(count)), name);
         for (int k = 0; k < count; ++k)
-            b_.CreateStore(b_.CreateConstGEP1_32(f32_, base, unsigned(k)), b_.CreateConstGEP1_32(ptr_, array, unsigned(k)));
+            if (!only || (*only)[size_t(k)])
+                b_.CreateStore(b_.CreateConstGEP1_32(f32_, base, unsigned(k)), b_.CreateConstGEP1_32(ptr_, array, unsigned(k)));
         return array;
     }
 
@@ -190,7 +201,7 @@ private:
         llvm::Value* slotsArg = nullPtr();
         if (material_.slotCount > 0)
             slotsArg = b_.CreateSelect(b_.CreateIsNull(inputs), slotsArg,
-                                       pointerArray(inputs, material_.slotCount, "input.lanes"));
+                                       pointerArray(inputs, material_.slotCount, "input.lanes", &slotRead_));
         std::vector<llvm::Value*> args = {llvm::ConstantInt::get(i64_, 1), pointerArray(in0, 3, "in0.lanes"),
                                           pointerArray(in1, 3, "in1.lanes"), slotsArg};
         for (size_t g = 0; g < out.size(); ++g)
@@ -220,16 +231,19 @@ private:
         b_.CreateStore(nullPtr(), nullSlot);
         std::vector<double> defaults = material_.defaultSlots();
         std::vector<llvm::Value*> slotBase, slotDefault;
+        slotBase.resize(size_t(slots));
+        slotDefault.resize(size_t(slots));
         for (int s = 0; s < slots; ++s) {
+            if (!slotRead_[size_t(s)]) continue;
             llvm::Value* addr = b_.CreateSelect(b_.CreateIsNull(inputs), nullSlot,
                                                 b_.CreateConstGEP1_32(ptr_, inputs, unsigned(s)));
-            slotBase.push_back(b_.CreateLoad(ptr_, addr));
+            slotBase[size_t(s)] = b_.CreateLoad(ptr_, addr);
             std::string name = prefix_ + ".aot.default" + std::to_string(s);
             llvm::GlobalVariable* global = module_.getGlobalVariable(name, true);
             if (!global)
                 global = new llvm::GlobalVariable(module_, f32_, true, llvm::GlobalValue::PrivateLinkage,
                                                   llvm::ConstantFP::get(f32_, double(float(defaults[s]))), name);
-            slotDefault.push_back(global);
+            slotDefault[size_t(s)] = global;
         }
         std::vector<llvm::Value*> inLane, outLane;
         for (size_t g = 0; g < in.size(); ++g) inLane.push_back(b_.CreateAlloca(f32_, b_.getInt32(3), "in.lane"));
@@ -248,6 +262,7 @@ private:
                 b_.CreateStore(b_.CreateLoad(f32_, b_.CreateGEP(f32_, inStreams[3 * g + c], i)),
                                b_.CreateConstGEP1_32(f32_, inLane[g], c));
         for (int s = 0; s < slots; ++s) {
+            if (!slotRead_[size_t(s)]) continue;
             llvm::Value* src = b_.CreateSelect(b_.CreateIsNull(slotBase[s]), slotDefault[s],
                                                b_.CreateGEP(f32_, slotBase[s], i));
             b_.CreateStore(b_.CreateLoad(f32_, src), b_.CreateConstGEP1_32(f32_, lane, unsigned(s)));
@@ -276,6 +291,7 @@ private:
     const CheckedMaterial& material_;
     std::string prefix_;
     llvm::Type *ptr_, *i64_, *f32_;
+    std::vector<bool> slotRead_;  // per slot: does a kernel load it?
 };
 
 }  // namespace

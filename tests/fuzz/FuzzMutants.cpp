@@ -637,7 +637,6 @@ struct EvalStats {
 void checkMaterialEval(const CheckedMaterial& m, Rng& rng, Failures& fail, const std::string& where, EvalStats& st) {
     static const std::vector<DirPair> pairs = directionPairs();
     Interpreter<double> interp(m);
-    const int n = m.slotCount;
     // Slot sets: defaults (null), defaults (explicit), and perturbed values
     // that clamping must tame; then NaN and Inf in one slot (must be invalid).
     std::vector<std::vector<double>> sets;
@@ -647,9 +646,17 @@ void checkMaterialEval(const CheckedMaterial& m, Rng& rng, Failures& fail, const
     for (double& v : perturbed)
         if (rng.chance(60)) v = odd[rng.below(std::size(odd))];
     sets.push_back(perturbed);
-    for (int variant = 0; variant < (n > 0 ? 2 : 0); ++variant) {
+    // Only a slot the material reads can invalidate a lane: an input no
+    // model argument depends on is never loaded (SPEC 2), so NaN there is
+    // ignored by design.
+    std::vector<int> readSlots;
+    const CheckedMaterial::Reads reads = m.readByModels();
+    for (size_t i = 0; i < m.inputs.size(); ++i)
+        if (reads.inputs[i])
+            for (int s = 0; s < m.inputs[i].slotCount(); ++s) readSlots.push_back(m.inputs[i].firstSlot + s);
+    for (int variant = 0; variant < (readSlots.empty() ? 0 : 2); ++variant) {
         std::vector<double> bad = m.defaultSlots();
-        bad[rng.below(size_t(n))] = variant ? std::numeric_limits<double>::infinity()
+        bad[size_t(readSlots[rng.below(readSlots.size())])] = variant ? std::numeric_limits<double>::infinity()
                                             : std::numeric_limits<double>::quiet_NaN();
         sets.push_back(bad);
     }

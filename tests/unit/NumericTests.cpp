@@ -159,3 +159,27 @@ TEST_CASE("the slope-form Student-t tail matches closed forms and quadrature") {
 }
 
 }  // TEST_SUITE
+
+namespace {
+struct Direction {
+    double x, y, z;
+};
+// Out of line, so that the compiler cannot see the values it rounds.
+__attribute__((noinline)) Direction unroundedDirection() { return {-0.67595424627987033, 0.123456789012345, 0.2}; }
+}  // namespace
+
+// The shape of code in which GCC 12's SLP vectorizer folded the round trip
+// double -> float -> double away (top-level CMakeLists.txt turns it off):
+// three conversions side by side, then the floats read back as doubles.
+// The reference paths that evaluate at the float direction a kernel
+// returns depend on the rounding happening.
+TEST_CASE("float round trips: double -> float -> double rounds to float") {
+    Direction r = unroundedDirection();
+    float w[3];
+    w[0] = float(r.x), w[1] = float(r.y), w[2] = float(r.z);
+    const double wf[3] = {w[0], w[1], w[2]};
+    CHECK(wf[0] == -0x1.5a16acp-1);
+    CHECK(wf[0] != r.x);
+    CHECK(wf[1] != r.y);
+    CHECK(double(float(wf[1])) == wf[1]);
+}
