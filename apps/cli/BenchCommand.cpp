@@ -11,6 +11,7 @@
 #include "MaterialFile.h"
 #include "OutputFile.h"
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -84,15 +85,23 @@ int cmdBench(const std::vector<std::string>& args) {
     if (lanes) report.settings.lanes = *lanes;
     if (runs) report.settings.runs = *runs;
     bench::describeHost(report);
-    // Progress goes to a terminal only, so that logs and pipes stay clean.
-    std::FILE* progress = isatty(fileno(stderr)) ? stderr : nullptr;
+    // One line of progress per file on stderr (a long run in a log shows
+    // how far along it is); the per-row figures go to a terminal only.
+    std::FILE* rows = isatty(fileno(stderr)) ? stderr : nullptr;
     bool materialErrors = false;
-    for (const std::string& file : files) {
+    for (size_t i = 0; i < files.size(); ++i) {
+        const std::string& file = files[i];
         DiagnosticEngine diags;
-        if (!bench::benchFile(file, report.settings, report, diags, progress)) {
+        const auto start = std::chrono::steady_clock::now();
+        const size_t before = report.materials.size();
+        if (!bench::benchFile(file, report.settings, report, diags, rows)) {
             std::fputs(diags.str().c_str(), stderr);
             materialErrors = true;
+            continue;
         }
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        std::fprintf(stderr, "facet bench: [%zu/%zu] %s: eval, sampling and compile time of %zu material(s), %.1f s\n",
+                     i + 1, files.size(), file.c_str(), report.materials.size() - before, seconds);
     }
 
     if (report.materials.empty()) return materialErrors ? kExitMaterialError : kExitOk;

@@ -3,8 +3,8 @@
 # is wrong, with exit 2 (usage: options, target, CPU, feature, an output that
 # cannot be written) or 65 (material file error, including a material the
 # file does not have), and no output file is left behind or half-replaced.
-# Also the other outputs (--emit) and the header as C99 and C++; and, last,
-# the argument fuzz of aot_fuzz_test.sh.
+# Also the other outputs (--emit) and the header as C99 and C++. The argument
+# fuzz (aot_fuzz_test.sh) is a test of its own, aot_fuzz, in the long tier.
 set -euo pipefail
 build=$(cd "$1" && pwd) source=$(cd "$2" && pwd)  # absolute: some cases run from other directories
 facet=$build/bin/facet
@@ -212,7 +212,4 @@ for dir in "$inject" "$odd"; do
 done
 grep -q -F '/x* / int injected = 42; / * /gold.mat' "$inject/g.h" || fail "the '*/' path is not in the header as 'x* /'"
 grep -q -F '/nl\n int injected = 42; \xc3\xa9\t?\x3f//gold.mat' "$odd/g.h" || fail "the newline path is not escaped in the header"
-
-# The fuzz of targets, CPUs, features and output paths (its own summary line).
-"$source/tests/aot/aot_fuzz_test.sh" "$build" "$source" || failed=1
 exit $failed
