@@ -17,7 +17,7 @@ int cmdLut(const std::vector<std::string>& args);
 // facet bench FILE... [--out DIR] [--json] [--quick]  (BenchCommand.cpp, bench/)
 int cmdBench(const std::vector<std::string>& args);
 
-// facet render FILE -o OUT [--plot lobe|ndf] ...  (RenderCommand.cpp, apps/preview/)
+// facet render FILE -o OUT [--plot lobe|ndf|pdf] ...  (RenderCommand.cpp, apps/preview/)
 int cmdRender(const std::vector<std::string>& args);
 
 // facet sample FILE --wo X,Y,Z [-n N] [--out OUT.csv] [--seed S]  (SampleCommand.cpp)

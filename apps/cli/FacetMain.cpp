@@ -42,14 +42,17 @@ const char* kUsage =
     "  lut FILE [--material NAME] -o TABLES.exr   write the Kulla-Conty E/E_avg tables (EXR)\n"
     "  bench FILE... [--out DIR] [--json] [--quick]   speed against error (bench.md/.json/.png)\n"
     "  verify FILE... [--material NAME] [--verbose]   hard cases, backends and physics (SPEC 7)\n"
-    "  render FILE -o OUT.png|.exr [--plot lobe|ndf] [--size N] [--light T,P] ...\n"
-    "                                      lit-sphere preview, lobe or NDF plot ('facet render' for all options)\n"
+    "  render FILE -o OUT.png|.exr [--plot lobe|ndf|pdf] [--size N] [--light T,P] ...\n"
+    "                                      lit-sphere preview, lobe, NDF or sample-histogram plot\n"
+    "                                      ('facet render' for all options)\n"
     "  build FILE -o OUT.o [--header OUT.h] [--material NAME] [--backend scalar|simd]\n"
     "       [--math exact|fast|tolerance=X] [--width N] [--assume unit] [--set NAME=VALUE]... [--target TRIPLE]\n"
     "       [--cpu CPU] [--features +a,-b] [--prefix SYMBOL] [--emit obj|asm|llvm-ir|bitcode]\n"
     "                                      a self-contained object + C header, for the host or another target\n"
     "  sample FILE --wo X,Y,Z [-n N] [--out OUT.csv] [--seed S] [--material NAME]\n"
-    "                                      importance-sample wi (reference sampler): wi, pdf, weight per row\n"
+    "       [--backend interp|scalar|simd] [--math exact|fast]\n"
+    "                                      importance-sample wi (the kernel's sampler; interp: the\n"
+    "                                      reference sampler): wi, pdf, weight per row\n"
     "exit codes: 0 ok, 1 a check failed, 2 usage, 65 a material file error\n";
 
 struct UsageError {

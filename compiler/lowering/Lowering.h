@@ -1,10 +1,13 @@
 // Lowering: a checked (and usually specialized) material to LLVM IR.
 //
 // Emits up to two entry points with a C ABI (SPEC section 4), and next to
-// each the sampler's sample and pdf twins (SPEC section 8, LoweredModule):
-//   void  <prefix>_scalar(const float wi[3], const float wo[3], const float* inputs, float rgb[3])
+// each the sampler's sample and pdf twins (SPEC section 8, LoweredModule;
+// KernelEntries.cpp):
+//   int32 <prefix>_scalar_status(const float wi[3], const float wo[3], const float* inputs, float rgb[3])
+//                                (1: invalid lane; Kernel::eval, the SPEC's void entry, drops it)
 //   int64 <prefix>_batch(int64 n, const float* const wi[3], const float* const wo[3],
-//                        const float* const* inputs, float* const rgb[3])
+//                        const float* const* inputs, float* const rgb[3], uint8_t* status)
+//                        (status: NULL, or n bytes: 1 for an invalid lane, 0 for a valid one)
 // The batch kernel works on explicit LLVM vectors of `width` lanes (a main
 // loop over full vectors, then one masked remainder step) and returns the
 // number of invalid lanes. Both entry points are generated from the same
