@@ -577,21 +577,10 @@ int64_t Kernel::sampleBatch(int64_t n, const float* const wo[3], const float* co
             double od[3] = {o[0], o[1], o[2]}, ud[3] = {uu[0], uu[1], uu[2]};
             SampleResult<double> r = interp->sample(od, ud, lane);
             w[0] = float(r.wi.x), w[1] = float(r.wi.y), w[2] = float(r.wi.z);
-            if (r.valid && r.pdf > 0) {
-                // The density and f of the direction returned, rounded to
-                // float, as the compiled samplers report them
-                // (LaneSampling.cpp): what facet_pdf and eval give for it.
-                const double wf[3] = {w[0], w[1], w[2]};
-                PdfResult<double> at = interp->pdf(wf, od, lane);
-                EvalResult<double> f = interp->eval(wf, od, lane);
-                r.pdf = at.valid ? at.pdf : 0;
-                // A density that underflows float: pdf 0, weight 0.
-                const bool weighted = f.valid && float(r.pdf) > 0 && wf[2] > 0;
-                for (int c = 0; c < 3; ++c) r.weight[c] = weighted ? f.rgb[c] * wf[2] / r.pdf : 0;
-                r.valid = at.valid && f.valid;
-            }
             p = float(r.pdf);
-            for (int c = 0; c < 3; ++c) wt[c] = float(r.weight[c]);
+            // As the compiled samplers: a density that underflows float is
+            // no density a renderer can divide by, so pdf 0 means weight 0.
+            for (int c = 0; c < 3; ++c) wt[c] = p > 0 ? float(r.weight[c]) : 0.0f;
             // As the compiled kernels: a result float cannot hold is an invalid lane.
             bad = !r.valid || !std::isfinite(p) || !std::isfinite(wt[0]) || !std::isfinite(wt[1]) ||
                   !std::isfinite(wt[2]);

@@ -272,79 +272,86 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woArg, const Vec& u
     // The specular lobe: wi is the reflection of wo about the drawn m.
     Vec m = visible ? emitters_.ndf.sampleVisibleNormal(*this, t.n, t.wo, u1, u2)
                     : emitters_.ndf.sampleNormal(*this, t.n, u1, u2);
-    Value* twoOm = pm.mul(pm.c(2.0), dot(pm, t.wo, m));
-    Vec wi = {pm.sub(pm.mul(twoOm, m[0]), t.wo[0]), pm.sub(pm.mul(twoOm, m[1]), t.wo[1]),
-              pm.sub(pm.mul(twoOm, m[2]), t.wo[2])};
+    Value* om = dot(pm, t.wo, m);
+    Value* twoOm = pm.add(om, om);
+    Vec sum = {pm.mul(twoOm, m[0]), pm.mul(twoOm, m[1]), pm.mul(twoOm, m[2])};  // wi + wo
+    Vec wi = {pm.sub(sum[0], t.wo[0]), pm.sub(sum[1], t.wo[1]), pm.sub(sum[2], t.wo[2])};
+    Value* specular = nullptr;
+    Vec mPdf = m, cosineSum{};
+    Value *omPdf = om, *pdfExists = pm.c(1.0);
     if (sp.cosineLobe) {
         // The cosine lobe: sqrt(u1) in the unit disk at azimuth 2 pi u2,
-        // lifted to the hemisphere.
-        Value* specular = pm.lt(u0, t.p);
+        // lifted to the hemisphere. Its specular density is through the
+        // half vector.
+        specular = pm.lt(u0, t.p);
         Value* r = pm.sqrt(u1);
         auto [sinPhi, cosPhi] = pm.sinCosTurns(u2);
         Vec wiCos = {pm.mul(r, cosPhi), pm.mul(r, sinPhi), pm.sqrt(pm.sub(pm.c(1.0), u1))};
+        HalfNormal h = halfNormal(pm, wiCos, t.wo);
+        cosineSum = h.sum;
         wi = selectVec(pm, specular, wi, wiCos);
+        mPdf = selectVec(pm, specular, m, h.m);
+        omPdf = pm.select(specular, om, h.om);
+        pdfExists = pm.select(b.CreateOr(specular, h.exists), pm.c(1.0), pm.c(0.0));
     }
-    // The density and f are those of the direction returned, rounded to
-    // float: what facet_pdf and eval give for it (through the half vector
-    // of the rounded wi and wo, as emitPdf), so that a renderer's MIS
-    // weights see one density. Where the drawn normal is ill-conditioned in
-    // the rounded reflection (grazing wo, a narrow lobe: the rounding turns
-    // the half vector by more than alpha; a knife-edge normal whose
-    // reflection rounds below it) the drawn normal's density would disagree
-    // with facet_pdf by factors; the weight f cos / pdf stays F G2 / G1 or
-    // the diffuse ratio either way, as D cancels.
-    Vec wiLane, wiF{};
-    for (int i = 0; i < 3; ++i) wiLane[i] = fm.convert(wi[i], fm.type());
-    // Renormalized as facet_pdf and eval read it: where the half vector is
-    // ill-conditioned, the float wi's length off 1 moves it too.
-    Vec wiP = unitDirection(wiLane, wiF);
-    HalfNormal h = halfNormal(pm, wiP, t.wo);
-    // A float body keeps the lanes whose density and f it computes to
-    // float accuracy: the half vector is the sum wi + wo, exact to a few ulp
-    // absolutely, so |wi + wo|^2 >= 1e-2 keeps D of it within ~1e-6.
-    if (body.guarded()) distrust(pm.lt(dot(pm, h.sum, h.sum), pm.c(1e-2)));
-    Value* spec = pm.select(h.exists, specularPdf(t, h.m, h.om), pm.c(0.0));
-    Value* pdf = mixturePdf(t, spec, wiP);
+    if (body.guarded()) {
+        // A float body keeps the lanes whose density and f it computes to
+        // float accuracy: wo.m, in float a few ulp off absolutely, enters F
+        // and the maskings that divide by wo.h relative to itself, so |wo.m|
+        // >= 1e-2 (with visible normals the density of m is proportional to
+        // wo.m: such lanes are rare); a cosine sample's half vector is the
+        // sum wi + wo, exact to a few ulp absolutely, so |wi + wo|^2 >= 1e-2
+        // keeps D of it within ~1e-6.
+        Value* badSpecular = pm.lt(pm.abs(om), pm.c(1e-2));
+        distrust(sp.cosineLobe ? pm.select(specular, badSpecular, pm.lt(dot(pm, cosineSum, cosineSum), pm.c(1e-2)))
+                               : badSpecular);
+    }
+    Value* spec = pm.mul(specularPdf(t, mPdf, omPdf), pdfExists);
+    Value* pdf = mixturePdf(t, spec, wi);
 
+    // f at the sample from eval's assembly. For a specular sample the half
+    // vector is the drawn normal (and wi + wo its multiple), not the sum of
+    // the rounded directions: near wi = -wo that sum would turn h away from
+    // m, and D(h) would no longer cancel the density's D(m).
+    Vec wiLane;
+    for (int i = 0; i < 3; ++i) wiLane[i] = fm.convert(wi[i], fm.type());
     Vec wiEval = selectVec(fm, t.above, wiLane, constantVec(fm, 0, 0, 1));
-    // f as eval computes it for (wi, wo); a lane below the horizon has
-    // weight 0 whatever f is.
     LaneGeometry geo = geometry(wiEval, woIn, true);
     if (!pm.isDouble()) {
-        // A float body's f reads wo as the density does (n for a lane below
-        // the horizon): the terms of wo both take (the Smith root) are then
-        // one value, and f / pdf keeps G2 / G1 <= 1 however far the float
-        // approximations of Lambda(wo) at grazing are from each other.
+        // A float body's eval reads wo as the sampler does (n for a lane
+        // below the horizon, whose weight is 0 below): the same values, so
+        // that the terms of wo both take (the Smith root) are computed once.
         geo.wo = t.wo;
         geo.woD = t.wo;
     }
-    // f's half vector is the density's, to the bit: where wi + wo nearly
-    // cancels, D follows the last bits of h (by 1/alpha^2 with anisotropy),
-    // and f / pdf keeps F G2 / G1 only if both read the same h.
+    Value* fromDrawn = sp.cosineLobe ? specular : llvm::Constant::getAllOnesValue(boolType());
     if (geo.hD[0])  // null where the plan keeps the half angle in float (no consumer of the unit h)
         for (int i = 0; i < 3; ++i) {
-            geo.hD[i] = h.m[i];
-            geo.h[i] = fm.convert(h.m[i], fm.type());
+            geo.hD[i] = pm.select(fromDrawn, m[i], geo.hD[i]);
+            geo.h[i] = fm.select(fromDrawn, fm.convert(m[i], fm.type()), geo.h[i]);
         }
     if (geo.slopeHLen2) {
-        // wi + wo up to scale.
-        for (int i = 0; i < 3; ++i) geo.slopeH[i] = h.sum[i];
-        geo.slopeHLen2 = dot(pm, h.sum, h.sum);
+        // wi + wo up to scale: the drawn normal's multiple.
+        for (int i = 0; i < 3; ++i) geo.slopeH[i] = pm.select(fromDrawn, sum[i], geo.slopeH[i]);
+        geo.slopeHLen2 = pm.select(fromDrawn, dot(pm, sum, sum), geo.slopeHLen2);
     } else {
-        for (int i = 0; i < 3; ++i) geo.slopeH[i] = h.m[i];
+        for (int i = 0; i < 3; ++i) geo.slopeH[i] = pm.select(fromDrawn, m[i], geo.slopeH[i]);
     }
-    // wo.h too (h = m, or -m where wo.m < 0), for the masking and Fresnel
-    // terms that read it (Kelemen's (wo.h)^2, F(wo.h)); 1 - wo.h =
-    // |wo - h|^2 / 2 without cancellation near wo = h.
+    // wo.h of the drawn normal too (h = m, or -m where wo.m < 0): the
+    // masking and Fresnel terms that read it (Kelemen's (wo.h)^2, F(wo.h))
+    // would otherwise take |wi + wo| / 2 of the rounded directions, which at
+    // grazing mirror pairs (wi + wo of size n.wo) is off by several percent
+    // while the density uses the exact wo.m. 1 - wo.h = |wo - h|^2 / 2
+    // without cancellation near wo = h.
     {
-        Value* sign = pm.select(pm.lt(h.om, pm.c(0.0)), pm.c(-1.0), pm.c(1.0));
-        Vec d = {pm.sub(t.wo[0], pm.mul(sign, h.m[0])), pm.sub(t.wo[1], pm.mul(sign, h.m[1])),
-                 pm.sub(t.wo[2], pm.mul(sign, h.m[2]))};
-        Value* cosM = pm.minnum(pm.abs(h.om), pm.c(1.0));
+        Value* sign = pm.select(pm.lt(om, pm.c(0.0)), pm.c(-1.0), pm.c(1.0));
+        Vec d = {pm.sub(t.wo[0], pm.mul(sign, m[0])), pm.sub(t.wo[1], pm.mul(sign, m[1])),
+                 pm.sub(t.wo[2], pm.mul(sign, m[2]))};
+        Value* cosM = pm.minnum(pm.abs(om), pm.c(1.0));
         Value* oneMinusCosM = pm.minnum(pm.mul(dot(pm, d, d), pm.c(0.5)), pm.c(1.0));
-        geo.cosD = cosM;
-        geo.oneMinusCosD = oneMinusCosM;
-        geo.sin2D = pm.mul(oneMinusCosM, pm.add(pm.c(1.0), cosM));
+        geo.cosD = pm.select(fromDrawn, cosM, geo.cosD);
+        geo.oneMinusCosD = pm.select(fromDrawn, oneMinusCosM, geo.oneMinusCosD);
+        geo.sin2D = pm.select(fromDrawn, pm.mul(oneMinusCosM, pm.add(pm.c(1.0), cosM)), geo.sin2D);
     }
     Value* fValid = nullptr;
     Vec f = brdfPrecise(geo, fValid);
@@ -355,7 +362,7 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woArg, const Vec& u
     // divide by: pdf 0 means weight 0.
     r.pdf = fm.convert(pdf, fm.type());
     Value* weighted = b.CreateAnd(b.CreateAnd(fValid, t.above), fm.gt(r.pdf, fm.c(0.0)));
-    Value* cosOverPdf = pm.div(wiP[2], pdf);
+    Value* cosOverPdf = pm.div(wi[2], pdf);
     for (int ch = 0; ch < 3; ++ch) {
         Value* w = pm.select(weighted, pm.mul(f[ch], cosOverPdf), pm.c(0.0));
         r.weight[ch] = fm.convert(w, fm.type());

@@ -101,7 +101,8 @@ bool DiffStats::ok(std::string& why) const {
     return true;
 }
 
-void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneBatch& s, DiffStats& stats) {
+void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneBatch& s, DiffStats& stats,
+             std::optional<ReferenceValues>* shared) {
     size_t n = s.size();
     // Kernel slots are the reference slots minus bound inputs; map by name.
     std::vector<const float*> inputs(kernel.inputCount());
@@ -126,7 +127,10 @@ void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneB
     }
     // The reference evaluates the kernel's own material, in which bound
     // inputs are folded, on the kernel's remaining inputs.
-    ReferenceValues ref = evaluateReference(kernel.material(), kernel.energyTable(), n, wi, wo, inputs.data());
+    std::optional<ReferenceValues> own;
+    std::optional<ReferenceValues>& slot = shared ? *shared : own;
+    if (!slot) slot = evaluateReference(kernel.material(), kernel.energyTable(), n, wi, wo, inputs.data());
+    const ReferenceValues& ref = *slot;
     const float* const written[3] = {rgb[0], rgb[1], rgb[2]};
     ReferenceComparison cmp = compareWithReference(ref, written);
     size_t compared = cmp.rel.size() - cmp.nonFinite;

@@ -11,7 +11,9 @@
 #include "Interpreter.h"
 #include "Kernel.h"
 #include "LaneBatch.h"
+#include "ReferenceComparison.h"
 
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -36,7 +38,12 @@ struct DiffStats {
 // unspecialized material) and compares with the reference interpreter of the
 // kernel's own material, in which inputs bound by the options are folded
 // (ReferenceComparison.h defines the error).
-void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneBatch& s, DiffStats& stats);
+// `shared`, when given, holds the reference values of `s` across calls: the
+// first call computes them, later ones (kernels of the same material, inputs
+// and tables: other backends, widths, bodies) reuse them instead of running
+// the interpreter over the sample again.
+void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneBatch& s, DiffStats& stats,
+             std::optional<ReferenceValues>* shared = nullptr);
 // Scalar vs SIMD on the same sample: max ulp distance.
 void compareUlp(const Kernel& scalar, const Kernel& simd, const LaneBatch& s, DiffStats& stats);
 

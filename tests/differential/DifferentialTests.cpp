@@ -67,6 +67,8 @@ TEST_CASE("every shipped and corpus material agrees with the interpreter on ever
             ++materials;
             LaneBatch random = randomSample(m, 100000, 42 + materials);
             LaneBatch hard = hardSample(m);
+            // One reference per sample for all the material's kernels.
+            std::optional<ReferenceValues> randomRef, hardRef;
             std::unique_ptr<Kernel> scalar;
             struct Run { Backend backend; int width; };
             for (Run run : {Run{Backend::Scalar, 0}, Run{Backend::Simd, 4}, Run{Backend::Simd, 8}, Run{Backend::Simd, 16}}) {
@@ -74,8 +76,8 @@ TEST_CASE("every shipped and corpus material agrees with the interpreter on ever
                 auto kernel = compiler.compileFile(path, m.name, optionsFor(run.backend, run.width), kd);
                 REQUIRE_MESSAGE(kernel, kd.str());
                 DiffStats stats;
-                compare(*kernel, m, random, stats);
-                compare(*kernel, m, hard, stats);
+                compare(*kernel, m, random, stats, &randomRef);
+                compare(*kernel, m, hard, stats, &hardRef);
                 if (run.backend == Backend::Scalar) {
                     scalar = std::move(kernel);
                 } else {
@@ -92,8 +94,8 @@ TEST_CASE("every shipped and corpus material agrees with the interpreter on ever
                 auto kernel = compiler.compileFile(path, m.name, optionsFor(Backend::Simd, 16, true), kd);
                 REQUIRE_MESSAGE(kernel, kd.str());
                 DiffStats stats;
-                compare(*kernel, m, random, stats);
-                compare(*kernel, m, hard, stats);
+                compare(*kernel, m, random, stats, &randomRef);
+                compare(*kernel, m, hard, stats, &hardRef);
                 worstFloatFirst = std::max(worstFloatFirst, stats.maxRel);
                 checkStats(stats, fmt::format("{} material {} SIMD16 float-first", path, m.name));
                 // Float-first keeps exact-mode accuracy (all-double kernels: 1.1e-6).
@@ -125,8 +127,9 @@ TEST_CASE("random materials agree across interpreter, scalar and SIMD") {
         auto simd = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Simd, widths[i % 3], false, kQuick), kd);
         REQUIRE_MESSAGE((scalar && simd), kd.str() << rm.text);
         DiffStats stats;
-        compare(*scalar, m, s, stats);
-        compare(*simd, m, s, stats);
+        std::optional<ReferenceValues> ref;
+        compare(*scalar, m, s, stats, &ref);
+        compare(*simd, m, s, stats, &ref);
         compareUlp(*scalar, *simd, s, stats);
         worst = std::max(worst, stats.maxRel);
         std::string why;
@@ -140,7 +143,7 @@ TEST_CASE("random materials agree across interpreter, scalar and SIMD") {
             auto floatFirst = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Simd, widths[i % 3], true, kQuick), kd);
             REQUIRE_MESSAGE(floatFirst, kd.str() << rm.text);
             DiffStats ff;
-            compare(*floatFirst, m, s, ff);
+            compare(*floatFirst, m, s, ff, &ref);
             worstFloatFirst = std::max(worstFloatFirst, ff.maxRel);
             if (!ff.ok(why) || !(ff.maxRel < 4e-6)) {
                 if (why.empty()) why = fmt::format("relative error {:.3g} beyond 4e-6: {}", ff.maxRel, ff.worst);

@@ -31,6 +31,8 @@
 //     n.wo = 1e-7 and wi near -wo; the spherical cap's point next to -wo at
 //     u2 = 1 - 2^-24), which float and an approximate sqrt or sine move by
 //     far more than 2e-3;
+//   - a pdf that underflows float has weight 0 (the reference's, in
+//     double, divides by its tiny pdf);
 //   - no NaN, Inf or negative pdf or weight on any lane;
 //   - paired scalar and SIMD kernels of one math mode: wi within 2e-5 and
 //     pdf and weight within 2e-3 of each other (exact: the SIMD sampler of
@@ -238,7 +240,12 @@ void compareWithReferenceSampler(const Kernel& k, const CheckedMaterial& m, cons
             }
         };
         value("pdf", out.pdf[i], ref.pdf, pdfAtWi);
-        for (int c = 0; c < 3; ++c) value("weight", out.weight[c][i], ref.weight[c], weightAtWi[c]);
+        // A density that underflows float is no density a renderer can
+        // divide by: the kernel's weight is then 0 (pdf 0 means weight 0),
+        // where the double reference still divides by its tiny pdf.
+        const bool pdfUnderflows = float(ref.pdf) == 0.0f && out.pdf[i] == 0.0f;
+        for (int c = 0; c < 3; ++c)
+            value("weight", out.weight[c][i], pdfUnderflows ? 0.0 : ref.weight[c], weightAtWi[c]);
     }
 }
 

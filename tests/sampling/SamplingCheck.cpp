@@ -30,7 +30,8 @@ CheckOutcome checkSampler(const Sampler& sampler, const PdfFunction& pdf, const 
         if (cell < 0) ++out.noSample;
         else observed[cell] += 1;
     }
-    std::vector<double> expected = integrateCells(grid, pdf);
+    std::vector<double> expected =
+        integrateCells(grid, pdf, s.normalizationTolerance / (10.0 * double(grid.cellCount())));
     for (int i = 0; i < grid.rings(); ++i)
         for (int j = 0; j < grid.sectors(); ++j) {
             double p = expected[i * grid.sectors() + j];

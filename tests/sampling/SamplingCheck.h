@@ -24,6 +24,10 @@ struct CheckSettings {
     double level = 0.01;       // per test (already Sidak-corrected)
     uint64_t seed = 1;
     bool renormalize = false;  // scale the expected counts to the samples drawn (shape only)
+    // The normalization the caller asserts (|integral - 1| <= it). The
+    // cells are integrated to a tenth of it in all, which also keeps each
+    // expected count within a fraction of a sample of its exact value.
+    double normalizationTolerance = 1e-4;
 };
 
 struct CheckOutcome {

@@ -83,6 +83,14 @@ int64_t facet_eval_batch_status(const facet_kernel* k, int64_t n, const float* c
    - n.wo <= 0: no sample (wi = 0, pdf = 0, weight = 0), a valid lane.
    - a sample below the horizon (n.wi <= 0) is valid: weight 0, its pdf
      reported (the density over the whole sphere integrates to 1).
+   - a density below float's range (the far tail of a narrow lobe) is
+     pdf = 0, and then weight = 0: no sample a renderer would divide by 0.
+   - pdf is the density of the direction drawn; facet_pdf of the returned
+     wi (rounded to float) agrees with it within the math mode's bound
+     (1e-5 exact, 2e-3 fast), except where the half vector of wi and wo is
+     ill-conditioned (wi nearly -wo: grazing wo with a narrow lobe, a
+     normal near the horizon), where it differs by as much as the exact
+     density moves under the rounding of wi to float.
    - invalid lanes (a non-finite or non-unit wo, u outside [0, 1) or NaN, a
      non-finite input, a result float cannot hold): wi = 0, pdf = 0,
      weight = 0, counted in the return value.
