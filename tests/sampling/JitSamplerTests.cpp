@@ -673,7 +673,7 @@ TEST_CASE("jit sampling: a pdf that underflows float has weight 0") {
 // The exact density where n.wo is float-subnormal: wo.m is |wi + wo| / 2
 // for the mirror pair (1, 0, 1e-40) and (-1, 0, 4.33e-24), not the dot
 // product of the near-cancelling components (which gave pdf 0 where the
-// interpreter gives 9.3e24).
+// interpreter gives 9.3e24 for clearcoat_gtr, 4.1e23 for cook_torrance_classic).
 TEST_CASE("jit sampling: the exact pdf at a float-subnormal n.wo is the interpreter's") {
     for (const char* file : {"clearcoat_gtr.mat", "cook_torrance_classic.mat"}) {
         const std::string path = std::string(FACET_SOURCE_DIR) + "/materials/" + file;
@@ -683,8 +683,8 @@ TEST_CASE("jit sampling: the exact pdf at a float-subnormal n.wo is the interpre
         const float wo[3] = {1.0f, 0.0f, 1e-40f}, wi[3] = {-1.0f, 0.0f, 4.33e-24f};
         auto interp = compile(text, "backend=interp");
         const float want = interp->pdf(wi, wo, nullptr);
-        INFO(file, " interpreter pdf ", want);
-        CHECK(want > 1e24f);
+        INFO(std::string(file), " interpreter pdf ", want);
+        CHECK(want > 1e20f);  // (the compiled pdf was 0 here)
         for (const char* options : {"backend=scalar;math=exact", "backend=simd;math=exact"}) {
             const float got = compile(text, options)->pdf(wi, wo, nullptr);
             INFO(options, " pdf ", got);
