@@ -18,6 +18,9 @@
 #                    `home_untouched` fails if anything was written there
 #   XDG_CACHE_HOME   unset, so the default cache root would be under HOME
 #   TMPDIR           build/test-tmp
+#   CCACHE_DIR       build/test-tmp/ccache, and CMAKE_<LANG>_COMPILER_LAUNCHER
+#                    unset: the tests that build C hosts or a CMake consumer do
+#                    not write to a developer's ccache in HOME
 # PROCESSORS: how many cores the test keeps busy (its threads), so that
 # `ctest -j 2` does not start a second test beside a two-thread one.
 
@@ -52,13 +55,14 @@ function(facet_add_test)
     set(arg_TIMEOUT 300)
   endif()
   set(labels ${arg_TIER} ${arg_LABELS})
-  set(environment FACET_CACHE_DIR=${cache} HOME=${FACET_TEST_HOME} TMPDIR=${FACET_TEST_TMP} ${arg_ENVIRONMENT})
+  set(environment FACET_CACHE_DIR=${cache} HOME=${FACET_TEST_HOME} TMPDIR=${FACET_TEST_TMP}
+                  CCACHE_DIR=${FACET_TEST_TMP}/ccache ${arg_ENVIRONMENT})
   set(fixtures facet_test_home ${arg_FIXTURES_REQUIRED})
   set_tests_properties(${arg_NAME} PROPERTIES
     LABELS "${labels}"
     TIMEOUT ${arg_TIMEOUT}
     ENVIRONMENT "${environment}"
-    ENVIRONMENT_MODIFICATION "XDG_CACHE_HOME=unset:"
+    ENVIRONMENT_MODIFICATION "XDG_CACHE_HOME=unset:;CMAKE_C_COMPILER_LAUNCHER=unset:;CMAKE_CXX_COMPILER_LAUNCHER=unset:"
     FIXTURES_REQUIRED "${fixtures}")
   foreach(property PROCESSORS COST PASS_REGULAR_EXPRESSION SKIP_RETURN_CODE FIXTURES_SETUP)
     if(arg_${property})
