@@ -2,7 +2,7 @@
 // self-contained object for the host or another LLVM target.
 //
 // The kernel itself is lowered, optimized and emitted exactly as the JIT
-// does it (Compiler::compileAot in Kernel.cpp, optimizeKernelModule and
+// does it (Compiler::compileAot in CompilerOutputs.cpp, optimizeKernelModule and
 // runKernelCodegen in Jit.h); this file supplies the three things the JIT
 // does not need:
 //   - a target machine for a triple, CPU and features named on the command

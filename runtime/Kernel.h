@@ -49,7 +49,6 @@ class Kernel;
 struct KernelCode;
 struct PipelineRun;
 struct PipelineControl;
-struct PipelineTarget;
 class EnergyTable;
 class TableCache;
 class CacheDirectory;
@@ -294,7 +293,6 @@ public:
 
 private:
     std::unique_ptr<Kernel> compile(PipelineRun& run, DiagnosticEngine& diags);
-    PipelineTarget jitTarget(FacetJit::Level level) const;
     std::string compileObject(const CheckedMaterial& material, const LoweringOptions& lowering,
                               const std::string& prefix, FacetJit::Level level);
     // Links `object` into a fresh dylib and installs its entry points in
@@ -303,16 +301,9 @@ private:
     // The fastest variant meeting `tolerance`; its MathVariant in `chosen`.
     CachedKernel searchVariants(const CheckedMaterial& material, LoweringOptions lowering, double tolerance,
                                 const std::string& prefix, FacetJit::Level level, MathVariant& chosen);
-    // What the tier-up thread does for one kernel (see the top of this file).
-    struct TierUpJob {
-        std::weak_ptr<KernelCode> code;
-        CheckedMaterial material;
-        std::shared_ptr<const EnergyTable> energyTable;  // keeps lowering.energyTable alive
-        LoweringOptions lowering;
-        std::string prefix, key, cachePath;
-        CompileOptions::Cache cache;
-        CachedKernel record;  // variant name and measured error, for the caches
-    };
+    // What the tier-up thread does for one kernel (see the top of this
+    // file); defined in Compiler.cpp.
+    struct TierUpJob;
     void tierUp(const TierUpJob& job, TierUpWorker::Run run);
 
     std::shared_ptr<FacetJit> jit_;

@@ -15,6 +15,14 @@
 
 namespace facet {
 
+PipelineTarget PipelineTarget::forJit(FacetJit& jit, FacetJit::Level level) {
+    PipelineTarget target;
+    target.jit = &jit;
+    target.level = level;
+    target.naturalWidth = jit.hostVectorWidth();
+    return target;
+}
+
 const char* pipelineStageName(PipelineStage stage) {
     switch (stage) {
         case PipelineStage::Source: return "source";

@@ -46,6 +46,9 @@ struct PipelineTarget {
     AotOutput aotOutput = AotOutput::Object;
     FacetJit::Level level = FacetJit::Level::Optimized;
     int naturalWidth = 8;  // SIMD lanes where the options name no width
+
+    // The JIT's host at `level`, with the host's natural width.
+    static PipelineTarget forJit(FacetJit& jit, FacetJit::Level level);
 };
 
 // One run's state: each stage fills its part, in order.

@@ -1,7 +1,7 @@
 // ReferenceComparison: the one definition of how far a kernel's output is from
 // the double reference interpreter.
 //
-// `facet bench`, `facet verify`, the tolerance search of Kernel.cpp, the
+// `facet bench`, `facet verify`, the tolerance search (ToleranceSearch.cpp), the
 // differential tests and the ahead-of-time tests all compare float kernel
 // outputs with Interpreter<double> evaluated on the very same float inputs.
 // They differ in what they report (a maximum, a p99.9, counts within a bound,

@@ -6,6 +6,17 @@
 
 namespace facet {
 
+// A command line that does not make sense, thrown by a command (and by
+// CompileFlags.h): main prints `message` with the usage text of every
+// command, and exits 2.
+struct UsageError {
+    std::string message;
+};
+
+// facet eval FILE --in IN.csv [--out OUT.csv] ...  (EvalCommand.cpp): the BRDF
+// for each CSV row. Throws UsageError.
+int cmdEval(const std::vector<std::string>& args);
+
 // facet verify FILE... (VerifyCommand.cpp): hard cases, backend agreement and
 // physics checks. Returns the process exit code (0 ok, 1 a check failed,
 // 2 usage, 65 a material file error).

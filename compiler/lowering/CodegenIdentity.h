@@ -9,7 +9,7 @@
 // and any edit changes it; the SHA-256 of every constant table the lowering
 // embeds for the material (the models' emitters list theirs); and the LLVM
 // version. The
-// kernel cache adds the CPU and the material (runtime/Kernel.cpp).
+// kernel cache adds the CPU and the material (runtime/KernelCache.h).
 #pragma once
 
 #include <string>

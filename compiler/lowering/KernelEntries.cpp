@@ -512,7 +512,7 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
         }
     }
     // Every constant table in the module is part of the cache key: the
-    // energy tables through their own key (runtime/Kernel.cpp), the others
+    // energy tables through their own key (runtime/KernelCache.h), the others
     // through embeddedTables(), whose per-material hooks must agree with
     // what the emitters embedded.
     std::vector<EmbeddedTable> keyed = embeddedTables(material);

@@ -32,7 +32,7 @@ std::vector<std::string> materialFiles() {
 }
 
 // Random materials are compiled with quick codegen: the same bits as
-// optimized code (JitTests, "tiered compile"), without a tier-up compiling
+// optimized code (JitTierUpTests, "tiered compile"), without a tier-up compiling
 // every kernel a second time; the shipped materials go the default way.
 CompileOptions optionsFor(Backend b, int width, bool floatFirst = false,
                           CompileOptions::Codegen codegen = CompileOptions::Codegen::Tiered) {

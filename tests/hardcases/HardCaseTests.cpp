@@ -297,7 +297,7 @@ MaterialResult runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& c
         KernelResult k;
         k.variant = v.name;
         CompileOptions o;
-        // Quick codegen: the same bits as optimized code (JitTests, "tiered
+        // Quick codegen: the same bits as optimized code (JitTierUpTests, "tiered
         // compile"), without a tier-up compiling every kernel a second time.
         std::string error = CompileOptions::parse(std::string(v.options) + ";codegen=quick", o);
         DiagnosticEngine kd;

@@ -168,7 +168,7 @@ MaterialRun runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& comp
         return r;
     }
     const CheckedMaterial& m = program.materials.front();
-    // Quick codegen gives the optimized code's bits (JitTests, "tiered compile").
+    // Quick codegen gives the optimized code's bits (JitTierUpTests, "tiered compile").
     const std::string kind = std::string(kKinds[index % 8]) + ";codegen=quick;cache=off";
     const std::string where = fmt::format("{} [{}]", hm.name, kKinds[index % 8]);
     std::string error;
