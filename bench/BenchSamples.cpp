@@ -58,7 +58,7 @@ LaneBatch regularSample(const CheckedMaterial& material, size_t n, uint64_t seed
 
 namespace {
 
-// The shared generator of compiler/HardCases.h, as a lane batch.
+// The shared generator of compiler/hardcases/HardCases.h, as a lane batch.
 LaneBatch fromHardCases(const CheckedMaterial& m, const std::vector<HardCase>& cases) {
     LaneBatch s;
     s.slots.assign(m.slotCount, {});
@@ -73,7 +73,7 @@ LaneBatch fromHardCases(const CheckedMaterial& m, const std::vector<HardCase>& c
 LaneBatch hardCaseSample(const CheckedMaterial& material) { return fromHardCases(material, hardCases(material)); }
 
 std::string hardCaseSampleDescription() {
-    return "compiler/HardCases.h hardCases(): SPEC 7 grazing/mirror/retro/opposite/below-horizon directions, "
+    return "compiler/hardcases/HardCases.h hardCases(): SPEC 7 grazing/mirror/retro/opposite/below-horizon directions, "
            "input sweeps (range ends, outside the range, denormal, roughness ladder 1e-5..2, anisotropy 1e4, "
            "NaN/Inf), and invalid lanes";
 }

@@ -7,7 +7,7 @@
 //   over the upper hemisphere, a few below the horizon) and inputs uniform
 //   in their declared ranges; it is also the batch that is timed;
 // - the hard-case sample (SPEC section 7) of the shared generator
-//   compiler/HardCases.h (also used by `facet verify` and the hard-case
+//   compiler/hardcases/HardCases.h (also used by `facet verify` and the hard-case
 //   tests): grazing, mirror, retro-reflected and nearly opposite directions,
 //   extreme inputs, and invalid lanes.
 #pragma once

@@ -1,7 +1,7 @@
 // facet lut FILE [--material NAME] -o TABLES.exr [--threads N]
 //
 // Integrates the Kulla-Conty E / E_avg table of the material's NDF x masking
-// pair (compiler/KullaConty.h) and writes it as EXR with its metadata
+// pair (compiler/reference/KullaConty.h) and writes it as EXR with its metadata
 // (compiler/tables/TableCache.h). Reports the grid, the build time of the
 // pair, E_avg at a few roughnesses and F_avg of the material's Fresnel at its
 // default inputs. The material need not use energy = kulla_conty, but its

@@ -7,7 +7,7 @@
 // simd (the default) and scalar run the kernel's compiled sampler (float,
 // %.9g; a material whose NDF has no compiled sampler samples through the
 // reference, and a note says so), interp the reference sampler
-// (compiler/Sampling.h, the interpreter in double, %.17g). The uniform
+// (compiler/reference/Sampling.h, the interpreter in double, %.17g). The uniform
 // numbers come from a 64-bit Mersenne Twister seeded with S (default 1),
 // 53 bits each (rounded down to float below 1 for the kernels), so a seed
 // gives the same samples on every platform. With

@@ -1,7 +1,7 @@
 // facet verify FILE... : hard cases, backend agreement and physics (SPEC section 7).
 //
 // Per material:
-//   1. the hard-case sample (compiler/HardCases.h) on the double interpreter
+//   1. the hard-case sample (compiler/hardcases/HardCases.h) on the double interpreter
 //      and on the JIT kernels (scalar and SIMD at the host width, math exact
 //      and fast): every output finite and >= 0, invalid inputs give 0 and are
 //      counted (the batch return value), JIT against the interpreter within

@@ -5,7 +5,7 @@
 // Schlick F0 = 0.9, no diffuse) at alpha 0.05 and 0.3, the preview renderer
 // (SphereRender.h) draws the sphere under the sky alone (the light's eval
 // lane has no variance) with a few samples per pixel, once per technique of
-// compiler/Sampling.h: visible normals, NDF sampling and cosine sampling, all
+// compiler/reference/Sampling.h: visible normals, NDF sampling and cosine sampling, all
 // through the double reference sampler with exact pdfs (so every image is an
 // unbiased estimate of the same one). Each is compared with a render of many
 // samples per pixel by the kernel's own sampler: the RMSE of the radiance

@@ -4,7 +4,7 @@
 // normal or the half vector, the one-sample mixture's pdf, and the weight
 // f (n.wi) / pdf with f from eval's own assembly. The NDF-specific samplers
 // are the NDF emitters' hooks (TermEmitters.h). Written independently of
-// the reference sampler (compiler/Sampling.cpp), against which the tests
+// the reference sampler (compiler/reference/Sampling.cpp), against which the tests
 // compare it.
 #include "LaneEmitter.h"
 

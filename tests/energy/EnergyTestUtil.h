@@ -4,7 +4,7 @@
 // from one memory-only TableCache per test process (built once per pair).
 // The albedo quadrature is the physics tests' (PhysicsUtil.h): graded
 // Gauss-Legendre panels over the half vector, written independently of the
-// table code in compiler/KullaConty.cpp.
+// table code in compiler/reference/KullaConty.cpp.
 #pragma once
 
 #include "Checker.h"

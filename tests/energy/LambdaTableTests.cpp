@@ -1,4 +1,4 @@
-// Tabulated Smith Lambdas (compiler/LambdaTable.h): the student_t, epd,
+// Tabulated Smith Lambdas (compiler/reference/LambdaTable.h): the student_t, epd,
 // gtr, gaussian, abc and sgd tables against an independent 2D quadrature in long double (Gauss-Legendre over
 // the polar angle and the azimuth, written here, not the table's closed-form
 // azimuth integral), and the tabulation method against the closed-form

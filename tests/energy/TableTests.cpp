@@ -1,4 +1,4 @@
-// The E tables (compiler/KullaConty.h): closed-form values, interpolation
+// The E tables (compiler/reference/KullaConty.h): closed-form values, interpolation
 // error, the exact consistency of EcAvg with the interpolated rows, the
 // quadrature's convergence for every pair the checker accepts, and the table
 // build time per pair.

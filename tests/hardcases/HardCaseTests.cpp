@@ -1,6 +1,6 @@
 // Hard-case tests (SPEC section 7).
 //
-// Over the hard-case sample (compiler/HardCases.h) of every generated
+// Over the hard-case sample (compiler/hardcases/HardCases.h) of every generated
 // material -- every NDF form x masking x Fresnel the checker accepts, with
 // the model parameters as unranged inputs, plus constant extreme parameters
 // -- on the interpreter, scalar and SIMD16 kernels (SIMD4 and SIMD8

@@ -3,7 +3,7 @@
 # (scripts/stress-materials.sh measures their time and memory). Accepted
 # input never crashes a backend, and what would make LLVM take minutes or
 # overflow its stack is refused by the checker with a message at the
-# statement that passes the compute budget (compiler/ComputeCost.h):
+# statement that passes the compute budget (compiler/frontend/ComputeCost.h):
 #   - 10000 unused inputs: accepted; every backend evaluates the material as
 #     if they were not there (the inputs are never loaded);
 #   - a 100000-let chain and a 20000-let rgb mix chain: refused (exit 65);

@@ -1,6 +1,6 @@
 // The energy slot: none, or Kulla & Conty 2017 multiple-scattering
 // compensation from the tabulated albedo of the material's NDF and masking
-// (compiler/KullaConty.h builds the tables).
+// (compiler/reference/KullaConty.h builds the tables).
 #include "models/ModelMath.h"
 #include "Immortal.h"
 

@@ -1,5 +1,5 @@
 // none, kulla_conty: the energy compensation as IR (the reference is the
-// interpreter's, compiler/KullaConty.h). f_ms = Ec(mu_i) Ec(mu_o) /
+// interpreter's, compiler/reference/KullaConty.h). f_ms = Ec(mu_i) Ec(mu_o) /
 // (pi EcAvg) times F_avg^2 (1 - EcAvg) / (1 - F_avg EcAvg) per channel,
 // with Ec bilinear and EcAvg linear in the material's table, which the
 // kernel embeds as a constant (sqrt-spaced in alpha and mu).
