@@ -38,11 +38,7 @@ public:
         // The kernels load only the slots a model argument depends on
         // (LoweringPlan::reads); the entry points pass on only those, so a
         // material with thousands of unused inputs costs nothing per lane.
-        const CheckedMaterial::Reads reads = material.readByModels();
-        slotRead_.assign(size_t(material.slotCount), false);
-        for (size_t k = 0; k < material.inputs.size(); ++k)
-            for (int s = 0; s < material.inputs[k].slotCount(); ++s)
-                slotRead_[size_t(material.inputs[k].firstSlot + s)] = reads.inputs[k];
+        slotRead_ = material.readByModels().slots;
     }
 
     // void PREFIX_eval(const float wi[3], const float wo[3], const float* inputs, float rgb[3]):

@@ -7,12 +7,14 @@
 # a lit sphere per material and the plots in build/gallery
 # (scripts/gallery.sh, the same command that made docs/gallery).
 #
-#   scripts/run-main.sh          a few minutes: 7 timed runs of 16384 lanes a row
+#   scripts/run-main.sh          a few minutes: 7 timed runs of 16384 lanes and
+#                                2 timed compiles of each kind a row
 #   scripts/run-main.sh --full   the bench's own defaults (15 runs of 65536
-#                                lanes): steadier figures, several times longer
+#                                lanes, 7 compiles): steadier figures, several
+#                                times longer
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bench_settings=(--runs 7 --lanes 16384)
+bench_settings=(--runs 7 --lanes 16384 --compile-runs 2)
 case "${1:-}" in
     --full) bench_settings=() ;;
     "") ;;

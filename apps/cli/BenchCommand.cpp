@@ -1,4 +1,4 @@
-// facet bench FILE... [--out DIR] [--json] [--quick] [--lanes N] [--runs N]
+// facet bench FILE... [--out DIR] [--json] [--quick] [--lanes N] [--runs N] [--compile-runs N]
 //
 // Speed against error (SPEC section 6). The measurements live in bench/
 // (library facet_bench); this file only parses the command line and routes
@@ -25,12 +25,13 @@ namespace facet {
 namespace {
 
 const char* kBenchUsage =
-    "usage: facet bench FILE... [--out DIR] [--json] [--quick] [--lanes N] [--runs N]\n"
+    "usage: facet bench FILE... [--out DIR] [--json] [--quick] [--lanes N] [--runs N] [--compile-runs N]\n"
     "  --out DIR   write bench.md, bench.json and bench.png there (default ./bench-out)\n"
     "  --json      print the JSON report on stdout instead of the table\n"
     "  --quick     small batches and few runs (a smoke test; numbers are noisy)\n"
     "  --lanes N   lanes per timed batch and in the regular error sample (default 65536)\n"
-    "  --runs N    timed runs per row, median reported (default 15)\n";
+    "  --runs N    timed runs per row, median reported (default 15)\n"
+    "  --compile-runs N  timed cold compiles and cache hits per row, median reported (default 7)\n";
 
 int usage(const std::string& message) {
     std::fprintf(stderr, "facet bench: %s\n%s", message.c_str(), kBenchUsage);
@@ -44,7 +45,7 @@ int cmdBench(const std::vector<std::string>& args) {
     std::string outDir = "bench-out";
     bool asJson = false, quick = false;
     std::optional<size_t> lanes;
-    std::optional<int> runs;
+    std::optional<int> runs, compileRuns;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         auto value = [&]() -> const std::string* { return i + 1 < args.size() ? &args[++i] : nullptr; };
@@ -72,6 +73,10 @@ int cmdBench(const std::vector<std::string>& args) {
             auto n = count(1, 10000);
             if (!n) return usage("--runs needs a count in 1 .. 10000");
             runs = int(*n);
+        } else if (a == "--compile-runs") {
+            auto n = count(1, 1000);
+            if (!n) return usage("--compile-runs needs a count in 1 .. 1000");
+            compileRuns = int(*n);
         } else if (!a.empty() && a[0] == '-') {
             return usage(fmt::format("unknown option '{}'", a));
         } else {
@@ -84,6 +89,7 @@ int cmdBench(const std::vector<std::string>& args) {
     report.settings = quick ? bench::BenchSettings::quickSettings() : bench::BenchSettings{};
     if (lanes) report.settings.lanes = *lanes;
     if (runs) report.settings.runs = *runs;
+    if (compileRuns) report.settings.compileRuns = *compileRuns;
     bench::describeHost(report);
     // One line of progress per file on stderr (a long run in a log shows
     // how far along it is); the per-row figures go to a terminal only.

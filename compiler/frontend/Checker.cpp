@@ -64,7 +64,8 @@ std::vector<double> CheckedMaterial::defaultSlots() const {
 }
 
 CheckedMaterial::Reads CheckedMaterial::readByModels() const {
-    Reads read{std::vector<bool>(inputs.size(), false), std::vector<bool>(lets.size(), false)};
+    Reads read{std::vector<bool>(inputs.size(), false), std::vector<bool>(lets.size(), false),
+               std::vector<bool>(size_t(slotCount), false)};
     // Names an expression uses; lets are followed once each (a let only
     // names lets defined before it, so the walk ends).
     std::vector<const Expr*> pending;
@@ -95,6 +96,8 @@ CheckedMaterial::Reads CheckedMaterial::readByModels() const {
                 break;
         }
     }
+    for (size_t k = 0; k < inputs.size(); ++k)
+        for (int s = 0; s < inputs[k].slotCount(); ++s) read.slots.at(size_t(inputs[k].firstSlot + s)) = read.inputs[k];
     return read;
 }
 

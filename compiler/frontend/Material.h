@@ -69,6 +69,7 @@ struct CheckedMaterial {
     // input does not invalidate the lane and compiled kernels never load it.
     struct Reads {
         std::vector<bool> inputs, lets;
+        std::vector<bool> slots;  // per slot of the flat input array: read through its input
     };
     Reads readByModels() const;
 };

@@ -208,7 +208,7 @@ llvm::Function* emitScalarFunction(const KernelContext& k, llvm::Module& module,
         auto* defaults = defaultsArray(module, std::vector<float>(d.begin(), d.end()), name + ".defaults");
         llvm::Value* base = b.CreateSelect(b.CreateIsNull(inP), defaults, inP);
         for (int s = 0; s < mat.slotCount; ++s)
-            slots.push_back(k.plan.slotRead(mat, s) ? b.CreateLoad(f32, b.CreateConstGEP1_32(f32, base, s)) : nullptr);
+            slots.push_back(k.plan.slotRead(s) ? b.CreateLoad(f32, b.CreateConstGEP1_32(f32, base, s)) : nullptr);
     }
     LaneOutputs r = lanes(b, f32, in, slots);
     size_t next = 0;
@@ -282,7 +282,7 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
     // a material's unused inputs cost nothing (no stream, no register).
     std::vector<int> readSlots;
     for (int s = 0; s < mat.slotCount; ++s)
-        if (k.plan.slotRead(mat, s)) readSlots.push_back(s);
+        if (k.plan.slotRead(s)) readSlots.push_back(s);
     // The stage buffers of the partial chunk (below), in the entry block:
     // static allocas.
     const int streams = shape.inStreams() + int(readSlots.size());

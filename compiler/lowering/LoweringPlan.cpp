@@ -241,14 +241,7 @@ SpecularSampling plannedSpecularSampling(const CheckedMaterial& material) {
     return visible ? SpecularSampling::VisibleNormals : SpecularSampling::NdfNormals;
 }
 
-bool LoweringPlan::slotRead(const CheckedMaterial& material, int slot) const {
-    for (size_t i = 0; i < material.inputs.size(); ++i) {
-        const CheckedInput& in = material.inputs[i];
-        if (slot >= in.firstSlot && slot < in.firstSlot + in.slotCount()) return reads.inputs.at(i);
-    }
-    internal_error << "slot " << slot << " of no input";
-    return false;
-}
+bool LoweringPlan::slotRead(int slot) const { return reads.slots.at(size_t(slot)); }
 
 LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs) {
     const MaterialEmitters em = termEmitters(material);

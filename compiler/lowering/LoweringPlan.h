@@ -218,7 +218,7 @@ struct LoweringPlan {
     // those inputs are loaded and tested, only those lets lowered.
     CheckedMaterial::Reads reads;
     // Whether slot s (CheckedMaterial's flat slot index) is read.
-    bool slotRead(const CheckedMaterial& material, int slot) const;
+    bool slotRead(int slot) const;
     SamplingPlan sampling;
     // By ModelSlot, then the catalog's canonical parameter index.
     std::array<std::vector<ParamPlan>, kModelSlotCount> params;

@@ -650,10 +650,9 @@ void checkMaterialEval(const CheckedMaterial& m, Rng& rng, Failures& fail, const
     // model argument depends on is never loaded (SPEC 2), so NaN there is
     // ignored by design.
     std::vector<int> readSlots;
-    const CheckedMaterial::Reads reads = m.readByModels();
-    for (size_t i = 0; i < m.inputs.size(); ++i)
-        if (reads.inputs[i])
-            for (int s = 0; s < m.inputs[i].slotCount(); ++s) readSlots.push_back(m.inputs[i].firstSlot + s);
+    const std::vector<bool> read = m.readByModels().slots;
+    for (size_t s = 0; s < read.size(); ++s)
+        if (read[s]) readSlots.push_back(int(s));
     for (int variant = 0; variant < (readSlots.empty() ? 0 : 2); ++variant) {
         std::vector<double> bad = m.defaultSlots();
         bad[size_t(readSlots[rng.below(readSlots.size())])] = variant ? std::numeric_limits<double>::infinity()
