@@ -694,6 +694,10 @@ std::optional<LambdaTableBench> benchLambdaTable(const CheckedMaterial& m, int l
     e.buildMs = table->buildMillis;
     e.nodes = int(table->z.size());
     e.threads = table->buildThreads;
+    // The reference interpreter (the error columns) asks the memory layer for
+    // this very table: give it the one just built rather than a second
+    // quadrature of ~10 s.
+    adoptLambdaTable(table);
     // Cached: the file in the table cache directory, written first if it is
     // missing or not a valid table of this key (as a cache miss would).
     std::string dir = cacheDir ? *cacheDir : defaultTableCacheDir();
