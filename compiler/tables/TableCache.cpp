@@ -360,7 +360,10 @@ std::shared_ptr<const LambdaTable> TableCache::produceLambda(const NdfEntry& ndf
     std::optional<std::string> bytes;
     LambdaTableFileResult r;
     if (cache_->usable()) bytes = cache_->read(relPath, kMaxLambdaTableFileBytes);
-    if (bytes) r = decodeLambdaTable(*bytes, lambdaPathFor(ndf, shape), &ndf, &shape);
+    if (bytes) {
+        const std::shared_ptr<const LambdaTable> resident = residentLambdaTable(ndf, shape);
+        r = decodeLambdaTable(*bytes, lambdaPathFor(ndf, shape), &ndf, &shape, resident.get());
+    }
     if (r.status == TableFileStatus::Ok) {
         table = adoptLambdaTable(r.table);
         ev.action = "disk";

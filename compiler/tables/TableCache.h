@@ -105,9 +105,13 @@ struct LambdaTableFileResult {
     std::shared_ptr<LambdaTable> table;  // set when Ok, origin "disk"
 };
 // Reads the bytes of a Lambda table file; `path` names it in messages. With
-// `ndf`, a table for another NDF or `shape` is Stale.
+// `ndf`, a table for another NDF or `shape` is Stale. The nodes are checked
+// against the quadrature at a few spot nodes (~0.1 s each for the NDFs whose
+// Lambda has no closed form) or, given `trusted` (the table of the same key
+// this process already built or verified), against all of its nodes, exactly.
 LambdaTableFileResult decodeLambdaTable(const std::string& bytes, const std::string& path,
-                                        const NdfEntry* ndf = nullptr, const std::vector<double>* shape = nullptr);
+                                        const NdfEntry* ndf = nullptr, const std::vector<double>* shape = nullptr,
+                                        const LambdaTable* trusted = nullptr);
 
 // Reads the Lambda table file at `path` (missing: Missing; refused or not
 // a regular file: Unreadable), expecting the table of `ndf` with `shape`.

@@ -145,9 +145,20 @@ void checkCacheRecovery(const facet::NdfEntry& ndf, const std::vector<double>& s
         rebuiltBecause("corrupt", "node 77 is nan");
     }
     SUBCASE("corrupt: a node off by 1e-9 where a spot check looks") {
+        // A fresh process checks the quadrature at a few spot nodes.
         int spot = int(reference->z.size()) / 3;
-        patchNode(spot, reference->z[spot] + 1e-9);
-        rebuiltBecause("corrupt", "the quadrature gives");
+        LambdaTable copy = *reference;
+        copy.z[spot] += 1e-9;
+        facet::LambdaTableFileResult r =
+            facet::decodeLambdaTable(facet::encodeLambdaTable(copy), "t.bin", &ndf, &shape);
+        CHECK(r.status == facet::TableFileStatus::Corrupt);
+        CHECK(r.message.find("the quadrature gives") != std::string::npos);
+    }
+    SUBCASE("corrupt: a node off by 1e-9 anywhere, in a process that holds the table") {
+        // The cache compares every node with the table the process built.
+        int node = int(reference->z.size()) / 3 + 1;
+        patchNode(node, reference->z[node] + 1e-9);
+        rebuiltBecause("corrupt", "the table this process holds has");
     }
     SUBCASE("stale: another table version") {
         std::string bad = good;
