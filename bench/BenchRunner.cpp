@@ -648,7 +648,7 @@ std::optional<double> timeLoads(int runs, const std::string& file, int& done, st
 
 std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& m, int loadRuns,
                                                  const std::optional<std::string>& cacheDir) {
-    if (!m.compensatesEnergy() || kullaContyUnsupported(m)) return std::nullopt;
+    if (!m.singleLobe().compensatesEnergy() || kullaContyUnsupported(m, m.singleLobe())) return std::nullopt;
     EnergyTableKey key = energyTableKey(m);
     EnergyTableBench e;
     e.ndf = key.ndf->name;
@@ -685,7 +685,7 @@ std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& m, int l
 std::optional<LambdaTableBench> benchLambdaTable(const CheckedMaterial& m, int loadRuns,
                                                  const std::optional<std::string>& cacheDir) {
     if (!usesTabulatedLambda(m)) return std::nullopt;
-    const NdfEntry& ndf = ndfEntry(*m.ndf.model);
+    const NdfEntry& ndf = ndfEntry(*m.singleLobe().ndf.model);
     std::vector<double> shape = tabulatedLambdaShape(m);
     LambdaTableBench e;
     e.key = lambdaTableName(ndf, shape);
@@ -735,6 +735,11 @@ bool benchFile(const std::string& path, const BenchSettings& settings, BenchRepo
     std::string source = readText(path);
     Compiler compiler;
     for (const CheckedMaterial& m : program.materials) {
+        if (std::string why = compiledBackendsRefuse(m); !why.empty()) {
+            DiagnosticEngine refused;
+            refused.error(m.loc, why);
+            throw std::runtime_error(refused.str());
+        }
         MaterialBench mb;
         mb.file = path;
         mb.material = m.name;

@@ -100,6 +100,12 @@ bool check(PipelineRun& run, DiagnosticEngine& diags) {
                     fmt::format("no material named '{}'", run.name));
         return false;
     }
+    // The lowering handles one lobe (issue 48 phase 2 lowers combinations);
+    // until then a combination is a user error here, never a crash later.
+    if (std::string why = compiledBackendsRefuse(*material); !why.empty()) {
+        diags.error(material->loc, why);
+        return false;
+    }
     run.checked = *material;
     return true;
 }
@@ -107,7 +113,7 @@ bool check(PipelineRun& run, DiagnosticEngine& diags) {
 bool specialize(PipelineRun& run, TableCache& tables, DiagnosticEngine& diags) {
     run.specialized = specializeMaterial(run.checked, run.options.bindings, diags);
     if (diags.hasErrors()) return false;
-    if (run.specialized.compensatesEnergy()) run.energyTable = tables.getFor(run.specialized);
+    if (run.specialized.singleLobe().compensatesEnergy()) run.energyTable = tables.getFor(run.specialized);
     if (usesTabulatedLambda(run.specialized)) run.lambdaTable = tables.lambdaFor(run.specialized);
     return true;
 }
@@ -119,7 +125,7 @@ void plan(PipelineRun& run, const PipelineControl& control, const PipelineTarget
         int width = run.options.width ? run.options.width : target.naturalWidth;
         run.lowering = loweringOptionsFor(run.options, run.energyTable.get(), run.simd, width);
     }
-    internal_assert(!run.specialized.compensatesEnergy() || run.lowering.energyTable)
+    internal_assert(!run.specialized.singleLobe().compensatesEnergy() || run.lowering.energyTable)
         << "energy compensation planned without its table";
     run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.trustInputs);
 }

@@ -37,9 +37,9 @@ std::string samplerDeclarations(const std::string& p, const AotKernel& aot) {
     std::string h;
     if (!aot.hasSampler) {
         h += fmt::format("/* No importance sampler: Facet has no compiled sampler for ndf {} under\n",
-                         commentText(m.ndf.model->name));
+                         commentText(m.singleLobe().ndf.model->name));
         h += fmt::format("   masking {} (`facet ir --plan` shows sampling: specular=none), so this\n",
-                         commentText(m.masking.model->name));
+                         commentText(m.singleLobe().masking.model->name));
         h += fmt::format("   object has no {}_sample, {}_sample_batch,\n", p, p);
         h += fmt::format("   {}_pdf or {}_pdf_batch.\n", p, p);
         h += "   libfacet's facet_sample samples such materials through its reference\n";

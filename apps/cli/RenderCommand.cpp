@@ -322,7 +322,7 @@ int ndfPlotCommand(const RenderArgs& r) {
         NamedMaterial named = loadRenderMaterial(r);
         const CheckedMaterial* m = named.material;
         if (!m) return kExitMaterialError;
-        const NdfEntry& model = ndfEntry(*m->ndf.model);
+        const NdfEntry& model = ndfEntry(*m->singleLobe().ndf.model);
         if (model.wholeLobe) {
             std::fprintf(stderr, "%s: error: material '%s': the %s model has no microfacet distribution D to plot\n",
                          m->loc.str().c_str(), m->name.c_str(), model.name);

@@ -119,7 +119,7 @@ int runSample(const std::vector<std::string>& args) {
                          m->name.c_str(), kernel->samplerError().c_str());
         else if (kernel->samplerTier() != "jit")
             std::fprintf(stderr, "facet: note: material %s has no compiled sampler (ndf %s); sampling through the "
-                                 "reference\n", m->name.c_str(), m->ndf.model->name);
+                                 "reference\n", m->name.c_str(), m->singleLobe().ndf.model->name);
     }
     OutputStream output(out);
     if (!output.write("wi_x,wi_y,wi_z,pdf,weight_r,weight_g,weight_b\n")) return kExitFailed;

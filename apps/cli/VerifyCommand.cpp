@@ -79,16 +79,16 @@ bool verifyMaterial(const CheckedMaterial& m, const std::string& path, Compiler&
     bool ok = true;
     // energy and diffuse only where the material has one.
     std::string optional;
-    for (const ModelUse* use : {&m.energy, &m.diffuse})
+    for (const ModelUse* use : {&m.singleLobe().energy, &m.singleLobe().diffuse})
         if (std::string_view(use->model->name) != "none")
             optional += fmt::format(", {} {}", modelSlotName(use->model->slot), use->model->name);
-    std::printf("material %s (%s): ndf %s, masking %s, fresnel %s%s\n", m.name.c_str(), path.c_str(), m.ndf.model->name,
-                m.masking.model->name, m.fresnel.model->name, optional.c_str());
+    std::printf("material %s (%s): ndf %s, masking %s, fresnel %s%s\n", m.name.c_str(), path.c_str(), m.singleLobe().ndf.model->name,
+                m.singleLobe().masking.model->name, m.singleLobe().fresnel.model->name, optional.c_str());
 
     // ---- 1. hard cases on the interpreter and the kernels ----
     std::vector<HardCase> cases = hardCases(m);
     std::shared_ptr<const EnergyTable> table;
-    if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
+    if (m.singleLobe().compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
     HardCaseReference ref = evaluateHardCaseReference(interp, cases);
     size_t byInput = 0;
@@ -256,6 +256,13 @@ int cmdVerify(const std::vector<std::string>& args) {
         }
         for (const CheckedMaterial& m : program.materials) {
             if (!opt.material.empty() && m.name != opt.material) continue;
+            if (std::string why = compiledBackendsRefuse(m); !why.empty()) {
+                DiagnosticEngine refused;
+                refused.error(m.loc, why);
+                std::fputs(refused.str().c_str(), stderr);
+                materialError = true;
+                continue;
+            }
             ++total;
             if (verifyMaterial(m, path, compiler, opt)) ++passed;
             else {

@@ -133,7 +133,7 @@ struct Worst {
 std::vector<PhysicsCheck> physicsChecks(const CheckedMaterial& m, const PhysicsOptions& options) {
     std::vector<PhysicsCheck> out;
     std::shared_ptr<const EnergyTable> table;
-    if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
+    if (m.singleLobe().compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
 
     // Input settings: defaults, then each ranged float input at its ends.

@@ -160,13 +160,13 @@ Value* LaneEmitter::clampParam(Value* x, const ParamPlan& param, double lo, doub
 
 Value* LaneEmitter::scalarParam(const ModelUse& use, int p, bool floatResult, double capHi) {
     const ModelParam& domain = use.model->canonical.at(p);
-    const ParamPlan& param = plan.param(material.slotOf(use), p);
+    const ParamPlan& param = plan.param(material.singleLobe().slotOf(use), p);
     return clampParam(lower(*use.args.at(p)).c[0], param, domain.lo, std::min(domain.hi, capHi), floatResult);
 }
 
 LVal LaneEmitter::rgbParam(const ModelUse& use, int p, bool floatResult, double capHi) {
     const ModelParam& domain = use.model->canonical.at(p);
-    const ParamPlan& param = plan.param(material.slotOf(use), p);
+    const ParamPlan& param = plan.param(material.singleLobe().slotOf(use), p);
     LVal v = lower(*use.args.at(p));
     return map({v}, true,
                [&](auto& x) { return clampParam(x[0], param, domain.lo, std::min(domain.hi, capHi), floatResult); });

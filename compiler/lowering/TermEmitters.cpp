@@ -51,9 +51,9 @@ const Emitter& emitterOf(const ModelUse& use) {
 }  // namespace
 
 MaterialEmitters termEmitters(const CheckedMaterial& material) {
-    return {emitterOf<NdfEmitter>(material.ndf), emitterOf<MaskingEmitter>(material.masking),
-            emitterOf<FresnelEmitter>(material.fresnel), emitterOf<DiffuseEmitter>(material.diffuse),
-            emitterOf<EnergyEmitter>(material.energy)};
+    return {emitterOf<NdfEmitter>(material.singleLobe().ndf), emitterOf<MaskingEmitter>(material.singleLobe().masking),
+            emitterOf<FresnelEmitter>(material.singleLobe().fresnel), emitterOf<DiffuseEmitter>(material.singleLobe().diffuse),
+            emitterOf<EnergyEmitter>(material.singleLobe().energy)};
 }
 
 // ---- defaults: a hook an emitter does not override must not be reached (the plan and the traits keep them apart) ----

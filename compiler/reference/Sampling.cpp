@@ -185,6 +185,7 @@ SampleResult<Real> Interpreter<Real>::sample(const Real wo[3], const Real u[3], 
         if (!(u[k] >= 0 && u[k] < 1)) return invalid;  // NaN fails too
         uu[k] = u[k];
     }
+    if (material_.combinesLobes()) return invalid;  // the mixture sampler of lobes is not written yet
     ResolvedMaterial<Real> r = resolve(slots);
     if (!r.valid) return invalid;
     SampleResult<Real> out = sampleBrdf(r, o, uu);
@@ -200,6 +201,7 @@ PdfResult<Real> Interpreter<Real>::pdf(const Real wi[3], const Real wo[3], const
     invalid.valid = false;
     Vec3<Real> i, o;
     if (!unitDirection(wi, i) || !unitDirection(wo, o)) return invalid;
+    if (material_.combinesLobes()) return invalid;  // the mixture sampler of lobes is not written yet
     ResolvedMaterial<Real> r = resolve(slots);
     if (!r.valid) return invalid;
     PdfResult<Real> out;

@@ -686,7 +686,7 @@ void checkMaterialEval(const CheckedMaterial& m, Rng& rng, Failures& fail, const
             // dielectric's total-internal-reflection cut-off is a step, so a
             // rounding difference in wi.h against wo.h may legitimately
             // jump across it: skip that one.
-            if (r.valid && p.expect == DirPair::Any && !fresnelEntry(*m.fresnel.model).reciprocityStep) {
+            if (r.valid && p.expect == DirPair::Any && !fresnelEntry(*m.singleLobe().fresnel.model).reciprocityStep) {
                 EvalResult<double> q = interp.eval(p.wo.data(), p.wi.data(), slots);
                 for (int c = 0; c < 3 && q.valid; ++c) {
                     double a = r.rgb[c], b = q.rgb[c];
@@ -761,7 +761,7 @@ Outcome runOne(const std::string& text, Rng& rng, Failures& fail, const std::str
         out.checked = true;
         if (prog.materials.empty()) fail.add(where + ": no diagnostics and no materials");
         for (const CheckedMaterial& m : prog.materials) {
-            if (!m.ndf.model || !m.masking.model || !m.fresnel.model || !m.energy.model || !m.diffuse.model) {
+            if (!m.singleLobe().ndf.model || !m.singleLobe().masking.model || !m.singleLobe().fresnel.model || !m.singleLobe().energy.model || !m.singleLobe().diffuse.model) {
                 fail.add(where + ": checked material '" + m.name + "' has an unset model slot");
                 return out;
             }
@@ -778,8 +778,8 @@ Outcome runOne(const std::string& text, Rng& rng, Failures& fail, const std::str
             // under ASan, per mutant. Evaluate every other term with energy
             // = none instead; the Kulla-Conty term has its own physics tests.
             CheckedMaterial m = prog.materials[i];
-            if (m.compensatesEnergy()) {
-                m.energy.model = findModel(ModelSlot::Energy, "none");
+            if (m.singleLobe().compensatesEnergy()) {
+                m.singleLobe().energy.model = findModel(ModelSlot::Energy, "none");
                 ++st.energyReplaced;
             }
             // Likewise a Smith masking over a tabulated Lambda builds the
@@ -787,8 +787,8 @@ Outcome runOne(const std::string& text, Rng& rng, Failures& fail, const std::str
             // table: seconds in a release build, most of a minute under
             // ASan. Evaluate with masking = none; the tables have their own
             // tests (tests/energy LambdaTableTests, the hard cases).
-            if (m.masking.model->smith && ndfEntry(*m.ndf.model).tabulatedLambda) {
-                m.masking.model = findModel(ModelSlot::Masking, "none");
+            if (m.singleLobe().masking.model->smith && ndfEntry(*m.singleLobe().ndf.model).tabulatedLambda) {
+                m.singleLobe().masking.model = findModel(ModelSlot::Masking, "none");
                 ++st.maskingReplaced;
             }
             try {
