@@ -1,60 +1,36 @@
-// LobeCombination: the reference BRDF of a combination of lobes (SPEC 10):
-// the tree of CheckedMaterial::bsdf evaluated node by node over the
-// resolved lobes. A one-lobe material is that lobe's brdf() unchanged.
+// LobeCombination: Interpreter::combinedBrdf, the tree of CheckedMaterial::bsdf
+// evaluated by CombinationEval (LobeCombination.h). A one-lobe material is
+// that lobe's brdf() unchanged.
 #include "QuadMath.h"
-#include "Interpreter.h"
+#include "LobeCombination.h"
 
-#include "Diagnostics.h"
+#include <optional>
+#include <type_traits>
 
 namespace facet {
 
-namespace {
-
-template <typename Real>
-class CombinationEval {
-public:
-    CombinationEval(const CheckedMaterial& m, const ResolvedBsdf<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo,
-                    const Vec3<Real>& sum)
-        : m_(m), r_(r), wi_(wi), wo_(wo), sum_(sum) {}
-
-    std::array<Real, 3> node(int index) const {
-        const BsdfNode& n = m_.bsdf.at(size_t(index));
-        const std::array<Real, 3>& w = r_.weights.at(size_t(index));
-        std::array<Real, 3> out{};
-        switch (n.kind) {
-            case BsdfKind::Lobe: return r_.lobes.at(size_t(n.lobe)).brdf(wi_, wo_, sum_);
-            case BsdfKind::Scale: {
-                std::array<Real, 3> x = node(n.a);
-                for (int ch = 0; ch < 3; ++ch) out[ch] = w[ch] == 0 ? Real(0) : w[ch] * x[ch];
-                return out;
-            }
-            case BsdfKind::Sum: {
-                std::array<Real, 3> x = node(n.a), y = node(n.b);
-                for (int ch = 0; ch < 3; ++ch) out[ch] = x[ch] + y[ch];
-                return out;
-            }
-            case BsdfKind::Mix: {
-                std::array<Real, 3> x = node(n.a), y = node(n.b);
-                for (int ch = 0; ch < 3; ++ch) out[ch] = (1 - w[ch]) * x[ch] + w[ch] * y[ch];
-                return out;
-            }
-            case BsdfKind::Layer: break;
-        }
-        internal_error << "bsdf node '" << bsdfKindName(n.kind) << "' has no reference evaluation yet";
-    }
-
-private:
-    const CheckedMaterial& m_;
-    const ResolvedBsdf<Real>& r_;
-    const Vec3<Real>&wi_, &wo_, &sum_;
-};
-
-}  // namespace
+bool hasLayer(const CheckedMaterial& m) {
+    for (const BsdfNode& n : m.bsdf)
+        if (n.kind == BsdfKind::Layer) return true;
+    return false;
+}
 
 template <typename Real>
 std::array<Real, 3> Interpreter<Real>::combinedBrdf(const ResolvedBsdf<Real>& r, const Vec3<Real>& wi,
                                                     const Vec3<Real>& wo, const Vec3<Real>& sum, const Real*) const {
-    return CombinationEval<Real>(material_, r, wi, wo, sum).node(int(material_.bsdf.size()) - 1);
+    if (!material_.combinesLobes()) return r.lobes.at(size_t(material_.bsdfRoot().lobe)).brdf(wi, wo, sum);
+    // The layers' tables are baked in double, from the double form of r.
+    std::optional<ResolvedBsdf<double>> converted;
+    const ResolvedBsdf<double>* rd = nullptr;
+    if (hasLayer(material_)) {
+        if constexpr (std::is_same_v<Real, double>) {
+            rd = &r;
+        } else {
+            converted = bsdfToDouble(r);
+            rd = &*converted;
+        }
+    }
+    return CombinationEval<Real>(material_, r, rd, wi, wo, sum).node(int(material_.bsdf.size()) - 1);
 }
 
 #define FACET_COMBINATION(Real)                                                                                   \

@@ -291,8 +291,9 @@ CorpusFile readCorpusFile(const std::string& path) {
 // ===========================================================================
 
 struct Tally {
-    int passed = 0, failed = 0;
+    int passed = 0, failed = 0, skipped = 0;
     void pass() { ++passed; }
+    void skip() { ++skipped; }
     template <typename... Args>
     void fail(fmt::format_string<Args...> f, Args&&... args) {
         ++failed;
@@ -384,6 +385,13 @@ void runValueFile(const CorpusFile& f, const std::string& backend, Tally& tally)
         const CheckedMaterial* m = program.find(e.material);
         if (!m) {
             tally.fail("{}:{}: no material named '{}'", f.path, e.line, e.material);
+            continue;
+        }
+        // The compiled backends refuse combinations until issue 48's phase 2
+        // lowers them: those lines are counted, not failed; the interpreter
+        // checks them.
+        if (backend != "interp" && !facet::compiledBackendsRefuse(*m).empty()) {
+            tally.skip();
             continue;
         }
         std::vector<double> slots = m->defaultSlots();
@@ -509,5 +517,8 @@ int main(int argc, char** argv) {
         if (!facetBinary.empty()) runFacetCheck(f, facetBinary, tally);
     }
     std::printf("%d passed, %d failed\n", tally.passed, tally.failed);
+    if (tally.skipped)
+        std::printf("skipped: %d line(s) of materials that combine lobes (compiled backends: phase 2)\n",
+                    tally.skipped);
     return tally.failed ? 1 : 0;
 }
