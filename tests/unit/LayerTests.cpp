@@ -12,6 +12,7 @@
 #include "Checker.h"
 #include "Interpreter.h"
 #include "Sampling.h"
+#include "../physics/PhysicsUtil.h"
 
 #include <doctest/doctest.h>
 
@@ -46,24 +47,11 @@ std::string material(const std::string& lobes, const std::string& bsdf) {
     return "material m {\n" + lobes + "    bsdf = " + bsdf + ";\n}\n";
 }
 
-// Gauss-Legendre nodes and weights on [-1, 1] (Newton on P_n).
+// Gauss-Legendre (x, w) pairs on [-1, 1]: the physics tests' rule (Newton on P_n).
 std::vector<std::array<double, 2>> gauss(int n) {
+    physics::GaussLegendre g(n);
     std::vector<std::array<double, 2>> out;
-    for (int i = 0; i < n; ++i) {
-        double x = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1, p1 = x;
-            for (int k = 2; k <= n; ++k) {
-                double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
-                p0 = p1, p1 = p2;
-            }
-            dp = n * (x * p1 - p0) / (x * x - 1);
-            double dx = p1 / dp;
-            x -= dx;
-            if (std::abs(dx) < 1e-16) break;
-        }
-        out.push_back({x, 2 / ((1 - x * x) * dp * dp)});
-    }
+    for (int i = 0; i < n; ++i) out.push_back({g.x[i], g.w[i]});
     return out;
 }
 
