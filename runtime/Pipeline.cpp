@@ -111,6 +111,12 @@ bool check(PipelineRun& run, DiagnosticEngine& diags) {
 }
 
 bool specialize(PipelineRun& run, TableCache& tables, DiagnosticEngine& diags) {
+    // Also here: Compiler::compileMaterial starts from a checked material,
+    // not from the file stage above.
+    if (std::string why = compiledBackendsRefuse(run.checked); !why.empty()) {
+        diags.error(run.checked.loc, why);
+        return false;
+    }
     run.specialized = specializeMaterial(run.checked, run.options.bindings, diags);
     if (diags.hasErrors()) return false;
     if (run.specialized.singleLobe().compensatesEnergy()) run.energyTable = tables.getFor(run.specialized);

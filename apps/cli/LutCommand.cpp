@@ -68,6 +68,11 @@ int cmdLut(const std::vector<std::string>& args) {
                      m->loc.str().c_str(), m->name.c_str());
         return kExitMaterialError;
     }
+    if (!m->singleLobe().hasNdf()) {
+        std::fprintf(stderr, "%s: error: material '%s' is a diffuse lobe (no ndf); it has no E table\n",
+                     m->loc.str().c_str(), m->name.c_str());
+        return kExitMaterialError;
+    }
     if (auto why = kullaContyUnsupported(*m, m->singleLobe())) {
         std::fprintf(stderr, "%s: error: material '%s': %s\n", why->loc.str().c_str(), m->name.c_str(),
                      why->message.c_str());

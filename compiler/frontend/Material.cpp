@@ -60,6 +60,12 @@ std::string printBsdf(const CheckedMaterial& m, const BsdfNode& node) {
 }
 
 std::string compiledBackendsRefuse(const CheckedMaterial& m) {
+    // A lone diffuse lobe (`lobe x { diffuse = ... } bsdf = x;`) has no
+    // microfacet term for the lowering either: phase 2 lowers it with the
+    // combinations.
+    if (!m.combinesLobes() && !m.singleLobe().hasNdf())
+        return "material '" + m.name +
+               "' is a diffuse lobe alone (no ndf); the compiled backends do not support that yet, use --backend interp";
     if (!m.combinesLobes()) return "";
     return "material '" + m.name +
            "' combines lobes; the compiled backends do not support that yet, use --backend interp";

@@ -187,7 +187,7 @@ SampleResult<Real> Interpreter<Real>::sample(const Real wo[3], const Real u[3], 
         uu[k] = u[k];
     }
     SampleResult<Real> out;
-    if (material_.combinesLobes()) {
+    if (material_.combinesLobes() || !material_.singleLobe().hasNdf()) {  // a lone diffuse lobe: the cosine leaf
         ResolvedBsdf<Real> all = resolveAll(slots);
         if (!all.valid) return invalid;
         out = sampleCombination(*this, all, o, uu);
@@ -209,7 +209,7 @@ PdfResult<Real> Interpreter<Real>::pdf(const Real wi[3], const Real wo[3], const
     Vec3<Real> i, o;
     if (!unitDirection(wi, i) || !unitDirection(wo, o)) return invalid;
     PdfResult<Real> out;
-    if (material_.combinesLobes()) {
+    if (material_.combinesLobes() || !material_.singleLobe().hasNdf()) {  // a lone diffuse lobe: the cosine leaf
         ResolvedBsdf<Real> all = resolveAll(slots);
         if (!all.valid) return invalid;
         if (o.z > 0)

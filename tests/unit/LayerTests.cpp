@@ -249,3 +249,17 @@ TEST_CASE("the mixture sampler is unbiased and its pdf integrates to 1; a wrong 
 }
 
 }  // TEST_SUITE
+
+TEST_SUITE("layers") {
+
+TEST_CASE("a lone diffuse lobe samples its cosine lobe (no ndf to sample)") {
+    CheckedProgram p = checkText(material("    lobe grey {\n        diffuse = lambert(0.5);\n    }\n", "grey"));
+    const CheckedMaterial& m = p.materials.at(0);
+    for (double mu : {0.2, 1.0}) {
+        CHECK(unbiased(m, mu, 0.1, false));
+        CHECK(std::abs(pdfIntegral(m, mu, 0.1) - 1) <= 2e-3);
+    }
+    CHECK(!compiledBackendsRefuse(m).empty());  // a user error on compiled backends, not a crash in the lowering
+}
+
+}  // TEST_SUITE
