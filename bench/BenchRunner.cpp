@@ -648,7 +648,9 @@ std::optional<double> timeLoads(int runs, const std::string& file, int& done, st
 
 std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& m, int loadRuns,
                                                  const std::optional<std::string>& cacheDir) {
-    if (!m.singleLobe().compensatesEnergy() || kullaContyUnsupported(m, m.singleLobe())) return std::nullopt;
+    // (a combination's lobes: their tables are benched with the lobes' own materials)
+    if (m.combinesLobes() || !m.singleLobe().compensatesEnergy() || kullaContyUnsupported(m, m.singleLobe()))
+        return std::nullopt;
     EnergyTableKey key = energyTableKey(m);
     EnergyTableBench e;
     e.ndf = key.ndf->name;
@@ -684,7 +686,7 @@ std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& m, int l
 
 std::optional<LambdaTableBench> benchLambdaTable(const CheckedMaterial& m, int loadRuns,
                                                  const std::optional<std::string>& cacheDir) {
-    if (!usesTabulatedLambda(m)) return std::nullopt;
+    if (m.combinesLobes() || !usesTabulatedLambda(m)) return std::nullopt;
     const NdfEntry& ndf = ndfEntry(*m.singleLobe().ndf.model);
     std::vector<double> shape = tabulatedLambdaShape(m);
     LambdaTableBench e;

@@ -224,9 +224,9 @@ int runBuild(const std::vector<std::string>& args) {
             throw BuildOutputError{clash};
     if (!aot->hasSampler)
         std::fprintf(stderr,
-                     "facet: note: material %s has no compiled sampler (ndf %s, masking %s): the object has "
+                     "facet: note: material %s has no compiled sampler (%s): the object has "
                      "%s_eval and %s_eval_batch only, and the header says %s_HAS_SAMPLER 0\n",
-                     aot->material.name.c_str(), aot->material.singleLobe().ndf.model->name, aot->material.singleLobe().masking.model->name,
+                     aot->material.name.c_str(), samplerlessWhat(aot->material).c_str(),
                      opt.prefix.c_str(), opt.prefix.c_str(), opt.prefix.c_str());
     auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(printMaterial(aot->material)));
     std::string optionText = fmt::format("backend={};{};width={}", opt.backend,

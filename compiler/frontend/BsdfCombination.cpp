@@ -14,7 +14,7 @@ public:
     BsdfBuilder(const BsdfCheckContext& context, std::vector<BsdfNode>& nodes) : cx_(context), nodes_(nodes) {}
 
     // True when `e` denotes a combination of lobes rather than a number: it
-    // names a lobe or calls mix/layer somewhere. (A weight never does.)
+    // names a lobe or calls layer somewhere. (A weight never does.)
     bool isCombination(const Expr& e) const {
         switch (e.kind) {
             case ExprKind::Number: return false;
@@ -26,7 +26,9 @@ public:
             }
             case ExprKind::Call: {
                 const auto& call = static_cast<const CallExpr&>(e);
-                if (isCombinator(call)) return true;
+                // layer(...) always; mix(...) when it mixes lobes (else it
+                // is the builtin mix of numbers, e.g. inside a weight).
+                if (call.callee == "layer") return true;
                 for (const Argument& a : call.args)
                     if (isCombination(*a.value)) return true;
                 return false;

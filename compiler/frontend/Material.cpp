@@ -6,6 +6,7 @@
 #include "Diagnostics.h"
 
 #include <utility>
+#include <vector>
 
 namespace facet {
 
@@ -60,15 +61,18 @@ std::string printBsdf(const CheckedMaterial& m, const BsdfNode& node) {
 }
 
 std::string compiledBackendsRefuse(const CheckedMaterial& m) {
-    // A lone diffuse lobe (`lobe x { diffuse = ... } bsdf = x;`) has no
-    // microfacet term for the lowering either: phase 2 lowers it with the
-    // combinations.
-    if (!m.combinesLobes() && !m.singleLobe().hasNdf())
-        return "material '" + m.name +
-               "' is a diffuse lobe alone (no ndf); the compiled backends do not support that yet, use --backend interp";
-    if (!m.combinesLobes()) return "";
-    return "material '" + m.name +
-           "' combines lobes; the compiled backends do not support that yet, use --backend interp";
+    // A layer's tables are baked when the kernel is compiled, from constant
+    // parameters: a per-lane table (3D over the top's parameters) is not
+    // built yet. Binding the input (`--set`) makes it constant.
+    for (size_t i = 0; i < m.bsdf.size(); ++i) {
+        const BsdfNode& n = m.bsdf[i];
+        if (n.kind != BsdfKind::Layer) continue;
+        if (std::string input = layerTableInput(m, int(i)); !input.empty())
+            return "material '" + m.name + "': the compiled backends need the parameters of " + printBsdf(m, n) +
+                   " that its albedo tables depend on to be constant, but they read input '" + input +
+                   "'; bind it (--set " + input + "=VALUE) or use --backend interp";
+    }
+    return "";
 }
 
 const CheckedLobe& CheckedMaterial::singleLobe() const {
@@ -98,17 +102,10 @@ std::vector<double> CheckedMaterial::defaultSlots() const {
     return slots;
 }
 
-CheckedMaterial::Reads CheckedMaterial::readByModels() const {
+CheckedMaterial::Reads CheckedMaterial::readsOf(std::vector<const Expr*> pending) const {
     Reads read{std::vector<bool>(inputs.size(), false), std::vector<bool>(lets.size(), false)};
     // Names an expression uses; lets are followed once each (a let only
     // names lets defined before it, so the walk ends).
-    std::vector<const Expr*> pending;
-    for (const CheckedLobe& lobe : lobes)
-        for (int s = 0; s < kModelSlotCount; ++s)
-            for (const ExprPtr& arg : lobe.use(ModelSlot(s)).args)
-                if (arg) pending.push_back(arg.get());
-    for (const BsdfNode& node : bsdf)
-        if (node.weight) pending.push_back(node.weight.get());
     while (!pending.empty()) {
         const Expr& e = *pending.back();
         pending.pop_back();
@@ -134,6 +131,83 @@ CheckedMaterial::Reads CheckedMaterial::readByModels() const {
         }
     }
     return read;
+}
+
+CheckedMaterial::Reads CheckedMaterial::readByModels() const {
+    std::vector<const Expr*> all;
+    for (const CheckedLobe& lobe : lobes)
+        for (int s = 0; s < kModelSlotCount; ++s)
+            for (const ExprPtr& arg : lobe.use(ModelSlot(s)).args)
+                if (arg) all.push_back(arg.get());
+    for (const BsdfNode& node : bsdf)
+        if (node.weight) all.push_back(node.weight.get());
+    return readsOf(std::move(all));
+}
+
+CheckedMaterial lobeView(const CheckedMaterial& m, int lobe) {
+    CheckedMaterial view;
+    view.loc = m.loc;
+    view.name = m.name;
+    view.inputs = m.inputs;
+    view.lets = m.lets;
+    view.slotCount = m.slotCount;
+    view.lobes.push_back(m.lobes.at(size_t(lobe)));
+    BsdfNode root;
+    root.loc = view.lobes[0].loc;
+    root.lobe = 0;
+    view.bsdf.push_back(root);
+    return view;
+}
+
+bool isLambertianTree(const CheckedMaterial& m, int node) {
+    const BsdfNode& n = m.bsdf.at(size_t(node));
+    switch (n.kind) {
+        case BsdfKind::Lobe: return !m.lobes.at(size_t(n.lobe)).hasNdf();
+        case BsdfKind::Layer: return false;
+        default: return isLambertianTree(m, n.a) && (n.b < 0 || isLambertianTree(m, n.b));
+    }
+}
+
+namespace {
+
+// The expressions a layer's tables are computed from (LayerAlbedo.h): the
+// whole top sub-expression (its albedo, Fresnel included), and, unless the
+// base is Lambertian, the base's arguments other than its Fresnel terms
+// (the base enters the balance with Fresnel 1) and its weights.
+void layerTableExprs(const CheckedMaterial& m, int node, bool withFresnel, std::vector<const Expr*>& out) {
+    const BsdfNode& n = m.bsdf.at(size_t(node));
+    if (n.weight) out.push_back(n.weight.get());
+    if (n.kind == BsdfKind::Lobe) {
+        const CheckedLobe& lobe = m.lobes.at(size_t(n.lobe));
+        for (int s = 0; s < kModelSlotCount; ++s) {
+            if (ModelSlot(s) == ModelSlot::Fresnel && !withFresnel) continue;
+            for (const ExprPtr& arg : lobe.use(ModelSlot(s)).args)
+                if (arg) out.push_back(arg.get());
+        }
+        return;
+    }
+    if (n.a >= 0) layerTableExprs(m, n.a, withFresnel, out);
+    if (n.b >= 0) layerTableExprs(m, n.b, withFresnel, out);
+}
+
+}  // namespace
+
+std::string samplerlessWhat(const CheckedMaterial& m) {
+    if (m.combinesLobes()) return "a combination of lobes, sampled by the reference's mixture";
+    const CheckedLobe& lobe = m.singleLobe();
+    if (!lobe.hasNdf()) return "a diffuse lobe alone";
+    return std::string("ndf ") + lobe.ndf.model->name + ", masking " + lobe.masking.model->name;
+}
+
+std::string layerTableInput(const CheckedMaterial& m, int layer) {
+    const BsdfNode& n = m.bsdf.at(size_t(layer));
+    std::vector<const Expr*> exprs;
+    layerTableExprs(m, n.a, true, exprs);
+    if (!isLambertianTree(m, n.b)) layerTableExprs(m, n.b, false, exprs);
+    CheckedMaterial::Reads read = m.readsOf(std::move(exprs));
+    for (size_t i = 0; i < m.inputs.size(); ++i)
+        if (read.inputs[i]) return m.inputs[i].name;
+    return "";
 }
 
 }  // namespace facet

@@ -118,11 +118,26 @@ struct CheckedMaterial {
         std::vector<bool> inputs, lets;
     };
     Reads readByModels() const;
+    // What the expressions `exprs` read, directly or through lets.
+    Reads readsOf(std::vector<const Expr*> exprs) const;
 };
 
-// The compiled backends lower one lobe (issue 48's phase 2 lowers
-// combinations): the message with which they refuse a material that
-// combines lobes, "" when they take it. Every command that compiles,
+// The material with lobe `lobe` alone (same inputs, lets and slots; bsdf =
+// that lobe): what the one-lobe lowering plans and emits for each lobe of a
+// combination.
+CheckedMaterial lobeView(const CheckedMaterial& material, int lobe);
+// Whether the sub-expression `node` is Lambertian: diffuse lobes (no NDF)
+// combined by weights, sums and mixes, no layer.
+bool isLambertianTree(const CheckedMaterial& material, int node);
+// Why a material has no compiled sampler, for messages: "ndf X, masking Y"
+// of its lobe, or "a combination of lobes".
+std::string samplerlessWhat(const CheckedMaterial& material);
+// The first input that the tables of the layer node `layer` depend on
+// (LayerAlbedo.h), "" when they are constant.
+std::string layerTableInput(const CheckedMaterial& material, int layer);
+
+// The message with which the compiled backends refuse a material, "" when
+// they take it: a layer whose tables would depend on a per-lane input. Every command that compiles,
 // verifies or benchmarks a material reports it at the material's name.
 std::string compiledBackendsRefuse(const CheckedMaterial& material);
 

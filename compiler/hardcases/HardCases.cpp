@@ -425,7 +425,8 @@ struct QuadReference::Impl {
     Interpreter<double> d;
     Interpreter<Quad> q;
     static std::shared_ptr<const EnergyTable> tableFor(const CheckedMaterial& m) {
-        if (m.singleLobe().compensatesEnergy()) return buildEnergyTable(energyTableKey(m));
+        // (a combination's lobes build theirs in the interpreters)
+        if (!m.combinesLobes() && m.singleLobe().compensatesEnergy()) return buildEnergyTable(energyTableKey(m));
         return nullptr;
     }
     explicit Impl(const CheckedMaterial& m) : material(m), table(tableFor(m)), d(m, table), q(m, table) {}

@@ -80,7 +80,7 @@ namespace {
 // specialization may have copied the shared expression), or equal
 // constants. The isotropic forms save divisions.
 bool ndfIsIsotropic(const ModelUse& use) {
-    if (use.isotropic) return true;
+    if (use.isotropic || !use.model) return true;
     const int ax = paramIndex(*use.model, "alpha_x"), ay = paramIndex(*use.model, "alpha_y");
     if (ax < 0 || ay < 0 || !use.has(ax) || !use.has(ay)) return false;
     const Expr &x = *use.args[ax], &y = *use.args[ay];
@@ -235,6 +235,9 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
 // an exact sampler and the masking is a Smith form); the NDF's emitter says
 // whether it has that sampler in IR.
 SpecularSampling plannedSpecularSampling(const CheckedMaterial& material) {
+    // A combination is sampled by the reference's mixture (runtime), a
+    // diffuse lobe alone too.
+    if (material.combinesLobes() || !material.singleLobe().hasNdf()) return SpecularSampling::None;
     const NdfEmitter& ndf = termEmitters(material).ndf;
     const bool visible = samplesVisibleNormals(ndfEntry(*material.singleLobe().ndf.model), maskingEntry(*material.singleLobe().masking.model));
     if (!(visible ? ndf.traits.samplesVisibleNormals : ndf.traits.samplesNormals)) return SpecularSampling::None;
@@ -250,7 +253,9 @@ bool LoweringPlan::slotRead(const CheckedMaterial& material, int slot) const {
     return false;
 }
 
-LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs) {
+LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs,
+                          const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables) {
+    if (material.combinesLobes()) return planCombination(material, variant, trustInputs, lobeEnergyTables);
     const MaterialEmitters em = termEmitters(material);
     LoweringPlan plan;
     plan.variant = variant;
@@ -259,7 +264,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     plan.compensatesEnergy = material.singleLobe().compensatesEnergy();
     plan.reads = material.readByModels();
 
-    if (!material.singleLobe().masking.model->smith)
+    if (!material.singleLobe().masking.model->smith || !material.singleLobe().hasNdf())
         plan.lambda = LambdaForm::None;
     else if (em.ndf.traits.smithRootSums && !em.masking.traits.needsSeparateLambdas)
         plan.lambda = LambdaForm::RootSums;
@@ -310,7 +315,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     const ValueRanges ranges(material);
     for (int s = 0; s < kModelSlotCount; ++s) {
         const ModelUse& use = material.singleLobe().use(ModelSlot(s));
-        for (int p = 0; p < int(use.model->canonical.size()); ++p) {
+        for (int p = 0; use.model && p < int(use.model->canonical.size()); ++p) {
             const ModelParam& domain = use.model->canonical[p];
             ValueRange arg = ranges.argument(use, p);
             ParamPlan param;
@@ -352,9 +357,13 @@ void printBody(std::ostringstream& os, const char* what, const BodyPlan& body) {
 
 std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan) {
     std::ostringstream os;
+    if (plan.combines()) {
+        printCombinationPlan(os, material, plan);
+        return os.str();
+    }
     auto yesNo = [](bool b) { return b ? "yes" : "no"; };
     os << "material " << material.name << "\n";
-    os << "models: ndf=" << material.singleLobe().ndf.model->name << " masking=" << material.singleLobe().masking.model->name
+    os << "models: ndf=" << (material.singleLobe().hasNdf() ? material.singleLobe().ndf.model->name : "none") << " masking=" << material.singleLobe().masking.model->name
        << " fresnel=" << material.singleLobe().fresnel.model->name << " energy=" << material.singleLobe().energy.model->name
        << " diffuse=" << material.singleLobe().diffuse.model->name << "\n";
     os << "variant: " << plan.variant.name() << "\n";

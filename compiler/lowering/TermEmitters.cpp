@@ -48,10 +48,23 @@ const Emitter& emitterOf(const ModelUse& use) {
     return *static_cast<const Emitter*>(e);
 }
 
+// The NDF slot of a diffuse lobe (one without an NDF, in a combination):
+// no hook of it is reached, LaneEmitter::brdfPrecise emits no specular term
+// and the plan plans none.
+class AbsentNdfEmitter final : public NdfEmitter {
+public:
+    NdfParams params(LaneEmitter&) const override { return {}; }
+};
+
+const NdfEmitter& ndfEmitterOf(const ModelUse& use) {
+    static const AbsentNdfEmitter& absent = immortal<AbsentNdfEmitter>();
+    return use.model ? emitterOf<NdfEmitter>(use) : absent;
+}
+
 }  // namespace
 
 MaterialEmitters termEmitters(const CheckedMaterial& material) {
-    return {emitterOf<NdfEmitter>(material.singleLobe().ndf), emitterOf<MaskingEmitter>(material.singleLobe().masking),
+    return {ndfEmitterOf(material.singleLobe().ndf), emitterOf<MaskingEmitter>(material.singleLobe().masking),
             emitterOf<FresnelEmitter>(material.singleLobe().fresnel), emitterOf<DiffuseEmitter>(material.singleLobe().diffuse),
             emitterOf<EnergyEmitter>(material.singleLobe().energy)};
 }

@@ -257,6 +257,19 @@ Interpreter<Real>::Interpreter(const CheckedMaterial& material, std::shared_ptr<
 }
 
 template <typename Real>
+Interpreter<Real>::Interpreter(const CheckedMaterial& material,
+                               const std::vector<std::shared_ptr<const EnergyTable>>& lobeTables)
+    : material_(material), read_(material.readByModels()) {
+    for (size_t l = 0; l < material.lobes.size(); ++l) {
+        const CheckedLobe& lobe = material.lobes[l];
+        energy_.push_back(lobe.compensatesEnergy()
+                              ? std::make_shared<EnergyTableSlot>(energyTableKey(material, lobe),
+                                                                  l < lobeTables.size() ? lobeTables[l] : nullptr)
+                              : nullptr);
+    }
+}
+
+template <typename Real>
 ResolvedMaterial<Real> Interpreter<Real>::resolve(const Real* slots) const {
     internal_assert(!material_.combinesLobes()) << "resolve() of material '" << material_.name
                                                 << "', which combines lobes: use resolveAll()";

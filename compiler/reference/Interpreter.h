@@ -118,6 +118,10 @@ public:
     // `energyTable` is the table of a material's single lobe (a material
     // that combines lobes builds one per compensating lobe).
     explicit Interpreter(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> energyTable = nullptr);
+    // A combination with the tables of its lobes given (per lobe, in
+    // CheckedMaterial::lobes order; null where a lobe has none or where the
+    // interpreter is to build it).
+    Interpreter(const CheckedMaterial& material, const std::vector<std::shared_ptr<const EnergyTable>>& lobeTables);
 
     // Evaluates every let, model argument and weight for the given slot
     // values (material().slotCount of them; null means all defaults).

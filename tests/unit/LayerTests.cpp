@@ -259,7 +259,7 @@ TEST_CASE("a lone diffuse lobe samples its cosine lobe (no ndf to sample)") {
         CHECK(unbiased(m, mu, 0.1, false));
         CHECK(std::abs(pdfIntegral(m, mu, 0.1) - 1) <= 2e-3);
     }
-    CHECK(!compiledBackendsRefuse(m).empty());  // a user error on compiled backends, not a crash in the lowering
+    CHECK(compiledBackendsRefuse(m).empty());  // the compiled backends take it (tests/jit: its kernels)
 }
 
 }  // TEST_SUITE
