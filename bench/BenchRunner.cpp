@@ -648,7 +648,9 @@ std::optional<double> timeLoads(int runs, const std::string& file, int& done, st
 
 std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& m, int loadRuns,
                                                  const std::optional<std::string>& cacheDir) {
-    if (!m.compensatesEnergy() || kullaContyUnsupported(m)) return std::nullopt;
+    // (a combination's lobes: their tables are benched with the lobes' own materials)
+    if (m.combinesLobes() || !m.singleLobe().compensatesEnergy() || kullaContyUnsupported(m, m.singleLobe()))
+        return std::nullopt;
     EnergyTableKey key = energyTableKey(m);
     EnergyTableBench e;
     e.ndf = key.ndf->name;
@@ -684,8 +686,8 @@ std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& m, int l
 
 std::optional<LambdaTableBench> benchLambdaTable(const CheckedMaterial& m, int loadRuns,
                                                  const std::optional<std::string>& cacheDir) {
-    if (!usesTabulatedLambda(m)) return std::nullopt;
-    const NdfEntry& ndf = ndfEntry(*m.ndf.model);
+    if (m.combinesLobes() || !usesTabulatedLambda(m)) return std::nullopt;
+    const NdfEntry& ndf = ndfEntry(*m.singleLobe().ndf.model);
     std::vector<double> shape = tabulatedLambdaShape(m);
     LambdaTableBench e;
     e.key = lambdaTableName(ndf, shape);
@@ -739,6 +741,11 @@ bool benchFile(const std::string& path, const BenchSettings& settings, BenchRepo
     std::string source = readText(path);
     Compiler compiler;
     for (const CheckedMaterial& m : program.materials) {
+        if (std::string why = compiledBackendsRefuse(m); !why.empty()) {
+            DiagnosticEngine refused;
+            refused.error(m.loc, why);
+            throw std::runtime_error(refused.str());
+        }
         MaterialBench mb;
         mb.file = path;
         mb.material = m.name;

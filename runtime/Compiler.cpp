@@ -106,6 +106,9 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
     kernel->material_ = run.specialized;
     kernel->backend_ = options.backend;
     kernel->energyTable_ = run.energyTable;
+    kernel->lobeEnergyTables_ = run.specialized.combinesLobes()
+                                    ? run.lobeEnergyTables
+                                    : std::vector<std::shared_ptr<const EnergyTable>>{run.energyTable};
     for (int s = 0; s < kernel->material_.slotCount; ++s) kernel->slotNames_.push_back(kernel->material_.slotName(s));
     if (options.backend == Backend::Interp) {
         kernel->origin_ = "interpreter";
@@ -116,7 +119,7 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
     LoweringOptions lowering = run.lowering;
 
     // Cached under what the kernel computes, how and with what (KernelCache.h).
-    const KernelCacheKey keys(kernel->material_, options, lowering.width, *jit_, kernel->energyTable_.get());
+    const KernelCacheKey keys(kernel->material_, options, lowering.width, *jit_, kernel->lobeEnergyTables_);
     const std::string& key = keys.eval();
     std::string prefix = "facet_" + key.substr(0, 16);
     std::shared_ptr<CacheDirectory> disk = cache_;

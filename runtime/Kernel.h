@@ -218,6 +218,9 @@ private:
     std::string origin_;
     std::string variant_ = "reference";
     std::shared_ptr<const EnergyTable> energyTable_;
+    // Per lobe (CheckedMaterial::lobes order; {energyTable_} for one lobe):
+    // the tables the reference fallbacks evaluate the lobes with.
+    std::vector<std::shared_ptr<const EnergyTable>> lobeEnergyTables_;
     double measuredError_ = -1;
     double compileMillis_ = 0;
 };

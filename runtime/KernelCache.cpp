@@ -26,10 +26,13 @@ std::string sha256Hex(const std::string& text) {
 }  // namespace
 
 KernelCacheKey::KernelCacheKey(const CheckedMaterial& specialized, const CompileOptions& options, int width,
-                               const FacetJit& jit, const EnergyTable* energyTable) {
-    std::string tableId = energyTable ? fmt::format("{}/v{}/{}", energyTable->key.name(), kEnergyTableVersion,
-                                                    energyTable->quadrature.describe())
-                                      : "";
+                               const FacetJit& jit,
+                               const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables) {
+    std::string tableId;
+    for (const auto& table : lobeEnergyTables)
+        tableId += table ? fmt::format("{}/v{}/{};", table->key.name(), kEnergyTableVersion, table->quadrature.describe())
+                         : ";";
+    if (lobeEnergyTables.size() == 1) tableId.pop_back();  // one lobe: the key it always had
     text_ = fmt::format("{}|{}|w{}|{}|{}|{}|{}|{}|{}", printMaterial(specialized), options.canonical(), width,
                         LLVM_VERSION_STRING, jit.cpuName(), jit.cpuFeatures(), codegenIdentity(specialized),
                         FacetJit::kPipelineId, tableId);

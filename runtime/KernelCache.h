@@ -33,14 +33,14 @@ struct MemoryCache {
 // kernel computes (the specialized material, printed), how (the canonical
 // options, tolerance included, and the SIMD width) and with what (LLVM, the
 // CPU and its features, the code generator (CodegenIdentity.h), the
-// optimization pipeline, and the energy table's version and quadrature), so
+// optimization pipeline, and each lobe's energy table's version and quadrature), so
 // that a cache shared by several LLVMs or CPUs never hands one the other's
 // code. A sampler's key adds the variant its eval code was compiled with
 // (a tolerance search's choice).
 class KernelCacheKey {
 public:
     KernelCacheKey(const CheckedMaterial& specialized, const CompileOptions& options, int width, const FacetJit& jit,
-                   const EnergyTable* energyTable);
+                   const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables);
     const std::string& eval() const { return eval_; }
     std::string sampler(const std::string& variantName) const;
 

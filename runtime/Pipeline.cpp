@@ -81,7 +81,9 @@ void PipelineRun::rewindTo(PipelineStage stage) {
         context.reset();
     }
     if (stage < PipelineStage::Planned) lowering = LoweringOptions{}, plan = LoweringPlan{};
-    if (stage < PipelineStage::Specialized) specialized = CheckedMaterial{}, energyTable.reset(), lambdaTable.reset();
+    if (stage < PipelineStage::Specialized)
+        specialized = CheckedMaterial{}, energyTable.reset(), lambdaTable.reset(), lobeEnergyTables.clear(),
+        lobeLambdaTables.clear();
     internal_assert(stage >= PipelineStage::Checked || readFile || !text.empty())
         << "a pipeline run given a checked material cannot rewind to its source";
     reached = stage;
@@ -104,24 +106,48 @@ bool check(PipelineRun& run, DiagnosticEngine& diags) {
     return true;
 }
 
+// A combination's lobes each have their tables (the one-lobe view of each).
+void lobeTables(PipelineRun& run, TableCache& tables) {
+    if (!run.specialized.combinesLobes() || !run.lobeEnergyTables.empty()) return;
+    for (size_t l = 0; l < run.specialized.lobes.size(); ++l) {
+        CheckedMaterial view = lobeView(run.specialized, int(l));
+        const CheckedLobe& lobe = view.singleLobe();
+        run.lobeEnergyTables.push_back(lobe.compensatesEnergy() ? tables.getFor(view) : nullptr);
+        if (lobe.hasNdf() && usesTabulatedLambda(view)) run.lobeLambdaTables.push_back(tables.lambdaFor(view));
+    }
+}
+
 bool specialize(PipelineRun& run, TableCache& tables, DiagnosticEngine& diags) {
+    // After the bindings: a bound input can make a layer's tables constant.
     run.specialized = specializeMaterial(run.checked, run.options.bindings, diags);
     if (diags.hasErrors()) return false;
-    if (run.specialized.compensatesEnergy()) run.energyTable = tables.getFor(run.specialized);
-    if (usesTabulatedLambda(run.specialized)) run.lambdaTable = tables.lambdaFor(run.specialized);
+    const bool compiled = run.options.backend != Backend::Interp;
+    if (std::string why = compiled ? compiledBackendsRefuse(run.specialized) : ""; !why.empty()) {
+        diags.error(run.specialized.loc, why);
+        return false;
+    }
+    if (!run.specialized.combinesLobes()) {
+        if (run.specialized.singleLobe().compensatesEnergy()) run.energyTable = tables.getFor(run.specialized);
+        if (usesTabulatedLambda(run.specialized)) run.lambdaTable = tables.lambdaFor(run.specialized);
+    }
+    lobeTables(run, tables);
     return true;
 }
 
-void plan(PipelineRun& run, const PipelineControl& control, const PipelineTarget& target) {
+void plan(PipelineRun& run, const PipelineControl& control, const PipelineTarget& target, TableCache& tables) {
+    lobeTables(run, tables);
     if (control.lowering) {
         run.lowering = *control.lowering;
     } else {
         int width = run.options.width ? run.options.width : target.naturalWidth;
         run.lowering = loweringOptionsFor(run.options, run.energyTable.get(), run.simd, width);
     }
-    internal_assert(!run.specialized.compensatesEnergy() || run.lowering.energyTable)
+    run.lowering.lobeEnergyTables.clear();
+    for (const auto& t : run.lobeEnergyTables) run.lowering.lobeEnergyTables.push_back(t.get());
+    internal_assert(run.specialized.combinesLobes() || !run.specialized.singleLobe().compensatesEnergy() ||
+                    run.lowering.energyTable)
         << "energy compensation planned without its table";
-    run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.trustInputs);
+    run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.trustInputs, run.lobeEnergyTables);
 }
 
 void lower(PipelineRun& run, const PipelineControl& control) {
@@ -158,7 +184,7 @@ bool runKernelPipeline(PipelineRun& run, const PipelineControl& control, const P
             case PipelineStage::Specialized:
                 if (!specialize(run, tables, diags)) return false;
                 break;
-            case PipelineStage::Planned: plan(run, control, target); break;
+            case PipelineStage::Planned: plan(run, control, target, tables); break;
             // LLVM's stages recurse as deep as the material is long: on a
             // stack of known size, whatever thread the host calls from.
             case PipelineStage::Lowered: onCompileStack([&] { lower(run, control); }); break;

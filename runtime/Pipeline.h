@@ -65,6 +65,11 @@ struct PipelineRun {
     CheckedMaterial checked, specialized;
     std::shared_ptr<const EnergyTable> energyTable;
     std::shared_ptr<const LambdaTable> lambdaTable;
+    // A combination of lobes: the same per lobe (Kulla-Conty tables in
+    // CheckedMaterial::lobes order, null for a lobe without; the Lambda
+    // tables held for the plan to find), loaded at the planned stage.
+    std::vector<std::shared_ptr<const EnergyTable>> lobeEnergyTables;
+    std::vector<std::shared_ptr<const LambdaTable>> lobeLambdaTables;
     // planned
     LoweringOptions lowering;
     LoweringPlan plan;

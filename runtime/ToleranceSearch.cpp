@@ -94,6 +94,14 @@ CachedKernel Compiler::searchVariants(const CheckedMaterial& material, LoweringO
         Kernel probe;
         probe.material_ = material;
         if (lowering.energyTable) probe.energyTable_ = tables_->getFor(material);
+        probe.lobeEnergyTables_ = {probe.energyTable_};
+        if (material.combinesLobes()) {
+            probe.lobeEnergyTables_.clear();
+            for (size_t l = 0; l < material.lobes.size(); ++l) {
+                CheckedMaterial view = lobeView(material, int(l));
+                probe.lobeEnergyTables_.push_back(view.singleLobe().compensatesEnergy() ? tables_->getFor(view) : nullptr);
+            }
+        }
         probe.backend_ = lowering.emitBatch ? Backend::Simd : Backend::Scalar;
         probe.code_ = std::make_shared<KernelCode>();
         probe.code_->jit = jit_;

@@ -15,6 +15,10 @@ quadrature with nodes computed here by Newton iteration, and the Smith Lambda
 of the NDFs without a closed form a 2-D quadrature of a different integral
 than the one Facet tabulates.
 
+Materials of several lobes (SPEC 10: lobe blocks, bsdf = EXPR, layer) and
+energy = kulla_conty are evaluated by reference_lobes.py, independent in the
+same way (its own albedo quadrature and its own solve of the layer's balance).
+
 Usage:
   reference_values.py --eval FILE [--material NAME] [tol=T] wi=(x,y,z) wo=(x,y,z) [NAME=V | NAME=(r,g,b)]...
         print the `// expect:` line for one evaluation
@@ -475,14 +479,18 @@ class Parser:
         mats = []
         while self.peek()[0] != "end":
             self.take("material")
-            name = self.ident()
-            self.take("{")
-            stmts = []
-            while self.peek()[1] != "}":
-                stmts.append(self.statement())
-            self.take("}")
-            mats.append((name, stmts))
+            mats.append(self.block())
         return mats
+
+    def block(self):
+        """NAME { statements } of a material or (SPEC 10) a lobe -> (name, statements)."""
+        name = self.ident()
+        self.take("{")
+        stmts = []
+        while self.peek()[1] != "}":
+            stmts.append(self.statement())
+        self.take("}")
+        return name, stmts
 
     def statement(self):
         kw = self.ident()
@@ -504,6 +512,13 @@ class Parser:
             e = self.expr()
             self.take(";")
             return ("let", name, e)
+        if kw == "lobe":  # SPEC 10: lobe NAME { model statements }
+            return ("lobe",) + self.block()
+        if kw == "bsdf":  # SPEC 10: bsdf = EXPR; (lobes combined; read by reference_lobes)
+            self.take("=")
+            e = self.expr()
+            self.take(";")
+            return ("bsdf", e)
         self.take("=")
         model = self.ident()
         args = self.args() if self.peek()[1] == "(" else []
@@ -561,7 +576,8 @@ class Parser:
             return ("num", float(text))
         if kind == "id":
             if self.peek()[1] == "(":
-                return ("call", text, [e for _, e in self.args()])
+                args = self.args()  # argument names kept for bsdf's layer(.., weight = W)
+                return ("call", text, [e for _, e in args], [n for n, _ in args])
             return ("name", text)
         if text == "(":
             e = self.expr()
@@ -639,7 +655,7 @@ MODELS = {
     "fresnel": {"none": [[]], "schlick": [["f0"], ["eta"]], "dielectric": [["eta"]],
                 "conductor": [["eta", "k"]]},
     "diffuse": {"none": [[]], "lambert": [["albedo"]]},
-    "energy": {"none": [[]]},
+    "energy": {"none": [[]], "kulla_conty": [[]]},
 }
 MODELS["masking"]["schlick_smith"] = [["k"]]
 RGB_SLOTS = ("fresnel", "diffuse")  # their parameters are rgb (a float promotes); ndf and masking take floats
@@ -661,13 +677,62 @@ def bind_args(slot, model, args):
     raise ValueError("arguments of %s %s fit no form" % (slot, model))
 
 
+def new_models():
+    """The model slots of one lobe with their defaults (SPEC 1); ndf None until set."""
+    models = {"ndf": None, "masking": "none", "fresnel": "none", "energy": "none", "diffuse": "none"}
+    return models, {k: {} for k in models}
+
+
+def read_model(st, models, model_args):
+    _, slot, model, args = st
+    if model == "trowbridge_reitz":
+        model = "ggx"  # SPEC 3 alias
+    models[slot] = model
+    model_args[slot] = bind_args(slot, model, args)
+
+
+def resolve_models(models, model_args, env):
+    """Parameters of every model of one lobe, its expressions evaluated in env."""
+    params = {}
+    for slot, bound in model_args.items():
+        p = {}
+        for key, e in bound.items():
+            v = evaluate(e, env)
+            if slot in RGB_SLOTS:
+                p[key] = v if isinstance(v, tuple) else (v, v, v)
+            else:
+                p[key] = v
+        params[slot] = p
+    # Canonical NDF parameters; alpha clamped to >= 1e-4 (SPEC 3).
+    pn = params["ndf"]
+    if models["ndf"] == "sgd":  # alpha clamped to [2e-4, 10], p to [0, 2]
+        pn["alpha"] = min(max(pn["alpha"], 2e-4), 10.0)
+        pn["p"] = min(max(pn["p"], 0.0), 2.0)
+    elif "alpha" in pn:
+        pn["alpha"] = max(pn["alpha"], MIN_ALPHA)
+        pn.setdefault("alpha_x", pn["alpha"])
+        pn.setdefault("alpha_y", pn["alpha"])
+    for key in ("alpha_x", "alpha_y"):
+        if key in pn:
+            pn[key] = max(pn[key], MIN_ALPHA)
+    if models["ndf"] == "student_t":  # SPEC 3: gamma > 1.5 (clamped to [1.5, 1e4])
+        pn["gamma"] = min(max(pn["gamma"], 1.5), 1e4)
+    if models["ndf"] == "epd":  # p clamped to [0.25, 4]
+        pn["p"] = min(max(pn["p"], 0.25), 4.0)
+    if models["ndf"] == "abc":  # b clamped to [1/8, 2e8], c to [0, 10]
+        pn["b"] = min(max(pn["b"], 0.125), 2e8)
+        pn["c"] = min(max(pn["c"], 0.0), 10.0)
+    return params
+
+
 class Material:
     def __init__(self, name, stmts):
         self.name = name
         self.inputs = {}   # name -> (default, (lo, hi) or None)
         self.order = []    # ("input"|"let", name, expr) in definition order
-        self.models = {"ndf": None, "masking": "none", "fresnel": "none", "energy": "none", "diffuse": "none"}
-        self.model_args = {k: {} for k in self.models}
+        self.models, self.model_args = new_models()  # the implicit lobe of a material without lobe blocks
+        self.lobes = {}    # SPEC 10: lobe name -> (models, model_args)
+        self.bsdf = None   # SPEC 10: the bsdf expression, None without lobe blocks
         for st in stmts:
             if st[0] == "input":
                 _, n, d, rng = st
@@ -677,15 +742,22 @@ class Material:
                 self.order.append(("input", n, None))
             elif st[0] == "let":
                 self.order.append(("let", st[1], st[2]))
+            elif st[0] == "lobe":
+                models, model_args = new_models()
+                for inner in st[2]:
+                    if inner[0] != "model":
+                        raise ValueError("lobe %s: only model statements belong in a lobe" % st[1])
+                    read_model(inner, models, model_args)
+                self.lobes[st[1]] = (models, model_args)
+            elif st[0] == "bsdf":
+                self.bsdf = st[1]
             else:
-                _, slot, model, args = st
-                if model == "trowbridge_reitz":
-                    model = "ggx"  # SPEC 3 alias
-                self.models[slot] = model
-                self.model_args[slot] = bind_args(slot, model, args)
+                read_model(st, self.models, self.model_args)
+        if self.lobes and self.bsdf is None:
+            raise ValueError("material %s has lobes and no bsdf" % name)
 
-    def resolve(self, values):
-        """Parameters of every model for the given input values (missing: defaults)."""
+    def environment(self, values):
+        """Inputs (given values or defaults, clamped to their ranges) and lets, by name."""
         env = {}
         for kind, n, e in self.order:
             if kind == "input":
@@ -698,39 +770,19 @@ class Material:
                 env[n] = v
             else:
                 env[n] = evaluate(e, env)
-        params = {}
-        for slot, bound in self.model_args.items():
-            p = {}
-            for key, e in bound.items():
-                v = evaluate(e, env)
-                if slot in RGB_SLOTS:
-                    p[key] = v if isinstance(v, tuple) else (v, v, v)
-                else:
-                    p[key] = v
-            params[slot] = p
-        # Canonical NDF parameters; alpha clamped to >= 1e-4 (SPEC 3).
-        pn = params["ndf"]
-        if self.models["ndf"] == "sgd":  # alpha clamped to [2e-4, 10], p to [0, 2]
-            pn["alpha"] = min(max(pn["alpha"], 2e-4), 10.0)
-            pn["p"] = min(max(pn["p"], 0.0), 2.0)
-        elif "alpha" in pn:
-            pn["alpha"] = max(pn["alpha"], MIN_ALPHA)
-            pn.setdefault("alpha_x", pn["alpha"])
-            pn.setdefault("alpha_y", pn["alpha"])
-        for key in ("alpha_x", "alpha_y"):
-            if key in pn:
-                pn[key] = max(pn[key], MIN_ALPHA)
-        if self.models["ndf"] == "student_t":  # SPEC 3: gamma > 1.5 (clamped to [1.5, 1e4])
-            pn["gamma"] = min(max(pn["gamma"], 1.5), 1e4)
-        if self.models["ndf"] == "epd":  # p clamped to [0.25, 4]
-            pn["p"] = min(max(pn["p"], 0.25), 4.0)
-        if self.models["ndf"] == "abc":  # b clamped to [1/8, 2e8], c to [0, 10]
-            pn["b"] = min(max(pn["b"], 0.125), 2e8)
-            pn["c"] = min(max(pn["c"], 0.0), 10.0)
-        return params
+        return env
+
+    def resolve(self, values):
+        """Parameters of every model for the given input values (missing: defaults)."""
+        return resolve_models(self.models, self.model_args, self.environment(values))
 
     def eval(self, wi, wo, values):
-        return brdf(self.models, self.resolve(values), wi, wo)
+        if self.bsdf is not None:
+            return reference_lobes.eval_material(self, wi, wo, values)
+        params = self.resolve(values)
+        if self.models["energy"] == "kulla_conty":
+            return reference_lobes.lobe_value(reference_lobes.ResolvedLobe(self.models, params), wi, wo)
+        return brdf(self.models, params, wi, wo)
 
 
 def load_materials(path):
@@ -972,8 +1024,17 @@ def cmd_selftest():
         rs, rp = (c - nct) / (c + nct), (n * n * c - nct) / (n * n * c + nct)
         check("conductor real form = complex form at c=%g" % c, fresnel_conductor(c, 0.2, 3.0),
               (abs(rs) ** 2 + abs(rp) ** 2) / 2)
+    import reference_lobes_selftest  # SPEC 10: albedo quadrature, Kulla-Conty, the layer
+    reference_lobes_selftest.selftest(check)
     print("selftest: %s" % ("FAILED" if fails else "passed"))
     return 1 if fails else 0
+
+
+# The multi-lobe part (SPEC 10) lives in its own module; it imports this one by
+# name, so a run as a script registers this module under that name first (one
+# copy of the caches and classes, not two).
+sys.modules.setdefault("reference_values", sys.modules[__name__])
+import reference_lobes  # noqa: E402  (needs the definitions above)
 
 
 def main(argv):

@@ -24,8 +24,8 @@ inline std::vector<HardCaseMaterial> coveringMaterials(const std::vector<HardCas
         if (program.materials.empty()) continue;
         const CheckedMaterial& m = program.materials.front();
         std::vector<std::string> keys = {"ndf " + hm.ndf, "masking " + hm.masking, "fresnel " + hm.fresnel};
-        if (m.masking.model->smith) keys.push_back("smith " + hm.ndf);
-        if (m.compensatesEnergy()) keys.push_back(m.masking.model->smith ? "energy smith" : "energy");
+        if (m.singleLobe().masking.model->smith) keys.push_back("smith " + hm.ndf);
+        if (m.singleLobe().compensatesEnergy()) keys.push_back(m.singleLobe().masking.model->smith ? "energy smith" : "energy");
         bool adds = false;
         for (const std::string& k : keys) adds |= seen.insert(k).second;
         if (adds) out.push_back(hm);

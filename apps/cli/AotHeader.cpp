@@ -36,10 +36,9 @@ std::string samplerDeclarations(const std::string& p, const AotKernel& aot) {
     const CheckedMaterial& m = aot.material;
     std::string h;
     if (!aot.hasSampler) {
-        h += fmt::format("/* No importance sampler: Facet has no compiled sampler for ndf {} under\n",
-                         commentText(m.ndf.model->name));
-        h += fmt::format("   masking {} (`facet ir --plan` shows sampling: specular=none), so this\n",
-                         commentText(m.masking.model->name));
+        h += fmt::format("/* No importance sampler: Facet has no compiled sampler for\n   {}\n",
+                         commentText(samplerlessWhat(m)));
+        h += "   (`facet ir --plan` shows the sampling line), so this\n";
         h += fmt::format("   object has no {}_sample, {}_sample_batch,\n", p, p);
         h += fmt::format("   {}_pdf or {}_pdf_batch.\n", p, p);
         h += "   libfacet's facet_sample samples such materials through its reference\n";

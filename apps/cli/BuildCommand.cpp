@@ -192,6 +192,12 @@ int runBuild(const std::vector<std::string>& args) {
         std::fprintf(stderr, "facet: error: %s\n", named.missing.c_str());
         return kExitMaterialError;
     }
+    if (std::string why = compiledBackendsRefuse(*material); !why.empty()) {
+        DiagnosticEngine refused;
+        refused.error(material->loc, why);
+        std::fputs(refused.str().c_str(), stderr);
+        return kExitMaterialError;
+    }
     for (const auto& [name, values] : options.bindings)
         if (!material->findInput(name))
             throw BuildUsageError{fmt::format("--set: material '{}' has no input '{}'", material->name, name)};
@@ -218,9 +224,9 @@ int runBuild(const std::vector<std::string>& args) {
             throw BuildOutputError{clash};
     if (!aot->hasSampler)
         std::fprintf(stderr,
-                     "facet: note: material %s has no compiled sampler (ndf %s, masking %s): the object has "
+                     "facet: note: material %s has no compiled sampler (%s): the object has "
                      "%s_eval and %s_eval_batch only, and the header says %s_HAS_SAMPLER 0\n",
-                     aot->material.name.c_str(), aot->material.ndf.model->name, aot->material.masking.model->name,
+                     aot->material.name.c_str(), samplerlessWhat(aot->material).c_str(),
                      opt.prefix.c_str(), opt.prefix.c_str(), opt.prefix.c_str());
     auto digest = llvm::SHA256::hash(llvm::arrayRefFromStringRef(printMaterial(aot->material)));
     std::string optionText = fmt::format("backend={};{};width={}", opt.backend,

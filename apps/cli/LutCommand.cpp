@@ -63,7 +63,17 @@ int cmdLut(const std::vector<std::string>& args) {
     if (named.fileErrors) return kExitMaterialError;
     if (!named.material) return usage(named.missing);
     const CheckedMaterial* m = named.material;
-    if (auto why = kullaContyUnsupported(*m)) {
+    if (m->combinesLobes()) {
+        std::fprintf(stderr, "%s: error: material '%s' combines lobes; 'facet lut' writes the table of one lobe\n",
+                     m->loc.str().c_str(), m->name.c_str());
+        return kExitMaterialError;
+    }
+    if (!m->singleLobe().hasNdf()) {
+        std::fprintf(stderr, "%s: error: material '%s' is a diffuse lobe (no ndf); it has no E table\n",
+                     m->loc.str().c_str(), m->name.c_str());
+        return kExitMaterialError;
+    }
+    if (auto why = kullaContyUnsupported(*m, m->singleLobe())) {
         std::fprintf(stderr, "%s: error: material '%s': %s\n", why->loc.str().c_str(), m->name.c_str(),
                      why->message.c_str());
         return kExitMaterialError;
@@ -82,7 +92,7 @@ int cmdLut(const std::vector<std::string>& args) {
     std::printf("  E_avg:");
     for (double a : {0.01, 0.05, 0.1, 0.25, 0.5, 1.0}) std::printf("  alpha %g: %.6f", a, 1 - table->ecAvgAt(a));
     std::printf("\n");
-    if (!m->compensatesEnergy())
+    if (!m->singleLobe().compensatesEnergy())
         std::printf("  (material uses energy = none; the table is the one kulla_conty would use)\n");
     Interpreter<double> interp(*m, table);
     ResolvedMaterial<double> r = interp.resolve(nullptr);

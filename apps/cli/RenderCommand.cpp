@@ -322,7 +322,15 @@ int ndfPlotCommand(const RenderArgs& r) {
         NamedMaterial named = loadRenderMaterial(r);
         const CheckedMaterial* m = named.material;
         if (!m) return kExitMaterialError;
-        const NdfEntry& model = ndfEntry(*m->ndf.model);
+        // D is a property of one microfacet lobe: a combination, or a lobe
+        // with only a diffuse term, has none to plot.
+        if (m->combinesLobes() || !m->singleLobe().hasNdf()) {
+            std::fprintf(stderr, "%s: error: material '%s': %s\n", m->loc.str().c_str(), m->name.c_str(),
+                         m->combinesLobes() ? "combines lobes; the D plot needs a material of one microfacet lobe"
+                                            : "has no ndf (a diffuse lobe); there is no D to plot");
+            return kExitFailed;
+        }
+        const NdfEntry& model = ndfEntry(*m->singleLobe().ndf.model);
         if (model.wholeLobe) {
             std::fprintf(stderr, "%s: error: material '%s': the %s model has no microfacet distribution D to plot\n",
                          m->loc.str().c_str(), m->name.c_str(), model.name);

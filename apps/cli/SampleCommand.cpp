@@ -118,8 +118,8 @@ int runSample(const std::vector<std::string>& args) {
             std::fprintf(stderr, "facet: warning: material %s: %s; sampling through the reference\n",
                          m->name.c_str(), kernel->samplerError().c_str());
         else if (kernel->samplerTier() != "jit")
-            std::fprintf(stderr, "facet: note: material %s has no compiled sampler (ndf %s); sampling through the "
-                                 "reference\n", m->name.c_str(), m->ndf.model->name);
+            std::fprintf(stderr, "facet: note: material %s has no compiled sampler (%s); sampling through the "
+                                 "reference\n", m->name.c_str(), samplerlessWhat(*m).c_str());
     }
     OutputStream output(out);
     if (!output.write("wi_x,wi_y,wi_z,pdf,weight_r,weight_g,weight_b\n")) return kExitFailed;

@@ -46,13 +46,15 @@ std::string parseSeed(const std::string& option, const std::string& text, uint64
 }
 
 std::unique_ptr<Interpreter<double>> referenceInterpreter(const CheckedMaterial& material) {
+    // A combination's lobes build their tables in memory (Interpreter).
+    if (material.combinesLobes()) return std::make_unique<Interpreter<double>>(material);
     std::shared_ptr<const EnergyTable> table;
     const bool lambda = usesTabulatedLambda(material);
-    if (material.compensatesEnergy() || lambda) {
+    if (material.singleLobe().compensatesEnergy() || lambda) {
         // The kernels' arrangement (Compiler): tables/ below the cache root,
         // one trust decision and one warning for the root.
         TableCache tables(std::make_shared<CacheDirectory>(defaultCacheRoot()), "tables");
-        if (material.compensatesEnergy()) table = tables.getFor(material);
+        if (material.singleLobe().compensatesEnergy()) table = tables.getFor(material);
         // The table stays resident in the process, where the interpreter's
         // Lambda finds it (LambdaTable.h).
         if (lambda) tables.lambdaFor(material);

@@ -79,16 +79,22 @@ bool verifyMaterial(const CheckedMaterial& m, const std::string& path, Compiler&
     bool ok = true;
     // energy and diffuse only where the material has one.
     std::string optional;
-    for (const ModelUse* use : {&m.energy, &m.diffuse})
-        if (std::string_view(use->model->name) != "none")
-            optional += fmt::format(", {} {}", modelSlotName(use->model->slot), use->model->name);
-    std::printf("material %s (%s): ndf %s, masking %s, fresnel %s%s\n", m.name.c_str(), path.c_str(), m.ndf.model->name,
-                m.masking.model->name, m.fresnel.model->name, optional.c_str());
+    if (m.combinesLobes()) {
+        std::printf("material %s (%s): %s\n", m.name.c_str(), path.c_str(), printBsdf(m, m.bsdfRoot()).c_str());
+    } else {
+        const CheckedLobe& lobe = m.singleLobe();
+        for (const ModelUse* use : {&lobe.energy, &lobe.diffuse})
+            if (std::string_view(use->model->name) != "none")
+                optional += fmt::format(", {} {}", modelSlotName(use->model->slot), use->model->name);
+        std::printf("material %s (%s): ndf %s, masking %s, fresnel %s%s\n", m.name.c_str(), path.c_str(),
+                    lobe.hasNdf() ? lobe.ndf.model->name : "none", lobe.masking.model->name,
+                    lobe.fresnel.model->name, optional.c_str());
+    }
 
     // ---- 1. hard cases on the interpreter and the kernels ----
     std::vector<HardCase> cases = hardCases(m);
-    std::shared_ptr<const EnergyTable> table;
-    if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
+    std::shared_ptr<const EnergyTable> table;  // (a combination's lobes build theirs in the interpreter)
+    if (!m.combinesLobes() && m.singleLobe().compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
     HardCaseReference ref = evaluateHardCaseReference(interp, cases);
     size_t byInput = 0;
@@ -256,6 +262,13 @@ int cmdVerify(const std::vector<std::string>& args) {
         }
         for (const CheckedMaterial& m : program.materials) {
             if (!opt.material.empty() && m.name != opt.material) continue;
+            if (std::string why = compiledBackendsRefuse(m); !why.empty()) {
+                DiagnosticEngine refused;
+                refused.error(m.loc, why);
+                std::fputs(refused.str().c_str(), stderr);
+                materialError = true;
+                continue;
+            }
             ++total;
             if (verifyMaterial(m, path, compiler, opt)) ++passed;
             else {

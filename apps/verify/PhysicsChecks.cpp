@@ -4,6 +4,7 @@
 
 #include "Interpreter.h"
 #include "KullaConty.h"
+#include "LayerAlbedo.h"
 #include "Quadrature.h"
 
 #include <algorithm>
@@ -130,10 +131,74 @@ struct Worst {
 
 }  // namespace
 
+namespace {
+
+// A combination of lobes (SPEC 10): each lobe's own checks (named "lobe
+// NAME: ..."), then the whole combination's reciprocity and its albedo
+// (LayerAlbedo's graded quadrature over the half vector, at its 65 cosines),
+// <= 1 where the combination adds no lobes (a sum's weights are the user's).
+std::vector<PhysicsCheck> combinationChecks(const CheckedMaterial& m, const PhysicsOptions& options) {
+    std::vector<PhysicsCheck> out;
+    for (size_t l = 0; l < m.lobes.size(); ++l) {
+        if (!m.lobes[l].hasNdf()) continue;  // a diffuse lobe: nothing to integrate
+        for (PhysicsCheck c : physicsChecks(lobeView(m, int(l)), options)) {
+            c.name = "lobe " + m.lobes[l].name + ": " + c.name;
+            out.push_back(std::move(c));
+        }
+    }
+    Interpreter<double> interp(m);
+    std::vector<double> slots = m.defaultSlots();
+    ResolvedBsdf<double> r = interp.resolveAll(slots.data());
+    const std::string where = fmtSlots(m, slots);
+    if (!r.valid) {
+        out.push_back({"inputs", where, 0, 0, 1, 0, true, "the material's parameters are not finite here"});
+        return out;
+    }
+    bool adds = false;
+    for (const BsdfNode& n : m.bsdf) adds |= n.kind == BsdfKind::Sum;
+    {
+        std::shared_ptr<const MuTable> albedo = albedoTable(m, r, int(m.bsdf.size()) - 1);
+        Worst energy;
+        for (int j = 0; j < MuTable::kNodes; ++j)
+            for (int ch = 0; ch < 3; ++ch) {
+                double a = albedo->v[size_t(j)][size_t(ch)];
+                energy.add("combination energy <= 1", fmt::format("{} mu_o={:.4g} ch {}", where, MuTable::nodeMu(j), ch),
+                           a, 1, std::max(0.0, a - 1), 1e-3, !adds,
+                           adds ? "a sum of lobes adds their albedos; its weights are the user's" : "");
+            }
+        out.push_back(energy.c);
+    }
+    {
+        Worst rec;
+        std::mt19937_64 rng(12345);
+        std::uniform_real_distribution<double> uni(0, 1);
+        for (int i = 0; i < options.reciprocityPairs; ++i) {
+            double zi = uni(rng), zo = uni(rng);
+            if (i % 4 == 0) zi = std::pow(10.0, -7 * uni(rng));  // grazing
+            V a = dirOf(std::acos(zi), 2 * kPi * uni(rng)), b = dirOf(std::acos(zo), 2 * kPi * uni(rng));
+            double wa[3] = {a.x, a.y, a.z}, wb[3] = {b.x, b.y, b.z};
+            EvalResult<double> f = interp.eval(wa, wb, slots.data()), g = interp.eval(wb, wa, slots.data());
+            for (int ch = 0; ch < 3; ++ch) {
+                double e = std::fabs(f.rgb[ch] - g.rgb[ch]) / std::max(std::fabs(f.rgb[ch]), 1e-300);
+                rec.add("combination reciprocity",
+                        fmt::format("{} wi=({:.9g},{:.9g},{:.9g}) wo=({:.9g},{:.9g},{:.9g})", where, a.x, a.y, a.z, b.x,
+                                    b.y, b.z),
+                        g.rgb[ch], f.rgb[ch], e, 1e-9, true, "");
+            }
+        }
+        out.push_back(rec.c);
+    }
+    return out;
+}
+
+}  // namespace
+
 std::vector<PhysicsCheck> physicsChecks(const CheckedMaterial& m, const PhysicsOptions& options) {
+    if (m.combinesLobes()) return combinationChecks(m, options);
+    if (!m.singleLobe().hasNdf()) return {};  // a diffuse lobe alone
     std::vector<PhysicsCheck> out;
     std::shared_ptr<const EnergyTable> table;
-    if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
+    if (m.singleLobe().compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
 
     // Input settings: defaults, then each ranged float input at its ends.

@@ -39,7 +39,8 @@ HardCaseReference evaluateHardCaseReference(const Interpreter<double>& interp, c
         EvalResult<double> r = interp.eval(c.wi.data(), c.wo.data(), slots);
         bool over = false;
         for (double v : r.rgb) over |= beyondFloat(v);
-        if (!c.invalidInput) over |= parametersBeyondFloat(interp.resolve(slots));
+        if (!c.invalidInput)
+            for (const ResolvedMaterial<double>& lobe : interp.resolveAll(slots).lobes) over |= parametersBeyondFloat(lobe);
         ref.results.push_back(r);
         ref.floatOverflow.push_back(over);
     }

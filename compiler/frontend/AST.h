@@ -108,7 +108,23 @@ struct ModelStmt {
     std::vector<Argument> args;
 };
 
-using Stmt = std::variant<InputDecl, LetDecl, ModelStmt>;
+// `lobe NAME { slot = model(args); ... }` (SPEC 10): the model statements of
+// one lobe. Inputs and lets stay at material level.
+struct LobeDecl {
+    SourceLoc loc;  // of the name
+    std::string name;
+    std::vector<ModelStmt> statements;
+};
+
+// `bsdf = EXPR;`: how the lobes combine. The expression is parsed with the
+// ordinary expression grammar (lobe names are names, `mix` and `layer` are
+// calls, weights are products); the checker tells lobes from numbers.
+struct BsdfStmt {
+    SourceLoc loc;  // of the `bsdf` keyword
+    ExprPtr value;
+};
+
+using Stmt = std::variant<InputDecl, LetDecl, ModelStmt, LobeDecl, BsdfStmt>;
 
 struct MaterialDecl {
     SourceLoc loc;  // of the name

@@ -1,6 +1,7 @@
 // Checker: resolution, typing and material rules (see Checker.h).
 #include "Checker.h"
 
+#include "BsdfCombination.h"
 #include "ComputeCost.h"
 #include "ExprEval.h"
 #include "KullaConty.h"
@@ -20,86 +21,6 @@
 #include <sstream>
 
 namespace facet {
-
-const CheckedInput* CheckedMaterial::findInput(std::string_view n) const {
-    for (const CheckedInput& in : inputs)
-        if (in.name == n) return &in;
-    return nullptr;
-}
-
-ModelUse& CheckedMaterial::use(ModelSlot slot) {
-    switch (slot) {
-        case ModelSlot::Ndf: return ndf;
-        case ModelSlot::Masking: return masking;
-        case ModelSlot::Fresnel: return fresnel;
-        case ModelSlot::Energy: return energy;
-        case ModelSlot::Diffuse: return diffuse;
-    }
-    internal_error << "bad slot";
-}
-
-const ModelUse& CheckedMaterial::use(ModelSlot slot) const { return const_cast<CheckedMaterial&>(*this).use(slot); }
-
-ModelSlot CheckedMaterial::slotOf(const ModelUse& u) const {
-    for (int s = 0; s < kModelSlotCount; ++s)
-        if (&use(ModelSlot(s)) == &u) return ModelSlot(s);
-    internal_error << "a model use of another material";
-}
-
-std::string CheckedMaterial::slotName(int slot) const {
-    for (const CheckedInput& in : inputs) {
-        if (slot < in.firstSlot || slot >= in.firstSlot + in.slotCount()) continue;
-        if (in.type == ValueType::Float) return in.name;
-        static const char* channels[3] = {"r", "g", "b"};
-        return in.name + "." + channels[slot - in.firstSlot];
-    }
-    return {};
-}
-
-std::vector<double> CheckedMaterial::defaultSlots() const {
-    std::vector<double> slots(slotCount);
-    for (const CheckedInput& in : inputs)
-        for (int i = 0; i < in.slotCount(); ++i) slots[in.firstSlot + i] = in.defaultValue[i];
-    return slots;
-}
-
-CheckedMaterial::Reads CheckedMaterial::readByModels() const {
-    Reads read{std::vector<bool>(inputs.size(), false), std::vector<bool>(lets.size(), false),
-               std::vector<bool>(size_t(slotCount), false)};
-    // Names an expression uses; lets are followed once each (a let only
-    // names lets defined before it, so the walk ends).
-    std::vector<const Expr*> pending;
-    for (int s = 0; s < kModelSlotCount; ++s)
-        for (const ExprPtr& arg : use(ModelSlot(s)).args)
-            if (arg) pending.push_back(arg.get());
-    while (!pending.empty()) {
-        const Expr& e = *pending.back();
-        pending.pop_back();
-        switch (e.kind) {
-            case ExprKind::Number: break;
-            case ExprKind::Name: {
-                const auto& n = static_cast<const NameExpr&>(e);
-                if (n.binding == BindingKind::Input) read.inputs.at(size_t(n.index)) = true;
-                else if (n.binding == BindingKind::Let && !read.lets.at(size_t(n.index))) {
-                    read.lets[size_t(n.index)] = true;
-                    pending.push_back(lets[size_t(n.index)].value.get());
-                }
-                break;
-            }
-            case ExprKind::Unary: pending.push_back(static_cast<const UnaryExpr&>(e).operand.get()); break;
-            case ExprKind::Binary:
-                pending.push_back(static_cast<const BinaryExpr&>(e).lhs.get());
-                pending.push_back(static_cast<const BinaryExpr&>(e).rhs.get());
-                break;
-            case ExprKind::Call:
-                for (const Argument& a : static_cast<const CallExpr&>(e).args) pending.push_back(a.value.get());
-                break;
-        }
-    }
-    for (size_t k = 0; k < inputs.size(); ++k)
-        for (int s = 0; s < inputs[k].slotCount(); ++s) read.slots.at(size_t(inputs[k].firstSlot + s)) = read.inputs[k];
-    return read;
-}
 
 const CheckedMaterial* CheckedProgram::find(std::string_view name) const {
     if (materials.empty()) return nullptr;
@@ -177,36 +98,54 @@ public:
         out_.loc = decl_.loc;
         out_.name = decl_.name;
         collectNames();
+        // Without lobe blocks the model statements form one implicit lobe,
+        // named after the material, and the combination is that lobe.
+        CheckedLobe implicit;
+        implicit.loc = decl_.loc;
+        implicit.name = decl_.name;
+        implicit.implicit = true;
         std::array<const ModelStmt*, kModelSlotCount> seen{};
+        const BsdfStmt* bsdf = nullptr;
         for (current_ = 0; current_ < decl_.statements.size(); ++current_) {
             const Stmt& s = decl_.statements[current_];
             if (auto* in = std::get_if<InputDecl>(&s)) checkInput(*in);
             else if (auto* let = std::get_if<LetDecl>(&s)) checkLet(*let);
-            else checkModelStmt(std::get<ModelStmt>(s), seen);
+            else if (auto* lobe = std::get_if<LobeDecl>(&s)) checkLobe(*lobe);
+            else if (auto* b = std::get_if<BsdfStmt>(&s)) checkBsdf(*b, bsdf);
+            else if (lobes_.empty()) checkModelStmt(std::get<ModelStmt>(s), seen, implicit);
+            else
+                diags_.error(std::get<ModelStmt>(s).loc,
+                             fmt::format("'{}' statement outside a lobe: material '{}' has lobe blocks, so every "
+                                         "model statement belongs in one of them",
+                                         modelSlotName(std::get<ModelStmt>(s).slot), decl_.name));
         }
-        if (!seen[int(ModelSlot::Ndf)])
-            diags_.error(decl_.loc, fmt::format("material '{}' has no 'ndf' statement; every material needs "
-                                                "one, e.g. 'ndf = ggx(0.3);'",
-                                                decl_.name));
-        for (int s = 0; s < kModelSlotCount; ++s) {
-            ModelUse& use = out_.use(ModelSlot(s));
-            if (!use.model && s != int(ModelSlot::Ndf)) {
-                use.model = findModel(ModelSlot(s), "none");
-                use.loc = decl_.loc;
-            }
+        if (lobes_.empty()) {
+            if (!seen[int(ModelSlot::Ndf)])
+                diags_.error(decl_.loc, fmt::format("material '{}' has no 'ndf' statement; every material needs "
+                                                    "one, e.g. 'ndf = ggx(0.3);'",
+                                                    decl_.name));
+            if (bsdf)
+                diags_.error(bsdf->loc, fmt::format("'bsdf' combines lobes, and material '{}' has no lobe blocks "
+                                                    "(write 'lobe NAME {{ ... }}')",
+                                                    decl_.name));
+            finishLobe(implicit, seen, errorsBefore);
+            out_.lobes.push_back(std::move(implicit));
+            out_.bsdf = {BsdfNode{BsdfKind::Lobe, decl_.loc, 0}};
+        } else if (!bsdf) {
+            diags_.error(decl_.loc, fmt::format("material '{}' has lobes but no 'bsdf = ...;' statement to "
+                                                "combine them (e.g. 'bsdf = {};')",
+                                                decl_.name, lobeNames_.front()));
+        } else if (!out_.bsdf.empty()) {
+            std::vector<bool> used(out_.lobes.size(), false);
+            for (const BsdfNode& node : out_.bsdf)
+                if (node.kind == BsdfKind::Lobe) used.at(size_t(node.lobe)) = true;
+            for (size_t i = 0; i < used.size(); ++i)
+                if (!used[i])
+                    diags_.error(out_.lobes[i].loc, fmt::format("lobe '{}' is not used in the bsdf statement at {}",
+                                                                out_.lobes[i].name, bsdf->loc.str()));
         }
-        if (seen[int(ModelSlot::Ndf)] && out_.ndf.model) checkCombination(seen);
-        if (out_.compensatesEnergy() && seen[int(ModelSlot::Ndf)] && out_.ndf.model &&
-            diags_.diagnostics().size() == errorsBefore && !diags_.full())
-            if (auto why = kullaContyUnsupported(out_)) diags_.error(why->loc, why->message);  // KullaConty.h
         if (diags_.diagnostics().size() == errorsBefore && !diags_.full())
             if (auto why = exceedsComputeBudget(out_)) diags_.error(why->loc, why->message);
-        if (seen[int(ModelSlot::Ndf)] && out_.ndf.model && out_.masking.model && out_.masking.model->smith &&
-            ndfEntry(*out_.ndf.model).tabulatedLambda && diags_.diagnostics().size() == errorsBefore && !diags_.full()) {
-            SourceLoc loc = out_.masking.loc;
-            std::string why = tabulatedLambdaUnsupported(out_, loc);  // LambdaTable.h
-            if (!why.empty()) diags_.error(loc, why);
-        }
         return std::move(out_);
     }
 
@@ -228,19 +167,107 @@ private:
                 name = &let->name;
                 loc = let->loc;
                 info = {BindingKind::Let, lets++, loc, i};
+            } else if (auto* lobe = std::get_if<LobeDecl>(&s)) {
+                collectLobe(*lobe, i);
+                continue;
             } else {
                 continue;
             }
-            auto it = names_.find(*name);
-            if (it != names_.end()) {
+            if (const NameInfo* first = definedName(*name)) {
                 diags_.error(loc, fmt::format("duplicate definition of '{}'; first defined at {}", *name,
-                                              it->second.loc.str()));
+                                              first->loc.str()));
                 duplicateStatements_.resize(decl_.statements.size());
                 duplicateStatements_[i] = true;
                 continue;
             }
             names_.emplace(*name, info);
         }
+    }
+
+    // A lobe's name shares the material's namespace with inputs and lets
+    // (a weight and a lobe must never be spelled alike).
+    void collectLobe(const LobeDecl& lobe, size_t statement) {
+        if (const NameInfo* first = definedName(lobe.name)) {
+            diags_.error(lobe.loc, fmt::format("duplicate definition of '{}'; first defined at {}", lobe.name,
+                                               first->loc.str()));
+            duplicateStatements_.resize(decl_.statements.size());
+            duplicateStatements_[statement] = true;
+            return;
+        }
+        lobes_.emplace(lobe.name, NameInfo{BindingKind::Unresolved, int(lobes_.size()), lobe.loc, statement});
+        lobeNames_.push_back(lobe.name);
+    }
+
+    // The input, let or lobe already called `name`, or null.
+    const NameInfo* definedName(const std::string& name) const {
+        if (auto it = names_.find(name); it != names_.end()) return &it->second;
+        if (auto it = lobes_.find(name); it != lobes_.end()) return &it->second;
+        return nullptr;
+    }
+
+    void checkLobe(const LobeDecl& decl) {
+        if (isDuplicate(current_)) return;
+        const size_t errorsBefore = diags_.diagnostics().size();
+        CheckedLobe lobe;
+        lobe.loc = decl.loc;
+        lobe.name = decl.name;
+        std::array<const ModelStmt*, kModelSlotCount> seen{};
+        for (const ModelStmt& stmt : decl.statements) checkModelStmt(stmt, seen, lobe);
+        if (!seen[int(ModelSlot::Ndf)]) {
+            if (!seen[int(ModelSlot::Diffuse)])
+                diags_.error(decl.loc, fmt::format("lobe '{}' has neither an 'ndf' nor a 'diffuse' statement; a "
+                                                   "lobe needs one, e.g. 'ndf = ggx(0.3);' or 'diffuse = lambert(0.5);'",
+                                                   decl.name));
+            for (ModelSlot slot : {ModelSlot::Masking, ModelSlot::Fresnel, ModelSlot::Energy})
+                if (seen[int(slot)])
+                    diags_.error(seen[int(slot)]->loc,
+                                 fmt::format("'{}' in lobe '{}', which has no 'ndf': a lobe without an ndf is a "
+                                             "diffuse lobe and takes only 'diffuse'",
+                                             modelSlotName(slot), decl.name));
+        }
+        finishLobe(lobe, seen, errorsBefore);
+        out_.lobes.push_back(std::move(lobe));
+    }
+
+    // The defaults (`none`) of the slots a lobe leaves out, then the rules
+    // that need the whole lobe: masking against the NDF, the Kulla-Conty
+    // and tabulated-Lambda tables (only when the lobe is otherwise clean).
+    void finishLobe(CheckedLobe& lobe, const std::array<const ModelStmt*, kModelSlotCount>& seen,
+                    size_t errorsBefore) {
+        for (int s = 0; s < kModelSlotCount; ++s) {
+            ModelUse& use = lobe.use(ModelSlot(s));
+            if (!use.model && s != int(ModelSlot::Ndf)) {
+                use.model = findModel(ModelSlot(s), "none");
+                use.loc = lobe.loc;
+            }
+        }
+        if (!seen[int(ModelSlot::Ndf)] || !lobe.ndf.model) return;
+        checkCombination(lobe, seen);
+        auto clean = [&] { return diags_.diagnostics().size() == errorsBefore && !diags_.full(); };
+        if (lobe.compensatesEnergy() && clean())
+            if (auto why = kullaContyUnsupported(out_, lobe)) diags_.error(why->loc, why->message);  // KullaConty.h
+        if (lobe.masking.model && lobe.masking.model->smith && ndfEntry(*lobe.ndf.model).tabulatedLambda && clean()) {
+            SourceLoc loc = lobe.masking.loc;
+            std::string why = tabulatedLambdaUnsupported(out_, lobe, loc);  // LambdaTable.h
+            if (!why.empty()) diags_.error(loc, why);
+        }
+    }
+
+    void checkBsdf(const BsdfStmt& stmt, const BsdfStmt*& first) {
+        if (first) {
+            diags_.error(stmt.loc, fmt::format("duplicate 'bsdf' statement; first given at {}", first->loc.str()));
+            return;
+        }
+        first = &stmt;
+        if (lobes_.empty()) return;  // reported once all statements are seen
+        BsdfCheckContext context{
+            [this](std::string_view name) {
+                auto it = lobes_.find(std::string(name));
+                return it == lobes_.end() || isDuplicate(it->second.statement) ? -1 : it->second.index;
+            },
+            [this](Expr& weight) { return typeOf(weight); }, lobeNames_, diags_};
+        std::vector<BsdfNode> nodes;
+        if (buildBsdfTree(*stmt.value, context, nodes) >= 0) out_.bsdf = std::move(nodes);
     }
 
     bool isDuplicate(size_t statement) const {
@@ -323,7 +350,7 @@ private:
     }
 
 
-    void checkModelStmt(const ModelStmt& stmt, std::array<const ModelStmt*, kModelSlotCount>& seen) {
+    void checkModelStmt(const ModelStmt& stmt, std::array<const ModelStmt*, kModelSlotCount>& seen, CheckedLobe& lobe) {
         const char* slotName = modelSlotName(stmt.slot);
         if (const ModelStmt* first = seen[int(stmt.slot)]) {
             diags_.error(stmt.loc, fmt::format("duplicate '{}' statement; first given at {}", slotName,
@@ -347,7 +374,7 @@ private:
         use.loc = stmt.modelLoc;
         use.model = model;
         use.args.assign(model->canonical.size(), nullptr);
-        if (matchArguments(stmt, *model, use)) out_.use(stmt.slot) = std::move(use);
+        if (matchArguments(stmt, *model, use)) lobe.use(stmt.slot) = std::move(use);
     }
 
     // Picks the form of `model` that the written arguments fit and fills the
@@ -469,10 +496,10 @@ private:
         return ok;
     }
 
-    void checkCombination(const std::array<const ModelStmt*, kModelSlotCount>& seen) {
-        const NdfEntry& ndf = ndfEntry(*out_.ndf.model);
-        const ModelInfo& masking = *out_.masking.model;
-        SourceLoc maskingLoc = seen[int(ModelSlot::Masking)] ? out_.masking.loc : out_.ndf.loc;
+    void checkCombination(const CheckedLobe& lobe, const std::array<const ModelStmt*, kModelSlotCount>& seen) {
+        const NdfEntry& ndf = ndfEntry(*lobe.ndf.model);
+        const ModelInfo& masking = *lobe.masking.model;
+        SourceLoc maskingLoc = seen[int(ModelSlot::Masking)] ? lobe.masking.loc : lobe.ndf.loc;
         if (ndf.wholeLobe) {
             if (std::string_view(masking.name) != "none")
                 diags_.error(maskingLoc, fmt::format("ndf '{}' is a whole BRDF lobe with its own normalization; it "
@@ -523,6 +550,10 @@ private:
             return ValueType::Unknown;
         }
         auto it = names_.find(n.name);
+        if (it == names_.end() && lobes_.count(n.name)) {
+            diags_.error(n.loc, fmt::format("'{}' is a lobe, not a number; lobes appear only in 'bsdf = ...;'", n.name));
+            return ValueType::Unknown;
+        }
         if (it == names_.end()) {
             if (diags_.full()) return ValueType::Unknown;  // not reported anyway: skip the suggestion search
             std::vector<std::string> candidates;
@@ -592,6 +623,8 @@ private:
     DiagnosticEngine& diags_;
     CheckedMaterial out_;
     std::map<std::string, NameInfo> names_;
+    std::map<std::string, NameInfo> lobes_;  // index: into CheckedMaterial::lobes
+    std::vector<std::string> lobeNames_;      // in source order
     std::vector<bool> duplicateStatements_;  // by statement index
     size_t current_ = 0;
     const std::string* constantContext_ = nullptr;

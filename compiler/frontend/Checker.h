@@ -6,7 +6,10 @@
 // arguments against the model's forms (positional or named), and enforces
 // the material rules: `ndf` required, no duplicate statements, masking
 // compatible with the NDF (Smith needs a closed-form Lambda; ward is a whole
-// BRDF and needs masking = none). Reports through the DiagnosticEngine.
+// BRDF and needs masking = none), and those of lobes (SPEC 10): every model
+// statement inside a lobe once a material has lobe blocks, each lobe with an
+// ndf or only a diffuse term, a `bsdf` that uses every lobe and numbers as
+// weights (BsdfCombination.h). Reports through the DiagnosticEngine.
 #pragma once
 
 #include "AST.h"

@@ -92,11 +92,18 @@ std::optional<ComputeBudgetError> exceedsComputeBudget(const CheckedMaterial& m)
         total += computeCost(*let.value);
         if (auto e = over(let.loc, fmt::format("let '{}'", let.name))) return e;
     }
-    for (int s = 0; s < kModelSlotCount; ++s) {
-        const ModelUse& use = m.use(ModelSlot(s));
-        for (const ExprPtr& arg : use.args)
-            if (arg) total += computeCost(*arg);
-        if (auto e = over(use.loc, fmt::format("the {} statement", modelSlotName(ModelSlot(s))))) return e;
+    for (const CheckedLobe& lobe : m.lobes)
+        for (int s = 0; s < kModelSlotCount; ++s) {
+            const ModelUse& use = lobe.use(ModelSlot(s));
+            for (const ExprPtr& arg : use.args)
+                if (arg) total += computeCost(*arg);
+            std::string where = fmt::format("the {} statement", modelSlotName(ModelSlot(s)));
+            if (!lobe.implicit) where += fmt::format(" of lobe '{}'", lobe.name);
+            if (auto e = over(use.loc, where)) return e;
+        }
+    for (const BsdfNode& node : m.bsdf) {
+        if (node.weight) total += computeCost(*node.weight);
+        if (auto e = over(node.loc, "the weights of the bsdf statement")) return e;
     }
     return std::nullopt;
 }

@@ -77,6 +77,7 @@ private:
                 decl.hasSyntaxErrors = true;
                 synchronize();
             }
+            if (lobeHadErrors_) decl.hasSyntaxErrors = true, lobeHadErrors_ = false;
         }
         if (at(TokenKind::End)) {
             report(peek(), fmt::format("missing '}}' to close material '{}'", decl.name));
@@ -89,7 +90,7 @@ private:
 
     // statement := 'input' IDENT '=' expr [ 'in' expr '..' expr ] ';'
     //            | 'let' IDENT '=' expr ';'
-    //            | SLOT '=' model ';'     SLOT := ndf | masking | fresnel | energy | diffuse
+    //            | model-statement | lobe | bsdf
     Stmt statement() {
         if (at(TokenKind::KwInput)) {
             advance();
@@ -118,26 +119,72 @@ private:
             expect(TokenKind::Semicolon, "';' after the let statement");
             return let;
         }
-        if (at(TokenKind::Identifier)) {
-            const Token& head = peek();
-            std::optional<ModelSlot> slot = slotFromName(head.text);
-            if (!slot) {
-                report(head, fmt::format("unknown statement '{}' (expected input, let, ndf, masking, "
-                                         "fresnel, energy or diffuse)",
-                                         head.text));
-                throw SyntaxError{};
-            }
-            advance();
-            ModelStmt stmt;
-            stmt.loc = head.loc;
-            stmt.slot = *slot;
-            expect(TokenKind::Equal, fmt::format("'=' after '{}'", modelSlotName(*slot)));
-            model(stmt);
-            expect(TokenKind::Semicolon, fmt::format("';' after the {} statement", modelSlotName(*slot)));
-            return stmt;
-        }
+        if (at(TokenKind::Identifier) && peek().text == "lobe" && peek(1).kind == TokenKind::Identifier) return lobe();
+        if (at(TokenKind::Identifier) && peek().text == "bsdf" && peek(1).kind == TokenKind::Equal) return bsdf();
+        if (at(TokenKind::Identifier)) return modelStatement("input, let, lobe, bsdf, ndf, masking, fresnel, energy or diffuse");
         report(peek(), fmt::format("expected a statement, found {}", describe(peek())));
         throw SyntaxError{};
+    }
+
+    // model-statement := SLOT '=' model ';'     SLOT := ndf | masking | fresnel | energy | diffuse
+    ModelStmt modelStatement(const char* expected) {
+        const Token& head = peek();
+        std::optional<ModelSlot> slot = slotFromName(head.text);
+        if (!slot) {
+            report(head, fmt::format("unknown statement '{}' (expected {})", head.text, expected));
+            throw SyntaxError{};
+        }
+        advance();
+        ModelStmt stmt;
+        stmt.loc = head.loc;
+        stmt.slot = *slot;
+        expect(TokenKind::Equal, fmt::format("'=' after '{}'", modelSlotName(*slot)));
+        model(stmt);
+        expect(TokenKind::Semicolon, fmt::format("';' after the {} statement", modelSlotName(*slot)));
+        return stmt;
+    }
+
+    // lobe := 'lobe' IDENT '{' model-statement* '}'
+    // A syntax error inside the block skips that statement only (the rest
+    // of the lobe still parses); the material is marked as having errors.
+    LobeDecl lobe() {
+        advance();  // 'lobe'
+        LobeDecl decl;
+        const Token& name = expect(TokenKind::Identifier, "a lobe name after 'lobe'");
+        decl.loc = name.loc;
+        decl.name = name.text;
+        expect(TokenKind::LBrace, fmt::format("'{{' after lobe '{}'", decl.name));
+        while (!at(TokenKind::RBrace) && !at(TokenKind::End) && !at(TokenKind::KwMaterial) && !diags_.full()) {
+            try {
+                if (at(TokenKind::KwInput) || at(TokenKind::KwLet) ||
+                    (at(TokenKind::Identifier) && (peek().text == "lobe" || peek().text == "bsdf"))) {
+                    report(peek(), fmt::format("'{}' belongs at material level, not inside lobe '{}'", peek().text,
+                                               decl.name));
+                    throw SyntaxError{};
+                }
+                if (!at(TokenKind::Identifier)) {
+                    report(peek(), fmt::format("expected a model statement in lobe '{}', found {}", decl.name,
+                                               describe(peek())));
+                    throw SyntaxError{};
+                }
+                decl.statements.push_back(modelStatement("ndf, masking, fresnel, energy or diffuse inside a lobe"));
+            } catch (SyntaxError&) {
+                lobeHadErrors_ = true;
+                synchronize();
+            }
+        }
+        expect(TokenKind::RBrace, fmt::format("'}}' to close lobe '{}'", decl.name));
+        return decl;
+    }
+
+    // bsdf := 'bsdf' '=' expr ';'      (lobe names, '+', weight '*', mix(...), layer(...))
+    BsdfStmt bsdf() {
+        BsdfStmt stmt;
+        stmt.loc = advance().loc;  // 'bsdf'
+        advance();                 // '='
+        stmt.value = expression();
+        expect(TokenKind::Semicolon, "';' after the bsdf statement");
+        return stmt;
     }
 
     // model := IDENT [ '(' [ argument { ',' argument } ] ')' ]
@@ -363,6 +410,7 @@ private:
     DiagnosticEngine& diags_;
     size_t pos_ = 0;
     int depth_ = 0;
+    bool lobeHadErrors_ = false;  // a statement inside a lobe block was dropped
 };
 
 }  // namespace

@@ -162,9 +162,12 @@ CheckedMaterial specializeMaterial(const CheckedMaterial& material, const InputB
         folder.letRemap[i] = int(out.lets.size());
         out.lets.push_back(let);
     }
-    for (ModelUse* use : {&out.ndf, &out.masking, &out.fresnel, &out.energy, &out.diffuse})
-        for (ExprPtr& arg : use->args)
-            if (arg) arg = folder.mutate(arg);
+    for (CheckedLobe& lobe : out.lobes)
+        for (ModelUse* use : {&lobe.ndf, &lobe.masking, &lobe.fresnel, &lobe.energy, &lobe.diffuse})
+            for (ExprPtr& arg : use->args)
+                if (arg) arg = folder.mutate(arg);
+    for (BsdfNode& node : out.bsdf)
+        if (node.weight) node.weight = folder.mutate(node.weight);
     return out;
 }
 
@@ -180,20 +183,30 @@ std::string printMaterial(const CheckedMaterial& m) {
         s += fmt::format(";  // slot {}\n", in.firstSlot);
     }
     for (const CheckedLet& let : m.lets) s += fmt::format("    let {} = {};\n", let.name, printExpr(*let.value));
-    for (const ModelUse* use : {&m.ndf, &m.masking, &m.fresnel, &m.energy, &m.diffuse}) {
-        s += fmt::format("    {} = {}", modelSlotName(use->model->slot), use->model->name);
-        if (!use->model->canonical.empty()) {
-            s += "(";
-            bool first = true;
-            for (size_t i = 0; i < use->args.size(); ++i) {
-                if (!use->args[i]) continue;
-                s += fmt::format("{}{} = {}", first ? "" : ", ", use->model->canonical[i].name, printExpr(*use->args[i]));
-                first = false;
+    // A material without lobe blocks prints as it was written; lobes print
+    // as blocks, then the combination.
+    for (const CheckedLobe& lobe : m.lobes) {
+        const std::string indent = lobe.implicit ? "    " : "        ";
+        if (!lobe.implicit) s += fmt::format("    lobe {} {{\n", lobe.name);
+        for (const ModelUse* use : {&lobe.ndf, &lobe.masking, &lobe.fresnel, &lobe.energy, &lobe.diffuse}) {
+            if (!use->model) continue;  // a diffuse lobe has no ndf
+            s += fmt::format("{}{} = {}", indent, modelSlotName(use->model->slot), use->model->name);
+            if (!use->model->canonical.empty()) {
+                s += "(";
+                bool first = true;
+                for (size_t i = 0; i < use->args.size(); ++i) {
+                    if (!use->args[i]) continue;
+                    s += fmt::format("{}{} = {}", first ? "" : ", ", use->model->canonical[i].name,
+                                     printExpr(*use->args[i]));
+                    first = false;
+                }
+                s += ")";
             }
-            s += ")";
+            s += ";\n";
         }
-        s += ";\n";
+        if (!lobe.implicit) s += "    }\n";
     }
+    if (!m.lobes.empty() && !m.lobes.front().implicit) s += fmt::format("    bsdf = {};\n", printBsdf(m, m.bsdfRoot()));
     return s + "}\n";
 }
 

@@ -371,7 +371,7 @@ std::vector<HardCaseMaterial> hardCaseMaterials(std::vector<std::string>* reject
     auto add = [&](const std::string& name, const std::string& body) {
         std::string text = "material " + name + " {\n" + body + "}\n";
         if (std::optional<CheckedMaterial> m = checked(text))
-            out.push_back({name, text, m->ndf.model->name, m->masking.model->name, m->fresnel.model->name});
+            out.push_back({name, text, m->singleLobe().ndf.model->name, m->singleLobe().masking.model->name, m->singleLobe().fresnel.model->name});
         else if (rejected)
             rejected->push_back(text);
     };
@@ -383,7 +383,7 @@ std::vector<HardCaseMaterial> hardCaseMaterials(std::vector<std::string>* reject
         if (!ndfEntry(ndf).tabulatedLambda) return false;
         std::optional<CheckedMaterial> m = checked("material t {\n" + ex.inputs + "\nndf = " + ex.stmt + ";\n" + ex.extra + "}\n");
         SourceLoc loc;
-        return m && tabulatedLambdaUnsupported(*m, loc).empty();
+        return m && tabulatedLambdaUnsupported(*m, m->singleLobe(), loc).empty();
     };
     // Every example of every NDF x masking x Fresnel model the checker
     // accepts, parameters as unranged inputs. A sparse example is combined
@@ -425,7 +425,8 @@ struct QuadReference::Impl {
     Interpreter<double> d;
     Interpreter<Quad> q;
     static std::shared_ptr<const EnergyTable> tableFor(const CheckedMaterial& m) {
-        if (m.compensatesEnergy()) return buildEnergyTable(energyTableKey(m));
+        // (a combination's lobes build theirs in the interpreters)
+        if (!m.combinesLobes() && m.singleLobe().compensatesEnergy()) return buildEnergyTable(energyTableKey(m));
         return nullptr;
     }
     explicit Impl(const CheckedMaterial& m) : material(m), table(tableFor(m)), d(m, table), q(m, table) {}

@@ -19,7 +19,12 @@ const char* codegenSourceList() { return kCodegenSourceList; }
 
 std::vector<EmbeddedTable> embeddedTables(const CheckedMaterial& material) {
     std::vector<EmbeddedTable> all;
-    for (const ModelUse* use : {&material.ndf, &material.masking, &material.fresnel, &material.diffuse, &material.energy})
+    if (material.combinesLobes()) {  // every lobe's (the layers' tables follow from the material's text)
+        for (size_t l = 0; l < material.lobes.size(); ++l)
+            for (const EmbeddedTable& t : embeddedTables(lobeView(material, int(l)))) all.push_back(t);
+        return all;
+    }
+    for (const ModelUse* use : {&material.singleLobe().ndf, &material.singleLobe().masking, &material.singleLobe().fresnel, &material.singleLobe().diffuse, &material.singleLobe().energy})
         if (const TermEmitterEntry* e = use->model ? findTermEmitterEntry(*use->model) : nullptr; e && e->tables)
             for (const EmbeddedTable& t : e->tables(material)) all.push_back(t);
     return all;

@@ -158,15 +158,25 @@ Value* LaneEmitter::clampParam(Value* x, const ParamPlan& param, double lo, doub
     return floatResult ? xf : preciseMath_.convert(x, preciseMath_.type());
 }
 
+LVal LaneEmitter::clampedExpression(const Expr& e, double lo, double hi) {
+    MathEmitter& em = expressionMath();
+    LVal v = lower(e);
+    return map({v}, v.rgb, [&](auto& x) {
+        markInvalid(em.isNan(x[0]));
+        Value* c = em.maxnum(std::isfinite(hi) ? em.minnum(x[0], em.c(hi)) : x[0], em.c(lo));
+        return doubleMath_.convert(c, doubleMath_.type());
+    });
+}
+
 Value* LaneEmitter::scalarParam(const ModelUse& use, int p, bool floatResult, double capHi) {
     const ModelParam& domain = use.model->canonical.at(p);
-    const ParamPlan& param = plan.param(material.slotOf(use), p);
+    const ParamPlan& param = plan.param(material.singleLobe().slotOf(use), p);
     return clampParam(lower(*use.args.at(p)).c[0], param, domain.lo, std::min(domain.hi, capHi), floatResult);
 }
 
 LVal LaneEmitter::rgbParam(const ModelUse& use, int p, bool floatResult, double capHi) {
     const ModelParam& domain = use.model->canonical.at(p);
-    const ParamPlan& param = plan.param(material.slotOf(use), p);
+    const ParamPlan& param = plan.param(material.singleLobe().slotOf(use), p);
     LVal v = lower(*use.args.at(p));
     return map({v}, true,
                [&](auto& x) { return clampParam(x[0], param, domain.lo, std::min(domain.hi, capHi), floatResult); });

@@ -10,6 +10,7 @@
 #include "Immortal.h"
 
 #include "Diagnostics.h"
+#include "CombinationEmitter.h"
 #include "LaneEmitter.h"
 
 #include <llvm/IR/Constants.h>
@@ -29,6 +30,7 @@ struct KernelContext {
     const CheckedMaterial& material;
     const LoweringPlan& plan;
     const LoweringOptions& options;
+    std::string symbolPrefix;
 };
 
 
@@ -232,6 +234,17 @@ LaneBody bodies(const KernelContext& k, llvm::Module& module, const BodyPlan& fi
     };
 }
 
+// The lane body of a combination of lobes (CombinationEmitter.h): every
+// lobe in its one plain body, no fallback.
+LaneBody combinationBody(const KernelContext& k, llvm::Module& module, bool scalar) {
+    return [&k, &module, scalar](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
+                                 const std::vector<llvm::Value*>& slots) {
+        CombinationLanes c = emitCombination(k.material, k.plan, k.options, scalar, b, laneTy, module,
+                                             {in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots, k.symbolPrefix);
+        return LaneOutputs{{c.rgb.begin(), c.rgb.end()}, c.invalid};
+    };
+}
+
 BodyLanes evalBody(LaneEmitter& lanes, const std::vector<llvm::Value*>& in, const std::vector<llvm::Value*>& slots) {
     LaneEmitter::Result r = lanes.emit({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
     return {{r.rgb.begin(), r.rgb.end()}, r.invalid, r.untrusted};
@@ -246,7 +259,9 @@ void emitScalarEntry(const KernelContext& k, llvm::Module& module, const std::st
     // root, and the guards would cost more than they save (measured: GGX
     // 47 ns/eval precise, 56 ns float-first).
     EntryShape shape{{{0, 0, 1}, {0, 0, 1}}, {3}};
-    emitScalarFunction(k, module, name, shape, k.plan.scalarBody, bodies(k, module, k.plan.scalarBody, nullptr, evalBody));
+    emitScalarFunction(k, module, name, shape, k.plan.scalarBody,
+                       k.plan.combines() ? combinationBody(k, module, true)
+                                         : bodies(k, module, k.plan.scalarBody, nullptr, evalBody));
 }
 
 // A batch entry point: int64 name(int64 n, const float* const in0[3], ...,
@@ -449,7 +464,8 @@ void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::str
     EntryShape shape{{{0, 0, 1}, {0, 0, 1}}, {3}};
     const BodyPlan* fallback = k.plan.fallbackBody ? &*k.plan.fallbackBody : nullptr;
     emitBatchFunction(k, module, name, shape, true, k.plan.batchBody,
-                      bodies(k, module, k.plan.batchBody, fallback, evalBody));
+                      k.plan.combines() ? combinationBody(k, module, false)
+                                        : bodies(k, module, k.plan.batchBody, fallback, evalBody));
 }
 
 // The sampler's entry points (SPEC 8), in the plan's sampling bodies:
@@ -477,7 +493,7 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
         << "unsupported vector width " << options.width;
     LoweredModule out;
     out.plan = plan;
-    const KernelContext k{material, out.plan, options};
+    const KernelContext k{material, out.plan, options, symbolPrefix};
     out.module = std::make_unique<llvm::Module>(symbolPrefix, context);
     const bool sampling = options.emitSampling && plan.sampling.specular != SpecularSampling::None;
     if (options.emitScalar) {

@@ -392,16 +392,23 @@ std::array<Value*, 3> LaneEmitter::brdfPrecise(const LaneGeometry& geo, Value*& 
     // float range whose product is not).
     const NdfEmitter& ndf = emitters_.ndf;
     NdfParams n = ndf.params(*this);
-    Value* spec;
-    if (ndf.traits.wholeLobe) {
+    const bool hasSpecular = material.singleLobe().hasNdf();  // else a diffuse lobe of a combination
+    Value* spec = nullptr;
+    if (!hasSpecular) {
+        internal_assert(!body.guarded() && !plan.compensatesEnergy) << "a diffuse lobe with a guarded body or compensation";
+    } else if (ndf.traits.wholeLobe) {
         spec = ndf.wholeLobe(*this, n, geo);
     } else {
         Value* quarterD = pm.mul(ndf.D(*this, n, geo), pm.c(0.25));
         if (quarterD_.num) quarterD_.value = quarterD;
         spec = emitters_.masking.overCosines(*this, ndf, n, geo, quarterD);
     }
-    LVal F = emitters_.fresnel.F(*this, geo);
     const bool hasDiffuse = emitters_.diffuse.present();
+    if (!hasSpecular) {
+        valid = b.CreateAnd(above, geo.hNonZero);
+        return (hasDiffuse ? emitters_.diffuse.diffuse(*this) : LVal::scalar(pm.c(0.0))).c;
+    }
+    LVal F = emitters_.fresnel.F(*this, geo);
     if (body.guarded()) {
         // Guards of a guarded body, for lanes above the horizon (the others
         // are 0 in both bodies):

@@ -100,6 +100,14 @@ public:
     PdfResult emitPdf(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
                       const std::vector<llvm::Value*>& slots);
 
+    // ---- what the combination of lobes uses (CombinationEmitter.cpp) ----
+    // The material's inputs and lets the plan reads (for a weight emitter:
+    // a plan whose reads are the combination's), then an expression of
+    // them clamped to [lo, hi], in double; a NaN value marks the lane invalid.
+    void lowerExpressions(const std::vector<llvm::Value*>& slots) { lowerInputsAndLets(slots); }
+    LVal clampedExpression(const Expr& e, double lo, double hi);
+    llvm::Value* invalidLanes() const { return invalid_; }
+
     // ---- what the term emitters use ----
     const CheckedMaterial& material;
     const LoweringPlan& plan;

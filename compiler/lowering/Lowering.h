@@ -31,6 +31,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace facet {
 
@@ -40,6 +41,9 @@ struct LoweringOptions {
     // energy = kulla_conty: the E table of the material's NDF x masking,
     // embedded in the module as constant arrays (required for such materials).
     const EnergyTable* energyTable = nullptr;
+    // A combination of lobes: the table of each compensating lobe (per lobe,
+    // in CheckedMaterial::lobes order; null for the others).
+    std::vector<const EnergyTable*> lobeEnergyTables;
     MathMode math = MathMode::Exact;
     MathVariant variant = MathVariant::exact();
     int width = 16;  // lanes of the batch kernel: 4, 8 or 16

@@ -80,7 +80,7 @@ namespace {
 // specialization may have copied the shared expression), or equal
 // constants. The isotropic forms save divisions.
 bool ndfIsIsotropic(const ModelUse& use) {
-    if (use.isotropic) return true;
+    if (use.isotropic || !use.model) return true;
     const int ax = paramIndex(*use.model, "alpha_x"), ay = paramIndex(*use.model, "alpha_y");
     if (ax < 0 || ay < 0 || !use.has(ax) || !use.has(ay)) return false;
     const Expr &x = *use.args[ax], &y = *use.args[ay];
@@ -130,7 +130,7 @@ bool onlyMultiplicativeExpressions(const CheckedMaterial& material) {
         }
     } scan;
     for (const CheckedLet& let : material.lets) scan.visit(*let.value);
-    for (const ModelUse* use : {&material.ndf, &material.masking, &material.fresnel, &material.diffuse, &material.energy})
+    for (const ModelUse* use : {&material.singleLobe().ndf, &material.singleLobe().masking, &material.singleLobe().fresnel, &material.singleLobe().diffuse, &material.singleLobe().energy})
         for (const ExprPtr& arg : use->args)
             if (arg) scan.visit(*arg);
     return !scan.additive && scan.operations <= kMaxFloatExpressionOperations;
@@ -141,8 +141,8 @@ bool onlyMultiplicativeExpressions(const CheckedMaterial& material) {
 // floatFirstCapable), and no energy table is looked up.
 bool floatFirstApplies(const CheckedMaterial& material, const MaterialEmitters& em, const MathVariant& variant) {
     if (!variant.precise || !variant.floatFirst || variant.estimates || variant.shortPolynomials) return false;
-    return em.ndf.traits.floatFirstBody && !material.compensatesEnergy() &&
-           em.fresnel.floatFirstCapable(material.fresnel);
+    return em.ndf.traits.floatFirstBody && !material.singleLobe().compensatesEnergy() &&
+           em.fresnel.floatFirstCapable(material.singleLobe().fresnel);
 }
 
 // Otherwise (a Fresnel term or expressions the float-first body cannot
@@ -153,7 +153,7 @@ bool floatFirstApplies(const CheckedMaterial& material, const MaterialEmitters& 
 bool guardedFastApplies(const CheckedMaterial& material, const MaterialEmitters& em, const MathVariant& variant,
                         bool ndfIsotropic) {
     if (variant.precise || !variant.floatFirst || !variant.estimates || !variant.shortPolynomials) return false;
-    return em.ndf.traits.guardedFastBody && ndfIsotropic && !material.compensatesEnergy();
+    return em.ndf.traits.guardedFastBody && ndfIsotropic && !material.singleLobe().compensatesEnergy();
 }
 
 // Where the exact kernel has a guarded float body, a fast kernel takes it,
@@ -195,11 +195,11 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
     // speed-ups).
     const bool unitHalfUnused = inDouble && role == BodyRole::Plain && em.ndf.traits.dFromUnnormalizedHalf &&
                                 !em.masking.traits.needsPreciseHalfAngle;
-    if (!inDouble && body.estimates && em.fresnel.atLeast(material.fresnel, 1e-6))
+    if (!inDouble && body.estimates && em.fresnel.atLeast(material.singleLobe().fresnel, 1e-6))
         body.halfVector = HalfVectorForm::Estimated;
-    else if (unitHalfUnused && em.fresnel.atLeast(material.fresnel, 1e-12))
+    else if (unitHalfUnused && em.fresnel.atLeast(material.singleLobe().fresnel, 1e-12))
         body.halfVector = HalfVectorForm::Direct;
-    else if (unitHalfUnused && em.fresnel.halfAngleInFloatOk(material.fresnel, plan.fresnel))
+    else if (unitHalfUnused && em.fresnel.halfAngleInFloatOk(material.singleLobe().fresnel, plan.fresnel))
         body.halfVector = HalfVectorForm::InFloat;
 
     // The float-first body leaves the unit h out where the NDF's float D
@@ -235,45 +235,50 @@ BodyPlan planBody(const CheckedMaterial& material, const MaterialEmitters& em, c
 // an exact sampler and the masking is a Smith form); the NDF's emitter says
 // whether it has that sampler in IR.
 SpecularSampling plannedSpecularSampling(const CheckedMaterial& material) {
+    // A combination is sampled by the reference's mixture (runtime), a
+    // diffuse lobe alone too.
+    if (material.combinesLobes() || !material.singleLobe().hasNdf()) return SpecularSampling::None;
     const NdfEmitter& ndf = termEmitters(material).ndf;
-    const bool visible = samplesVisibleNormals(ndfEntry(*material.ndf.model), maskingEntry(*material.masking.model));
+    const bool visible = samplesVisibleNormals(ndfEntry(*material.singleLobe().ndf.model), maskingEntry(*material.singleLobe().masking.model));
     if (!(visible ? ndf.traits.samplesVisibleNormals : ndf.traits.samplesNormals)) return SpecularSampling::None;
     return visible ? SpecularSampling::VisibleNormals : SpecularSampling::NdfNormals;
 }
 
 bool LoweringPlan::slotRead(int slot) const { return reads.slots.at(size_t(slot)); }
 
-LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs) {
+LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs,
+                          const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables) {
+    if (material.combinesLobes()) return planCombination(material, variant, trustInputs, lobeEnergyTables);
     const MaterialEmitters em = termEmitters(material);
     LoweringPlan plan;
     plan.variant = variant;
     plan.trustInputs = trustInputs;
-    plan.ndfIsotropic = ndfIsIsotropic(material.ndf);
-    plan.compensatesEnergy = material.compensatesEnergy();
+    plan.ndfIsotropic = ndfIsIsotropic(material.singleLobe().ndf);
+    plan.compensatesEnergy = material.singleLobe().compensatesEnergy();
     plan.reads = material.readByModels();
 
-    if (!material.masking.model->smith)
+    if (!material.singleLobe().masking.model->smith || !material.singleLobe().hasNdf())
         plan.lambda = LambdaForm::None;
     else if (em.ndf.traits.smithRootSums && !em.masking.traits.needsSeparateLambdas)
         plan.lambda = LambdaForm::RootSums;
     else if (variant.walterLambda && em.ndf.traits.beckmannProfileLambda)
         plan.lambda = LambdaForm::WalterFit;
-    else if (ndfEntry(*material.ndf.model).tabulatedLambda) {
+    else if (ndfEntry(*material.singleLobe().ndf.model).tabulatedLambda) {
         plan.lambda = LambdaForm::Table;
-        plan.lambdaTable = lambdaTable(ndfEntry(*material.ndf.model), tabulatedLambdaShape(material));
+        plan.lambdaTable = lambdaTable(ndfEntry(*material.singleLobe().ndf.model), tabulatedLambdaShape(material));
     } else
         plan.lambda = LambdaForm::ClosedForm;
 
     const FresnelEmitter& fresnel = em.fresnel;
     plan.fresnel.substituteSchlick = variant.schlickDielectric && fresnel.substitutableBySchlick();
-    plan.fresnel.exactInFloat = !plan.fresnel.substituteSchlick && fresnel.evaluableInFloat(material.fresnel);
-    plan.fresnel.rangeGuard = !fresnel.atLeast(material.fresnel, 1e-6);
+    plan.fresnel.exactInFloat = !plan.fresnel.substituteSchlick && fresnel.evaluableInFloat(material.singleLobe().fresnel);
+    plan.fresnel.rangeGuard = !fresnel.atLeast(material.singleLobe().fresnel, 1e-6);
     plan.fresnel.atMostOne = fresnel.atMostOne();
     // F >= 1e-12 at every angle (a constant f0 or eta that keeps it there)
     // stays positive in either type, rounded or flushed, so the lobe needs
     // no F = 0 select. (A smaller bound would admit a Schlick eta within
     // 1e-14 of 1, which a float body rounds to 1: f0 = 0.)
-    plan.fresnel.canVanish = fresnel.canVanish() && !fresnel.atLeast(material.fresnel, 1e-12);
+    plan.fresnel.canVanish = fresnel.canVanish() && !fresnel.atLeast(material.singleLobe().fresnel, 1e-12);
 
     // The scalar kernel computes the plain body: per lane, float is no
     // faster than double except for division and square root, and the
@@ -302,8 +307,8 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     // the range leaves possible.
     const ValueRanges ranges(material);
     for (int s = 0; s < kModelSlotCount; ++s) {
-        const ModelUse& use = material.use(ModelSlot(s));
-        for (int p = 0; p < int(use.model->canonical.size()); ++p) {
+        const ModelUse& use = material.singleLobe().use(ModelSlot(s));
+        for (int p = 0; use.model && p < int(use.model->canonical.size()); ++p) {
             const ModelParam& domain = use.model->canonical[p];
             ValueRange arg = ranges.argument(use, p);
             ParamPlan param;
@@ -315,8 +320,8 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     }
 
     plan.sampling.specular = plannedSpecularSampling(material);
-    plan.sampling.cosineLobe = em.diffuse.present() || material.compensatesEnergy();
-    plan.sampling.compensationAlbedo = material.compensatesEnergy();
+    plan.sampling.cosineLobe = em.diffuse.present() || material.singleLobe().compensatesEnergy();
+    plan.sampling.compensationAlbedo = material.singleLobe().compensatesEnergy();
     plan.sampling.body = plan.scalarBody;
     plan.sampling.batchBody = plan.scalarBody;
     // Only exact kernels: a fast kernel samples in its plain body, which is
@@ -345,11 +350,15 @@ void printBody(std::ostringstream& os, const char* what, const BodyPlan& body) {
 
 std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan) {
     std::ostringstream os;
+    if (plan.combines()) {
+        printCombinationPlan(os, material, plan);
+        return os.str();
+    }
     auto yesNo = [](bool b) { return b ? "yes" : "no"; };
     os << "material " << material.name << "\n";
-    os << "models: ndf=" << material.ndf.model->name << " masking=" << material.masking.model->name
-       << " fresnel=" << material.fresnel.model->name << " energy=" << material.energy.model->name
-       << " diffuse=" << material.diffuse.model->name << "\n";
+    os << "models: ndf=" << (material.singleLobe().hasNdf() ? material.singleLobe().ndf.model->name : "none") << " masking=" << material.singleLobe().masking.model->name
+       << " fresnel=" << material.singleLobe().fresnel.model->name << " energy=" << material.singleLobe().energy.model->name
+       << " diffuse=" << material.singleLobe().diffuse.model->name << "\n";
     os << "variant: " << plan.variant.name() << "\n";
     os << "batch-bodies: " << batchBodiesName(plan.batchBodies) << "\n";
     printBody(os, "scalar-body", plan.scalarBody);
@@ -368,7 +377,7 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
     os << "reads: inputs " << count(plan.reads.inputs) << " of " << plan.reads.inputs.size() << ", lets "
        << count(plan.reads.lets) << " of " << plan.reads.lets.size() << "\n";
     for (int s = 0; s < kModelSlotCount; ++s) {
-        const ModelUse& use = material.use(ModelSlot(s));
+        const ModelUse& use = material.singleLobe().use(ModelSlot(s));
         for (int p = 0; p < int(plan.params[s].size()); ++p) {
             if (!use.has(p)) continue;
             const ParamPlan& param = plan.params[s][p];
@@ -394,7 +403,7 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
 }
 
 bool walterLambdaApplies(const CheckedMaterial& material) {
-    return termEmitters(material).ndf.traits.beckmannProfileLambda && material.masking.model->smith;
+    return termEmitters(material).ndf.traits.beckmannProfileLambda && material.singleLobe().masking.model->smith;
 }
 
 bool schlickDielectricApplies(const CheckedMaterial& material) {

@@ -17,7 +17,9 @@
 
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace facet {
 
@@ -192,6 +194,10 @@ struct ParamPlan {
     bool testFloatRange = true;  // the clamped value can overflow float (invalid too)
 };
 
+struct LobeLowering;
+struct MuTable;  // LayerAlbedo.h
+class EnergyTable;
+
 struct LoweringPlan {
     MathVariant variant;
     BatchBodies batchBodies = BatchBodies::Plain;
@@ -223,11 +229,37 @@ struct LoweringPlan {
     // By ModelSlot, then the catalog's canonical parameter index.
     std::array<std::vector<ParamPlan>, kModelSlotCount> params;
     const ParamPlan& param(ModelSlot slot, int p) const { return params.at(int(slot)).at(p); }
+
+    // ---- a combination of lobes (CheckedMaterial::combinesLobes; SPEC 10) ----
+    // Per lobe (CheckedMaterial::lobes order): the lobe alone (lobeView) and
+    // its own plan, with one plain body (no float-first or guarded body: a
+    // lane's value needs every lobe, so a guarded body's fallback would be
+    // the whole combination). The fields above describe the combination's
+    // entries: its reads (every lobe's and the weights'), the bodies' common
+    // attributes (lobe 0's body), no parameters and no compiled sampler.
+    std::vector<std::shared_ptr<const LobeLowering>> lobes;
+    // Per node of CheckedMaterial::bsdf: a layer's g table (LayerAlbedo.h),
+    // baked from the constant parameters it depends on; null elsewhere.
+    std::vector<std::shared_ptr<const MuTable>> layerG;
+    bool combines() const { return !lobes.empty(); }
+};
+
+struct LobeLowering {
+    CheckedMaterial material;  // lobeView(combination, lobe)
+    LoweringPlan plan;
 };
 
 // `material` checked (and usually specialized). `trustInputs`: the host's
 // promise of valid inputs (LoweringPlan::trustInputs).
-LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs = false);
+// A combination of lobes is planned lobe by lobe (CombinationPlan.cpp);
+// `lobeEnergyTables` (per lobe, null for none) spare the layers' bake
+// building the lobes' Kulla-Conty tables again.
+LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs = false,
+                          const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables = {});
+// CombinationPlan.cpp: planLowering() and printPlan() of a combination.
+LoweringPlan planCombination(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs,
+                             const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables);
+void printCombinationPlan(std::ostringstream& os, const CheckedMaterial& material, const LoweringPlan& plan);
 
 // How the specular lobe of `material` is sampled in IR (None: the kernel
 // has no compiled sampler), as planLowering() plans it for every variant.

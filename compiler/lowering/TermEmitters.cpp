@@ -48,12 +48,25 @@ const Emitter& emitterOf(const ModelUse& use) {
     return *static_cast<const Emitter*>(e);
 }
 
+// The NDF slot of a diffuse lobe (one without an NDF, in a combination):
+// no hook of it is reached, LaneEmitter::brdfPrecise emits no specular term
+// and the plan plans none.
+class AbsentNdfEmitter final : public NdfEmitter {
+public:
+    NdfParams params(LaneEmitter&) const override { return {}; }
+};
+
+const NdfEmitter& ndfEmitterOf(const ModelUse& use) {
+    static const AbsentNdfEmitter& absent = immortal<AbsentNdfEmitter>();
+    return use.model ? emitterOf<NdfEmitter>(use) : absent;
+}
+
 }  // namespace
 
 MaterialEmitters termEmitters(const CheckedMaterial& material) {
-    return {emitterOf<NdfEmitter>(material.ndf), emitterOf<MaskingEmitter>(material.masking),
-            emitterOf<FresnelEmitter>(material.fresnel), emitterOf<DiffuseEmitter>(material.diffuse),
-            emitterOf<EnergyEmitter>(material.energy)};
+    return {ndfEmitterOf(material.singleLobe().ndf), emitterOf<MaskingEmitter>(material.singleLobe().masking),
+            emitterOf<FresnelEmitter>(material.singleLobe().fresnel), emitterOf<DiffuseEmitter>(material.singleLobe().diffuse),
+            emitterOf<EnergyEmitter>(material.singleLobe().energy)};
 }
 
 // ---- defaults: a hook an emitter does not override must not be reached (the plan and the traits keep them apart) ----

@@ -220,7 +220,9 @@ std::array<Real, 3> ResolvedMaterial<Real>::brdf(const Vec3<Real>& wi, const Vec
     // eval() computes without the rounding of the normalized directions.
     Real c = len / 2 < 1 ? len / 2 : Real(1);
     Real s2 = halfAngleSin2(wi, wo);  // 1 - c^2, accurate near wi = wo
-    if (ndf->wholeLobe) {
+    if (!ndf) {
+        // A diffuse lobe: no specular term.
+    } else if (ndf->wholeLobe) {
         Real lobe = ndf->formulas.template get<Real>().wholeLobe(ndfArgs, h, ci, co);
         for (int ch = 0; ch < 3; ++ch) out[ch] = fresnelAt(c, s2, ch) * lobe;
     } else {
@@ -245,15 +247,43 @@ std::array<Real, 3> ResolvedMaterial<Real>::brdf(const Vec3<Real>& wi, const Vec
 }
 
 template <typename Real>
+Interpreter<Real>::Interpreter(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> energyTable)
+    : material_(material), read_(material.readByModels()) {
+    for (const CheckedLobe& lobe : material.lobes)
+        energy_.push_back(lobe.compensatesEnergy()
+                              ? std::make_shared<EnergyTableSlot>(energyTableKey(material, lobe),
+                                                                  material.combinesLobes() ? nullptr : energyTable)
+                              : nullptr);
+}
+
+template <typename Real>
+Interpreter<Real>::Interpreter(const CheckedMaterial& material,
+                               const std::vector<std::shared_ptr<const EnergyTable>>& lobeTables)
+    : material_(material), read_(material.readByModels()) {
+    for (size_t l = 0; l < material.lobes.size(); ++l) {
+        const CheckedLobe& lobe = material.lobes[l];
+        energy_.push_back(lobe.compensatesEnergy()
+                              ? std::make_shared<EnergyTableSlot>(energyTableKey(material, lobe),
+                                                                  l < lobeTables.size() ? lobeTables[l] : nullptr)
+                              : nullptr);
+    }
+}
+
+template <typename Real>
 ResolvedMaterial<Real> Interpreter<Real>::resolve(const Real* slots) const {
+    internal_assert(!material_.combinesLobes()) << "resolve() of material '" << material_.name
+                                                << "', which combines lobes: use resolveAll()";
+    ResolvedBsdf<Real> all = resolveAll(slots);
+    ResolvedMaterial<Real> r = std::move(all.lobes.at(size_t(material_.bsdfRoot().lobe)));
+    r.valid = all.valid;
+    return r;
+}
+
+template <typename Real>
+ResolvedBsdf<Real> Interpreter<Real>::resolveAll(const Real* slots) const {
     using std::isnan;
     const CheckedMaterial& m = material_;
-    ResolvedMaterial<Real> r;
-    r.ndf = &ndfEntry(*m.ndf.model);
-    r.masking = &maskingEntry(*m.masking.model);
-    r.fresnel = &fresnelEntry(*m.fresnel.model);
-    r.energy = &energyEntry(*m.energy.model);
-    r.diffuse = &diffuseEntry(*m.diffuse.model);
+    ResolvedBsdf<Real> r;
 
     // Inputs: given or default, clamped to the declared range.
     std::vector<Value<Real>> inputs(m.inputs.size());
@@ -282,32 +312,55 @@ ResolvedMaterial<Real> Interpreter<Real>::resolve(const Real* slots) const {
     // clamping happens before the finiteness test so that e.g.
     // phong_exponent(0) = inf clamps to the largest exponent instead of
     // failing.
-    auto clampedArg = [&](Real x, const ModelParam& p) {
+    auto clamped = [&](Real x, Real lo, Real hi) {
         if (isnan(x)) {
             r.valid = false;
             return Real(0);
         }
-        x = x < Real(p.lo) ? Real(p.lo) : (x > Real(p.hi) ? Real(p.hi) : x);
+        x = x < lo ? lo : (x > hi ? hi : x);
         if (!finite(x)) r.valid = false;
         return x;
     };
-    auto resolveArgs = [&](const ModelUse& use, ModelArgs<Real>& args) {
-        for (size_t p = 0; p < use.model->canonical.size(); ++p) {
-            if (!use.has(int(p))) continue;
-            const ModelParam& param = use.model->canonical[p];
-            Value<Real> v = evaluateExpr<Real>(*use.args[p], lookup);
-            args.given[p] = true;
-            for (int ch = 0; ch < (param.type == ValueType::Rgb ? 3 : 1); ++ch)
-                args.value[p][ch] = clampedArg(param.type == ValueType::Rgb ? v.channel(ch) : v.c[0], param);
-            if (param.type != ValueType::Rgb) args.value[p][1] = args.value[p][2] = args.value[p][0];
+    for (size_t l = 0; l < m.lobes.size(); ++l) {
+        const CheckedLobe& lobe = m.lobes[l];
+        ResolvedMaterial<Real>& out = r.lobes.emplace_back();
+        out.ndf = lobe.ndf.model ? &ndfEntry(*lobe.ndf.model) : nullptr;
+        out.masking = &maskingEntry(*lobe.masking.model);
+        out.fresnel = &fresnelEntry(*lobe.fresnel.model);
+        out.energy = &energyEntry(*lobe.energy.model);
+        out.diffuse = &diffuseEntry(*lobe.diffuse.model);
+        auto resolveArgs = [&](const ModelUse& use, ModelArgs<Real>& args) {
+            if (!use.model) return;
+            for (size_t p = 0; p < use.model->canonical.size(); ++p) {
+                if (!use.has(int(p))) continue;
+                const ModelParam& param = use.model->canonical[p];
+                Value<Real> v = evaluateExpr<Real>(*use.args[p], lookup);
+                args.given[p] = true;
+                for (int ch = 0; ch < (param.type == ValueType::Rgb ? 3 : 1); ++ch)
+                    args.value[p][ch] = clamped(param.type == ValueType::Rgb ? v.channel(ch) : v.c[0],
+                                                Real(param.lo), Real(param.hi));
+                if (param.type != ValueType::Rgb) args.value[p][1] = args.value[p][2] = args.value[p][0];
+            }
+        };
+        resolveArgs(lobe.ndf, out.ndfArgs);
+        if (r.valid && out.ndf) out.ndf->formulas.template get<Real>().derive(out.ndfArgs);
+        resolveArgs(lobe.masking, out.maskingArgs);
+        resolveArgs(lobe.fresnel, out.fresnelArgs);
+        resolveArgs(lobe.diffuse, out.diffuseArgs);
+        if (energy_[l] && r.valid) resolveKullaConty(out, energy_[l]->get());
+    }
+    // The combination's weights (SPEC 10): a scale is clamped to >= 0, a
+    // mix's and a layer's to [0, 1].
+    for (const BsdfNode& node : m.bsdf) {
+        std::array<Real, 3>& w = r.weights.emplace_back(std::array<Real, 3>{1, 1, 1});
+        if (!node.weight) continue;
+        Value<Real> v = evaluateExpr<Real>(*node.weight, lookup);
+        Real hi = node.kind == BsdfKind::Scale ? Real(INFINITY) : Real(1);
+        for (int ch = 0; ch < 3; ++ch) {
+            w[ch] = clamped(v.channel(ch), Real(0), hi);
         }
-    };
-    resolveArgs(m.ndf, r.ndfArgs);
-    if (r.valid) r.ndf->formulas.template get<Real>().derive(r.ndfArgs);
-    resolveArgs(m.masking, r.maskingArgs);
-    resolveArgs(m.fresnel, r.fresnelArgs);
-    resolveArgs(m.diffuse, r.diffuseArgs);
-    if (energy_ && r.valid) resolveKullaConty(r, energy_->get());
+    }
+    for (ResolvedMaterial<Real>& lobe : r.lobes) lobe.valid = r.valid;
     return r;
 }
 
@@ -334,12 +387,12 @@ EvalResult<Real> Interpreter<Real>::eval(const Real wi[3], const Real wo[3], con
     // the last bits of the normalized directions.
     Vec3<Real> sum;
     normalizedPair(wi, wo, dirs[0], dirs[1], sum);
-    ResolvedMaterial<Real> r = resolve(slots);
+    ResolvedBsdf<Real> r = resolveAll(slots);
     if (!r.valid) {
         out.valid = false;
         return out;
     }
-    out.rgb = r.brdf(dirs[0], dirs[1], sum);
+    out.rgb = combinedBrdf(r, dirs[0], dirs[1], sum, slots);
     // A value that overflows even the reference's range (parameters far
     // outside any physical use) is reported as an invalid lane, never as Inf.
     for (Real v : out.rgb)

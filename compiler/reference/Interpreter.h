@@ -8,8 +8,10 @@
 // code with the JIT lowering: only the checked material and the builtin
 // function semantics (ExprEval.h) are common.
 //
-// Resolving a material against a set of input values gives a ResolvedMaterial
-// whose term functions (D, Lambda, G, F) the physics tests call directly.
+// Resolving a material against a set of input values gives one
+// ResolvedMaterial per lobe (SPEC 10; a material without lobe blocks has
+// one), whose term functions (D, Lambda, G, F) the physics tests call
+// directly, and the combination's weights (ResolvedBsdf, LobeCombination.h).
 #pragma once
 
 #include "Builtins.h"
@@ -24,9 +26,10 @@
 
 namespace facet {
 
-// One material with its parameters evaluated for one set of input values:
-// each slot's catalog entry and its clamped arguments. The term functions
-// dispatch to the entries' reference formulas.
+// One lobe with its parameters evaluated for one set of input values: each
+// slot's catalog entry and its clamped arguments. The term functions
+// dispatch to the entries' reference formulas. ndf is null for a diffuse
+// lobe (only `diffuse`): its specular term is zero.
 template <typename Real>
 struct ResolvedMaterial {
     bool valid = true;  // false when an input or parameter is not finite
@@ -84,6 +87,17 @@ struct ResolvedMaterial {
 ResolvedMaterial<double> lobeAtAlpha(const NdfEntry& ndf, const MaskingEntry& masking, double alpha,
                                      const std::vector<double>& shape = {});
 
+// A whole material resolved for one set of input values: its lobes (in
+// CheckedMaterial::lobes order) and, per node of CheckedMaterial::bsdf, the
+// node's weight per channel, clamped (Scale >= 0; Mix and Layer to [0, 1];
+// 1 where the node has none).
+template <typename Real>
+struct ResolvedBsdf {
+    bool valid = true;  // false when an input, parameter or weight is not finite
+    std::vector<ResolvedMaterial<Real>> lobes;
+    std::vector<std::array<Real, 3>> weights;
+};
+
 template <typename Real>
 struct EvalResult {
     std::array<Real, 3> rgb{};
@@ -101,18 +115,26 @@ public:
     // A material with energy = kulla_conty uses `energyTable` (e.g. from a
     // TableCache, compiler/tables/TableCache.h); without one, the interpreter
     // builds its table in memory on first use (~0.5 s).
-    explicit Interpreter(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> energyTable = nullptr)
-        : material_(material),
-          read_(material.readByModels()),
-          energy_(material.compensatesEnergy()
-                      ? std::make_shared<EnergyTableSlot>(energyTableKey(material), std::move(energyTable))
-                      : nullptr) {}
+    // `energyTable` is the table of a material's single lobe (a material
+    // that combines lobes builds one per compensating lobe).
+    explicit Interpreter(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> energyTable = nullptr);
+    // A combination with the tables of its lobes given (per lobe, in
+    // CheckedMaterial::lobes order; null where a lobe has none or where the
+    // interpreter is to build it).
+    Interpreter(const CheckedMaterial& material, const std::vector<std::shared_ptr<const EnergyTable>>& lobeTables);
 
-    // Evaluates every let and model argument for the given slot values
-    // (material().slotCount of them; null means all defaults). Inputs are
-    // clamped to their declared ranges; a non-finite input that the material
-    // reads, or a non-finite parameter, makes the result invalid.
+    // Evaluates every let, model argument and weight for the given slot
+    // values (material().slotCount of them; null means all defaults).
+    // Inputs are clamped to their declared ranges; a non-finite input that
+    // the material reads, or a non-finite parameter or weight, makes the
+    // result invalid.
+    ResolvedBsdf<Real> resolveAll(const Real* slots) const;
+    // The same for a material that does not combine lobes: its one lobe.
     ResolvedMaterial<Real> resolve(const Real* slots) const;
+    // The BRDF of the whole combination (LobeCombination.cpp); for one lobe
+    // exactly that lobe's brdf().
+    std::array<Real, 3> combinedBrdf(const ResolvedBsdf<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo,
+                                     const Vec3<Real>& sum, const Real* slots) const;
 
     // Full evaluation with the SPEC section 2 conventions: directions that
     // are not finite or not unit length within 1e-3 give an invalid lane
@@ -131,7 +153,7 @@ public:
 private:
     const CheckedMaterial& material_;
     CheckedMaterial::Reads read_;  // what the models read: nothing else is evaluated
-    std::shared_ptr<EnergyTableSlot> energy_;  // kulla_conty only
+    std::vector<std::shared_ptr<EnergyTableSlot>> energy_;  // per lobe; kulla_conty lobes only
 };
 
 extern template class Interpreter<float>;

@@ -217,17 +217,17 @@ bool EnergyTableKey::operator<(const EnergyTableKey& o) const {
     return shape < o.shape;
 }
 
-std::optional<EnergyUnsupported> kullaContyUnsupported(const CheckedMaterial& m) {
-    if (!m.ndf.model || !m.masking.model) return std::nullopt;
-    const NdfEntry& ndf = ndfEntry(*m.ndf.model);
+std::optional<EnergyUnsupported> kullaContyUnsupported(const CheckedMaterial& m, const CheckedLobe& lobe) {
+    if (!lobe.ndf.model || !lobe.masking.model) return std::nullopt;
+    const NdfEntry& ndf = ndfEntry(*lobe.ndf.model);
     if (ndf.wholeLobe)
-        return EnergyUnsupported{m.energy.loc,
+        return EnergyUnsupported{lobe.energy.loc,
                                  fmt::format("energy 'kulla_conty' needs a microfacet NDF with a masking term; ndf '{}' "
                                              "is a whole BRDF lobe with its own normalization and no roughness-only "
                                              "albedo table; use 'energy = none', or a microfacet NDF such as ggx or "
                                              "beckmann",
                                              ndf.name)};
-    for (const ModelUse* use : {&m.ndf, &m.masking}) {
+    for (const ModelUse* use : {&lobe.ndf, &lobe.masking}) {
         for (int p : use->model->tableShapeParams) {
             if (!use->has(p)) continue;
             const Expr& e = *use->args[p];
@@ -247,12 +247,14 @@ std::optional<EnergyUnsupported> kullaContyUnsupported(const CheckedMaterial& m)
     return std::nullopt;
 }
 
-EnergyTableKey energyTableKey(const CheckedMaterial& m) {
+EnergyTableKey energyTableKey(const CheckedMaterial& m) { return energyTableKey(m, m.singleLobe()); }
+
+EnergyTableKey energyTableKey(const CheckedMaterial& m, const CheckedLobe& lobe) {
     EnergyTableKey key;
-    key.ndf = &ndfEntry(*m.ndf.model);
-    key.masking = &maskingEntry(*m.masking.model);
+    key.ndf = &ndfEntry(*lobe.ndf.model);
+    key.masking = &maskingEntry(*lobe.masking.model);
     internal_assert(!key.ndf->wholeLobe) << "kulla_conty table requested for ndf " << key.ndf->name;
-    for (const ModelUse* use : {&m.ndf, &m.masking})
+    for (const ModelUse* use : {&lobe.ndf, &lobe.masking})
         for (int p : use->model->tableShapeParams) {
             internal_assert(!inputUsed(*use->args[p], m)) << "kulla_conty: " << use->model->name << " "
                                                            << use->model->canonical[p].name << " is not constant";

@@ -94,13 +94,13 @@ struct EnergyTableKey {
     bool operator<(const EnergyTableKey& o) const;
 };
 
-// Why `energy = kulla_conty` cannot be used with this material, with where
-// to point the diagnostic; nullopt when it can. Used by the checker.
+// Why `energy = kulla_conty` cannot be used with this lobe of the material,
+// with where to point the diagnostic; nullopt when it can. Used by the checker.
 struct EnergyUnsupported {
     SourceLoc loc;
     std::string message;
 };
-std::optional<EnergyUnsupported> kullaContyUnsupported(const CheckedMaterial& material);
+std::optional<EnergyUnsupported> kullaContyUnsupported(const CheckedMaterial& material, const CheckedLobe& lobe);
 
 // Does the expression depend on an input (directly or through lets)? The
 // first input found, or null.
@@ -108,8 +108,10 @@ const CheckedInput* inputUsed(const Expr& e, const CheckedMaterial& m, int depth
 // The value of an input-free expression (channel 0).
 double constantOf(const Expr& e, const CheckedMaterial& m);
 
-// The table key of a checked material with energy = kulla_conty (gamma / k
-// evaluated as constants). The material must pass kullaContyUnsupported.
+// The table key of a lobe with energy = kulla_conty (gamma / k evaluated as
+// constants). The lobe must pass kullaContyUnsupported.
+EnergyTableKey energyTableKey(const CheckedMaterial& material, const CheckedLobe& lobe);
+// The same for the single lobe of a material that does not combine lobes.
 EnergyTableKey energyTableKey(const CheckedMaterial& material);
 
 // Quadrature settings (part of the EXR metadata: a table built with other

@@ -272,8 +272,8 @@ std::shared_ptr<const LambdaTable> adoptLambdaTable(std::shared_ptr<const Lambda
     return slot;
 }
 
-std::string tabulatedLambdaUnsupported(const CheckedMaterial& m, SourceLoc& loc) {
-    const ModelUse& use = m.ndf;
+std::string tabulatedLambdaUnsupported(const CheckedMaterial& m, const CheckedLobe& lobe, SourceLoc& loc) {
+    const ModelUse& use = lobe.ndf;
     const NdfEntry& ndf = ndfEntry(*use.model);
     std::vector<double> shape;
     for (int p : ndf.tableShapeParams) {
@@ -284,31 +284,37 @@ std::string tabulatedLambdaUnsupported(const CheckedMaterial& m, SourceLoc& loc)
         if (const CheckedInput* in = inputUsed(e, m))
             return fmt::format("masking '{}' with ndf '{}' needs a constant {} (its Smith Lambda is tabulated for "
                                "one {}); this one depends on input '{}'",
-                               m.masking.model->name, ndf.name, what, what, in->name);
+                               lobe.masking.model->name, ndf.name, what, what, in->name);
         double v = constantOf(e, m);
         if (!std::isfinite(v))
-            return fmt::format("masking '{}' with ndf '{}' needs a finite {}, got {}", m.masking.model->name, ndf.name,
+            return fmt::format("masking '{}' with ndf '{}' needs a finite {}, got {}", lobe.masking.model->name, ndf.name,
                                what, v);
         shape.push_back(std::clamp(v, ndf.canonical[p].lo, ndf.canonical[p].hi));
     }
     if (ndf.lambdaShapeError) {
         std::string why = ndf.lambdaShapeError(shape);
-        if (!why.empty()) return fmt::format("masking '{}' with ndf '{}': {}", m.masking.model->name, ndf.name, why);
+        if (!why.empty()) return fmt::format("masking '{}' with ndf '{}': {}", lobe.masking.model->name, ndf.name, why);
     }
     return "";
 }
 
-bool usesTabulatedLambda(const CheckedMaterial& m) {
-    return m.masking.model && m.masking.model->smith && m.ndf.model && ndfEntry(*m.ndf.model).tabulatedLambda;
+bool usesTabulatedLambda(const CheckedLobe& lobe) {
+    return lobe.masking.model && lobe.masking.model->smith && lobe.ndf.model &&
+           ndfEntry(*lobe.ndf.model).tabulatedLambda;
 }
 
-std::vector<double> tabulatedLambdaShape(const CheckedMaterial& m) {
-    const NdfEntry& ndf = ndfEntry(*m.ndf.model);
+bool usesTabulatedLambda(const CheckedMaterial& m) { return usesTabulatedLambda(m.singleLobe()); }
+
+std::vector<double> tabulatedLambdaShape(const CheckedMaterial& m) { return tabulatedLambdaShape(m, m.singleLobe()); }
+
+std::vector<double> tabulatedLambdaShape(const CheckedMaterial& m, const CheckedLobe& lobe) {
+    const ModelUse& use = lobe.ndf;
+    const NdfEntry& ndf = ndfEntry(*use.model);
     std::vector<double> shape;
     for (int p : ndf.tableShapeParams) {
-        internal_assert(m.ndf.has(p) && !inputUsed(*m.ndf.args[p], m))
+        internal_assert(use.has(p) && !inputUsed(*use.args[p], m))
             << "tabulated Lambda: " << ndf.name << " " << ndf.canonical[p].name << " is not constant";
-        shape.push_back(std::clamp(constantOf(*m.ndf.args[p], m), ndf.canonical[p].lo, ndf.canonical[p].hi));
+        shape.push_back(std::clamp(constantOf(*use.args[p], m), ndf.canonical[p].lo, ndf.canonical[p].hi));
     }
     return shape;
 }

@@ -93,6 +93,7 @@
 namespace facet {
 
 struct CheckedMaterial;
+struct CheckedLobe;
 
 // Bumped whenever the table contents would change.
 constexpr int kLambdaTableVersion = 3;
@@ -204,10 +205,13 @@ inline std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const
 // A Smith masking with an NDF whose Lambda is tabulated: why the material
 // cannot have it (its shape parameters must be finite constants within the
 // entry's lambdaShapeError), "" when it can; `loc` is set to the argument.
-std::string tabulatedLambdaUnsupported(const CheckedMaterial& material, SourceLoc& loc);
-// The clamped constant shape values of the material's NDF.
+std::string tabulatedLambdaUnsupported(const CheckedMaterial& material, const CheckedLobe& lobe, SourceLoc& loc);
+// The clamped constant shape values of the lobe's NDF.
+std::vector<double> tabulatedLambdaShape(const CheckedMaterial& material, const CheckedLobe& lobe);
+// Whether the lobe's Smith masking needs its NDF's Lambda table.
+bool usesTabulatedLambda(const CheckedLobe& lobe);
+// The same two for the single lobe of a material that does not combine lobes.
 std::vector<double> tabulatedLambdaShape(const CheckedMaterial& material);
-// Whether the material's Smith masking needs its NDF's Lambda table.
 bool usesTabulatedLambda(const CheckedMaterial& material);
 
 }  // namespace facet

@@ -4,6 +4,7 @@
 #include "Sampling.h"
 
 #include "KullaContyEval.h"
+#include "LayerAlbedo.h"
 
 #include <cmath>
 
@@ -185,9 +186,16 @@ SampleResult<Real> Interpreter<Real>::sample(const Real wo[3], const Real u[3], 
         if (!(u[k] >= 0 && u[k] < 1)) return invalid;  // NaN fails too
         uu[k] = u[k];
     }
-    ResolvedMaterial<Real> r = resolve(slots);
-    if (!r.valid) return invalid;
-    SampleResult<Real> out = sampleBrdf(r, o, uu);
+    SampleResult<Real> out;
+    if (material_.combinesLobes() || !material_.singleLobe().hasNdf()) {  // a lone diffuse lobe: the cosine leaf
+        ResolvedBsdf<Real> all = resolveAll(slots);
+        if (!all.valid) return invalid;
+        out = sampleCombination(*this, all, o, uu);
+    } else {
+        ResolvedMaterial<Real> r = resolve(slots);
+        if (!r.valid) return invalid;
+        out = sampleBrdf(r, o, uu);
+    }
     // As in eval: a result beyond the reference's range is an invalid lane.
     bool ok = finite(out.pdf) && out.pdf >= 0 && finite(out.wi.x) && finite(out.wi.y) && finite(out.wi.z);
     for (Real w : out.weight) ok = ok && finite(w) && w >= 0;
@@ -200,10 +208,17 @@ PdfResult<Real> Interpreter<Real>::pdf(const Real wi[3], const Real wo[3], const
     invalid.valid = false;
     Vec3<Real> i, o;
     if (!unitDirection(wi, i) || !unitDirection(wo, o)) return invalid;
-    ResolvedMaterial<Real> r = resolve(slots);
-    if (!r.valid) return invalid;
     PdfResult<Real> out;
-    out.pdf = brdfPdf(r, i, o);
+    if (material_.combinesLobes() || !material_.singleLobe().hasNdf()) {  // a lone diffuse lobe: the cosine leaf
+        ResolvedBsdf<Real> all = resolveAll(slots);
+        if (!all.valid) return invalid;
+        if (o.z > 0)
+            out.pdf = combinationPdf(material_, all, leafProbabilities(material_, bsdfToDouble(all), double(o.z)), i, o);
+    } else {
+        ResolvedMaterial<Real> r = resolve(slots);
+        if (!r.valid) return invalid;
+        out.pdf = brdfPdf(r, i, o);
+    }
     return finite(out.pdf) && out.pdf >= 0 ? out : invalid;
 }
 

@@ -27,6 +27,7 @@
 #include "Interpreter.h"
 
 #include <array>
+#include <vector>
 
 namespace facet {
 
@@ -107,5 +108,25 @@ Real brdfPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<R
 template <typename Real>
 SampleResult<Real> sampleBrdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, const std::array<Real, 3>& u,
                               SamplingTechnique technique = SamplingTechnique::Material);
+
+// ---- combinations of lobes (LobeSampling.cpp) ----------------------------
+
+// A leaf lobe of the combination and the probability of picking it.
+struct LeafChoice {
+    int lobe = -1;  // index into ResolvedBsdf::lobes
+    double p = 0;
+};
+// The leaves of m's combination in tree order with their probabilities at
+// n.wo = muO (summing to 1): each proportional to its estimated share of
+// the albedo, at least 1 % of the largest share.
+std::vector<LeafChoice> leafProbabilities(const CheckedMaterial& m, const ResolvedBsdf<double>& r, double muO);
+// The mixture density sum_k p_k pdf_k(wi) of those leaves.
+template <typename Real>
+Real combinationPdf(const CheckedMaterial& m, const ResolvedBsdf<Real>& r, const std::vector<LeafChoice>& leaves,
+                    const Vec3<Real>& wi, const Vec3<Real>& wo);
+// One sample of the combination (unit wo, u in [0, 1)).
+template <typename Real>
+SampleResult<Real> sampleCombination(const Interpreter<Real>& in, const ResolvedBsdf<Real>& r, const Vec3<Real>& wo,
+                                     const std::array<Real, 3>& u);
 
 }  // namespace facet

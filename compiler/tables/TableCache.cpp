@@ -299,7 +299,7 @@ std::shared_ptr<const LambdaTable> TableCache::getLambda(const NdfEntry& ndf, co
 }
 
 std::shared_ptr<const LambdaTable> TableCache::lambdaFor(const CheckedMaterial& material) {
-    return getLambda(ndfEntry(*material.ndf.model), tabulatedLambdaShape(material));
+    return getLambda(ndfEntry(*material.singleLobe().ndf.model), tabulatedLambdaShape(material));
 }
 
 std::string TableCache::lambdaPathFor(const NdfEntry& ndf, const std::vector<double>& shape) const {

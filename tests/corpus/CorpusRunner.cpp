@@ -100,22 +100,35 @@ std::optional<Rgb> evaluate(const std::string& backend, const CheckedMaterial& m
         return r.rgb;
     }
     // LLVM JIT kernels, float in and out.
+    // A material the compiled backends take only with constant layer
+    // parameters is compiled per line, every input bound to the line's
+    // value (`--set`), as a user would.
+    const bool bindAll = !facet::compiledBackendsRefuse(material).empty();
+    std::string bound;
+    if (bindAll)
+        for (double v : slots) bound += fmt::format("{},", v);
     // Keyed by file and material name: checked materials of different files
     // may reuse the same address once a file's program is gone.
     static std::map<std::string, std::unique_ptr<facet::Kernel>> kernels;
-    std::unique_ptr<facet::Kernel>& kernel = kernels[fmt::format("{}\n{}\n{}", material.loc.str(), material.name, backend)];
+    std::unique_ptr<facet::Kernel>& kernel =
+        kernels[fmt::format("{}\n{}\n{}\n{}", material.loc.str(), material.name, backend, bound)];
     if (!kernel) {
         facet::CompileOptions options;
         std::string spec = backend == "scalar" ? "backend=scalar" : "backend=simd";
         if (backend.size() > 4 && backend.rfind("simd", 0) == 0) spec += ";width=" + backend.substr(4);
         std::string err = facet::CompileOptions::parse(spec + ";cache=memory", options);
         if (!err.empty()) throw std::runtime_error(err);
+        if (bindAll)
+            for (const facet::CheckedInput& in : material.inputs)
+                options.bindings[in.name] = std::vector<double>(slots.begin() + in.firstSlot,
+                                                                slots.begin() + in.firstSlot + in.slotCount());
         DiagnosticEngine diags;
         kernel = jitCompiler().compileMaterial(material, options, diags);
         if (!kernel) throw std::runtime_error("kernel compilation failed: " + diags.str());
     }
     float a[3], b[3], out[3];
     std::vector<float> in(slots.begin(), slots.end());
+    if (bindAll) in.clear();
     for (int i = 0; i < 3; ++i) {
         a[i] = float(wi[i]);
         b[i] = float(wo[i]);
@@ -509,5 +522,6 @@ int main(int argc, char** argv) {
         if (!facetBinary.empty()) runFacetCheck(f, facetBinary, tally);
     }
     std::printf("%d passed, %d failed\n", tally.passed, tally.failed);
+
     return tally.failed ? 1 : 0;
 }

@@ -105,10 +105,10 @@ double tabulatedShapeValue(Gen& g, const NdfEntry& ndf, const ModelParam& param)
 
 int randomMaterialCombinationCount() { return int(combinations().size()); }
 
-RandomMaterial randomMaterial(uint64_t seed, int i) {
-    static const std::vector<Combo> combos = combinations();
-    const Combo& c = combos[size_t(i) % combos.size()];
-    Gen g(seed * 1000003u + uint64_t(i));
+namespace {
+
+// The inputs (and a let) of a random material, named u*, c* and l0.
+std::string randomInputs(Gen& g) {
     std::string body;
     int nFloat = g.pick(3), nRgb = g.pick(2);
     for (int k = 0; k < nFloat; ++k) {
@@ -126,6 +126,12 @@ RandomMaterial randomMaterial(uint64_t seed, int i) {
         body += fmt::format("    let l0 = {};\n", g.unit());
         g.floatInputs.push_back("l0");  // lets are usable like inputs from here on
     }
+    return body;
+}
+
+// The model statements of one lobe of combination c, each line indented by `indent`.
+std::string lobeStatements(Gen& g, const Combo& c, const std::string& indent) {
+    std::string body;
     // The NDF's parameters: roughnesses as random expressions in [0.02, 1]
     // ([0.05, 0.6] for a whole lobe), shape parameters around their typical
     // value, anything else (Blinn-Phong's exponent) from a random roughness.
@@ -149,24 +155,82 @@ RandomMaterial randomMaterial(uint64_t seed, int i) {
         if (name == "alpha_x" && !c.anisotropic) name = "alpha";
         args += (args.empty() ? "" : ", ") + name + " = " + value;
     }
-    body += fmt::format("    ndf = {}({});\n", ndf.name, args);
+    body += fmt::format("{}ndf = {}({});\n", indent, ndf.name, args);
 
     std::string masking = c.masking->name;
-    if (masking == "schlick_smith") body += fmt::format("    masking = schlick_smith({});\n", g.ranged(0, 1));
-    else body += fmt::format("    masking = {};\n", masking);
+    if (masking == "schlick_smith") body += fmt::format("{}masking = schlick_smith({});\n", indent, g.ranged(0, 1));
+    else body += fmt::format("{}masking = {};\n", indent, masking);
 
     std::string fresnel = c.fresnel;
-    if (fresnel == "schlick_f0") body += fmt::format("    fresnel = schlick({});\n", g.rgbRanged(0, 1));
-    else if (fresnel == "schlick_eta") body += fmt::format("    fresnel = schlick(eta = {});\n", g.rgbRanged(1.1, 3.0));
-    else if (fresnel == "dielectric") body += fmt::format("    fresnel = dielectric({});\n", g.rgbRanged(1.1, 2.5));
-    else if (fresnel == "dielectric_tir") body += fmt::format("    fresnel = dielectric({});\n", g.rgbRanged(0.4, 0.9));
+    if (fresnel == "schlick_f0") body += fmt::format("{}fresnel = schlick({});\n", indent, g.rgbRanged(0, 1));
+    else if (fresnel == "schlick_eta") body += fmt::format("{}fresnel = schlick(eta = {});\n", indent, g.rgbRanged(1.1, 3.0));
+    else if (fresnel == "dielectric") body += fmt::format("{}fresnel = dielectric({});\n", indent, g.rgbRanged(1.1, 2.5));
+    else if (fresnel == "dielectric_tir") body += fmt::format("{}fresnel = dielectric({});\n", indent, g.rgbRanged(0.4, 0.9));
     else if (fresnel == "conductor")
-        body += fmt::format("    fresnel = conductor(eta = {}, k = {});\n", g.rgbRanged(0.1, 3.0), g.rgbRanged(0, 5));
-    if (std::string(c.diffuse) == "lambert") body += fmt::format("    diffuse = lambert({});\n", g.rgbRanged(0, 1));
+        body += fmt::format("{}fresnel = conductor(eta = {}, k = {});\n", indent, g.rgbRanged(0.1, 3.0), g.rgbRanged(0, 5));
+    if (std::string(c.diffuse) == "lambert") body += fmt::format("{}diffuse = lambert({});\n", indent, g.rgbRanged(0, 1));
+    return body;
+}
 
+}  // namespace
+
+RandomMaterial randomMaterial(uint64_t seed, int i) {
+    static const std::vector<Combo> combos = combinations();
+    const Combo& c = combos[size_t(i) % combos.size()];
+    Gen g(seed * 1000003u + uint64_t(i));
+    std::string body = randomInputs(g);
+    body += lobeStatements(g, c, "    ");
     RandomMaterial out;
-    out.combination = fmt::format("{}{}/{}/{}/{}", ndf.name, c.anisotropic ? "_aniso" : "", masking, c.fresnel, c.diffuse);
+    out.combination = fmt::format("{}{}/{}/{}/{}", c.ndf->name, c.anisotropic ? "_aniso" : "", c.masking->name,
+                                  c.fresnel, c.diffuse);
     out.text = fmt::format("material random_{} {{\n{}}}\n", i, body);
+    return out;
+}
+
+RandomMaterial randomMultiLobeMaterial(uint64_t seed, int i) {
+    static const std::vector<Combo> combos = combinations();
+    Gen g(seed * 2000003u + uint64_t(i));
+    std::string body = randomInputs(g);
+    const int lobes = 2 + g.pick(2);
+    // Lobe k cycles through the combinations at its own stride, so that every
+    // NDF is a top (lobe 0) and a base (lobe 1) within a few hundred materials.
+    // A layer's top, and a microfacet base of it, take constant parameters:
+    // the compiled backends bake the layer's tables from them.
+    const int kind = g.pick(4);  // 0 sum, 1 scale + sum, 2 mix, 3 layer
+    std::vector<std::string> names, combination;
+    for (int k = 0; k < lobes; ++k) {
+        std::string name = fmt::format("lobe{}", k);
+        names.push_back(name);
+        const bool diffuseOnly = k == lobes - 1 && g.pick(3) == 0;
+        const bool constant = kind == 3 && k < 2;
+        std::vector<std::string> savedF, savedC;
+        if (constant) std::swap(savedF, g.floatInputs), std::swap(savedC, g.rgbInputs);
+        if (diffuseOnly) {
+            body += fmt::format("    lobe {} {{\n        diffuse = lambert({});\n    }}\n", name, g.rgbRanged(0, 1));
+            combination.push_back("lambert");
+        } else {
+            const Combo& c = combos[(size_t(i) * (k == 0 ? 7 : k == 1 ? 11 : 13) + size_t(k)) % combos.size()];
+            body += fmt::format("    lobe {} {{\n{}    }}\n", name, lobeStatements(g, c, "        "));
+            combination.push_back(fmt::format("{}{}/{}/{}/{}", c.ndf->name, c.anisotropic ? "_aniso" : "",
+                                              c.masking->name, c.fresnel, c.diffuse));
+        }
+        if (constant) std::swap(savedF, g.floatInputs), std::swap(savedC, g.rgbInputs);
+    }
+    std::string expr;
+    switch (kind) {
+        case 0: expr = names[0] + " + " + names[1]; break;
+        case 1: expr = fmt::format("{} * {} + {} * {}", g.unit(), names[0], g.rgbRanged(0, 1), names[1]); break;
+        case 2: expr = fmt::format("mix({}, {}, {})", names[0], names[1], g.unit()); break;
+        default:
+            expr = g.pick(2) ? fmt::format("layer({}, {})", names[0], names[1])
+                             : fmt::format("layer({}, {}, weight = {})", names[0], names[1], g.unit());
+    }
+    if (lobes == 3) expr = g.pick(2) ? fmt::format("{} + {} * {}", expr, g.unit(), names[2])
+                                     : fmt::format("mix({}, {}, {})", names[2], expr, g.unit());
+    RandomMaterial out;
+    for (const std::string& c : combination) out.combination += (out.combination.empty() ? "" : " | ") + c;
+    out.combination = "bsdf = " + expr + ": " + out.combination;
+    out.text = fmt::format("material random_lobes_{} {{\n{}    bsdf = {};\n}}\n", i, body, expr);
     return out;
 }
 

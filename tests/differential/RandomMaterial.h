@@ -21,5 +21,9 @@ struct RandomMaterial {
 // combination so that consecutive indices cycle through all of them.
 RandomMaterial randomMaterial(uint64_t seed, int i);
 int randomMaterialCombinationCount();
+// The i-th material of 2 or 3 lobes (SPEC 10) for `seed`: lobes drawn from
+// the same combinations, combined by a sum, weighted sum, mix or layer, and a
+// third lobe added or mixed in.
+RandomMaterial randomMultiLobeMaterial(uint64_t seed, int i);
 
 }  // namespace facet::test

@@ -60,7 +60,7 @@ struct TestMaterial {
         material = program.find("t");
         REQUIRE(material != nullptr);
         std::shared_ptr<const facet::EnergyTable> table;
-        if (material->compensatesEnergy()) table = memoryTables().getFor(*material);
+        if (material->singleLobe().compensatesEnergy()) table = memoryTables().getFor(*material);
         interp = std::make_unique<facet::Interpreter<double>>(*material, table);
     }
     // Resolved with the given slot values (null: defaults).

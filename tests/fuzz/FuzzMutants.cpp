@@ -685,7 +685,9 @@ void checkMaterialEval(const CheckedMaterial& m, Rng& rng, Failures& fail, const
             // dielectric's total-internal-reflection cut-off is a step, so a
             // rounding difference in wi.h against wo.h may legitimately
             // jump across it: skip that one.
-            if (r.valid && p.expect == DirPair::Any && !fresnelEntry(*m.fresnel.model).reciprocityStep) {
+            bool step = false;
+            for (const CheckedLobe& lobe : m.lobes) step |= fresnelEntry(*lobe.fresnel.model).reciprocityStep;
+            if (r.valid && p.expect == DirPair::Any && !step) {
                 EvalResult<double> q = interp.eval(p.wo.data(), p.wi.data(), slots);
                 for (int c = 0; c < 3 && q.valid; ++c) {
                     double a = r.rgb[c], b = q.rgb[c];
@@ -760,10 +762,12 @@ Outcome runOne(const std::string& text, Rng& rng, Failures& fail, const std::str
         out.checked = true;
         if (prog.materials.empty()) fail.add(where + ": no diagnostics and no materials");
         for (const CheckedMaterial& m : prog.materials) {
-            if (!m.ndf.model || !m.masking.model || !m.fresnel.model || !m.energy.model || !m.diffuse.model) {
-                fail.add(where + ": checked material '" + m.name + "' has an unset model slot");
-                return out;
-            }
+            for (const CheckedLobe& lobe : m.lobes)
+                if ((!lobe.ndf.model && lobe.implicit) || !lobe.masking.model ||
+                    !lobe.fresnel.model || !lobe.energy.model || !lobe.diffuse.model) {
+                    fail.add(where + ": checked material '" + m.name + "' has an unset model slot");
+                    return out;
+                }
             int slots = 0;
             for (const CheckedInput& in : m.inputs) slots += in.slotCount();
             if (slots != m.slotCount) fail.add(where + ": slotCount does not add up");
@@ -777,19 +781,21 @@ Outcome runOne(const std::string& text, Rng& rng, Failures& fail, const std::str
             // under ASan, per mutant. Evaluate every other term with energy
             // = none instead; the Kulla-Conty term has its own physics tests.
             CheckedMaterial m = prog.materials[i];
-            if (m.compensatesEnergy()) {
-                m.energy.model = findModel(ModelSlot::Energy, "none");
-                ++st.energyReplaced;
-            }
+            for (CheckedLobe& lobe : m.lobes)
+                if (lobe.compensatesEnergy()) {
+                    lobe.energy.model = findModel(ModelSlot::Energy, "none");
+                    ++st.energyReplaced;
+                }
             // Likewise a Smith masking over a tabulated Lambda builds the
             // NDF's table on first use, and a mutated shape value is a new
             // table: seconds in a release build, most of a minute under
             // ASan. Evaluate with masking = none; the tables have their own
             // tests (tests/energy LambdaTableTests, the hard cases).
-            if (m.masking.model->smith && ndfEntry(*m.ndf.model).tabulatedLambda) {
-                m.masking.model = findModel(ModelSlot::Masking, "none");
-                ++st.maskingReplaced;
-            }
+            for (CheckedLobe& lobe : m.lobes)
+                if (lobe.hasNdf() && lobe.masking.model->smith && ndfEntry(*lobe.ndf.model).tabulatedLambda) {
+                    lobe.masking.model = findModel(ModelSlot::Masking, "none");
+                    ++st.maskingReplaced;
+                }
             try {
                 if (!opt.fullEval) {  // stress inputs: one evaluation proves the interpreter copes
                     const double n[3] = {0, 0, 1};

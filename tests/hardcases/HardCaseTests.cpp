@@ -271,7 +271,7 @@ MaterialResult runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& c
 
     // The reference on both samples (float-rounded and with double-only values).
     std::shared_ptr<const EnergyTable> table;
-    if (m.compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
+    if (m.singleLobe().compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
     HardCaseReference ref = evaluateHardCaseReference(interp, cases), refRaw = evaluateHardCaseReference(interp, raw);
     std::vector<EvalResult<float>> inFloat = evaluateInFloat(Interpreter<float>(m, table), cases);

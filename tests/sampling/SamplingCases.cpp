@@ -69,7 +69,7 @@ std::unique_ptr<TestMaterial> loadMaterial(const std::string& text, std::string*
     // One Kulla-Conty table per key for the whole run (each takes ~0.5 s).
     static std::map<EnergyTableKey, std::shared_ptr<const EnergyTable>> tables;
     std::shared_ptr<const EnergyTable> table;
-    if (t->material->compensatesEnergy()) {
+    if (t->material->singleLobe().compensatesEnergy()) {
         EnergyTableKey key = energyTableKey(*t->material);
         std::shared_ptr<const EnergyTable>& slot = tables[key];
         if (!slot) slot = buildEnergyTable(key);

@@ -66,8 +66,8 @@ TEST_CASE("expression types: float, rgb, and float promoting to rgb") {
     CHECK(letNamed(m, "k").value->type == ValueType::Rgb);
     CHECK(letNamed(m, "p").value->type == ValueType::Float);
     CHECK(m.inputs[0].type == ValueType::Rgb);
-    CHECK(std::string(m.fresnel.model->name) == "schlick");
-    CHECK(std::string(m.diffuse.model->name) == "lambert");
+    CHECK(std::string(m.singleLobe().fresnel.model->name) == "schlick");
+    CHECK(std::string(m.singleLobe().diffuse.model->name) == "lambert");
 }
 
 TEST_CASE("rgb where a float is required is a type error") {
@@ -205,23 +205,23 @@ TEST_CASE("model arguments: unknown models and arguments, arity, named forms") {
     // Named arguments in any order land in canonical order.
     CheckedProgram prog = mustCheck(inMaterial("ndf = ggx(alpha_y = 0.2, alpha_x = 0.1);"));
     const CheckedMaterial& m = prog.materials[0];
-    CHECK(!m.ndf.isotropic);
+    CHECK(!m.singleLobe().ndf.isotropic);
     ResolvedMaterial<double> r = Interpreter<double>(m).resolve(nullptr);
     CHECK(r.ndfArgs[0] == 0.1);
     CHECK(r.ndfArgs[1] == 0.2);
     // One alpha fills both and marks the NDF isotropic; the alias resolves to ggx.
     CheckedProgram iso = mustCheck(inMaterial("ndf = trowbridge_reitz(alpha = 0.3);"));
-    CHECK(iso.materials[0].ndf.isotropic);
-    CHECK(std::string(iso.materials[0].ndf.model->name) == "ggx");
+    CHECK(iso.materials[0].singleLobe().ndf.isotropic);
+    CHECK(std::string(iso.materials[0].singleLobe().ndf.model->name) == "ggx");
 }
 
 TEST_CASE("omitted slots default to none") {
     CheckedProgram prog = mustCheck("material m { ndf = beckmann(0.2); }");
     const CheckedMaterial& m = prog.materials[0];
-    CHECK(std::string(m.masking.model->name) == "none");
-    CHECK(std::string(m.fresnel.model->name) == "none");
-    CHECK(std::string(m.energy.model->name) == "none");
-    CHECK(std::string(m.diffuse.model->name) == "none");
+    CHECK(std::string(m.singleLobe().masking.model->name) == "none");
+    CHECK(std::string(m.singleLobe().fresnel.model->name) == "none");
+    CHECK(std::string(m.singleLobe().energy.model->name) == "none");
+    CHECK(std::string(m.singleLobe().diffuse.model->name) == "none");
 }
 
 TEST_CASE("diagnostics: rendering, ordering, the error limit, the whole-file form") {

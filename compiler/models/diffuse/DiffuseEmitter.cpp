@@ -16,7 +16,7 @@ public:
     // to >= 0 and unbounded above (so the output keeps its range check).
     LVal diffuse(LaneEmitter& lane) const override {
         MathEmitter& pm = lane.preciseMath();
-        LVal albedo = lane.rgbParam(lane.material.diffuse, kAlbedo, false);
+        LVal albedo = lane.rgbParam(lane.material.singleLobe().diffuse, kAlbedo, false);
         return lane.map({albedo}, true, [&](auto& x) { return pm.mul(x[0], pm.c(1.0 / kPi)); });
     }
 };

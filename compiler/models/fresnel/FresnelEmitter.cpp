@@ -119,7 +119,7 @@ public:
 
 private:
     static LVal f0(LaneEmitter& lane) {
-        const ModelUse& use = lane.material.fresnel;
+        const ModelUse& use = lane.material.singleLobe().fresnel;
         return use.has(kF0) ? lane.rgbParam(use, kF0, false) : f0FromEta(lane, lane.rgbParam(use, kSchlickEta, false));
     }
 };
@@ -170,7 +170,7 @@ public:
     }
 
     LVal F(LaneEmitter& lane, const LaneGeometry& geo) const override {
-        const ModelUse& use = lane.material.fresnel;
+        const ModelUse& use = lane.material.singleLobe().fresnel;
         if (lane.plan.fresnel.substituteSchlick) {
             // Schlick with f0 = ((eta - 1)/(eta + 1))^2: only chosen by a
             // tolerance that its measured error meets.
@@ -212,13 +212,13 @@ public:
 
     FresnelAverageArgs averageArgs(LaneEmitter& lane) const override {
         FresnelAverageArgs args;
-        args.constant = constantArg(lane.material.fresnel, kEta) != nullptr;
-        if (!args.constant) args.a = lane.rgbParam(lane.material.fresnel, kEta, false).c;
+        args.constant = constantArg(lane.material.singleLobe().fresnel, kEta) != nullptr;
+        if (!args.constant) args.a = lane.rgbParam(lane.material.singleLobe().fresnel, kEta, false).c;
         return args;
     }
     Value* average(LaneEmitter& lane, const FresnelAverageArgs& args, int ch) const override {
         if (args.constant) {
-            double eta = std::max(constantValue(*lane.material.fresnel.args[kEta])[ch], kMinEta);
+            double eta = std::max(constantValue(*lane.material.singleLobe().fresnel.args[kEta])[ch], kMinEta);
             return lane.preciseMath().c(fresnelAverageDielectric(eta));
         }
         return dielectricAverageLookup(lane, args.a[ch]);
@@ -267,7 +267,7 @@ public:
     }
 
     LVal F(LaneEmitter& lane, const LaneGeometry& geo) const override {
-        const ModelUse& use = lane.material.fresnel;
+        const ModelUse& use = lane.material.singleLobe().fresnel;
         auto [m, inFloat, one, c, c2] = exactTermMath(lane, geo);
         MathEmitter& pm = lane.preciseMath();
         LVal eta = lane.rgbParam(use, kEta, inFloat, lane.maxFresnelIndex());
@@ -353,7 +353,7 @@ public:
     }
 
     FresnelAverageArgs averageArgs(LaneEmitter& lane) const override {
-        const ModelUse& use = lane.material.fresnel;
+        const ModelUse& use = lane.material.singleLobe().fresnel;
         FresnelAverageArgs args;
         args.constant = constantArg(use, kEta) && constantArg(use, kK);
         if (!args.constant) {
@@ -364,7 +364,7 @@ public:
     }
     Value* average(LaneEmitter& lane, const FresnelAverageArgs& args, int ch) const override {
         if (args.constant) {
-            const ModelUse& use = lane.material.fresnel;
+            const ModelUse& use = lane.material.singleLobe().fresnel;
             double eta = std::max(constantValue(*use.args[kEta])[ch], kMinEta);
             double k = std::max(constantValue(*use.args[kK])[ch], 0.0);
             return lane.preciseMath().c(fresnelAverageConductor(eta, k));
@@ -383,12 +383,12 @@ std::vector<TermEmitterEntry> facetEmitters_fresnel_FresnelEmitter() {
     // The F_avg tables only where energy compensation needs F_avg of
     // per-lane parameters (averageArgs: constant ones are folded).
     auto dielectricTables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {
-        if (!material.compensatesEnergy() || constantArg(material.fresnel, kEta)) return {};
+        if (!material.singleLobe().compensatesEnergy() || constantArg(material.singleLobe().fresnel, kEta)) return {};
         const std::vector<float>& t = fresnelAverageTables().dielectric;
         return {{"facet_favg_dielectric", t.data(), t.size() * sizeof(float)}};
     };
     auto conductorTables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {
-        if (!material.compensatesEnergy() || (constantArg(material.fresnel, kEta) && constantArg(material.fresnel, kK)))
+        if (!material.singleLobe().compensatesEnergy() || (constantArg(material.singleLobe().fresnel, kEta) && constantArg(material.singleLobe().fresnel, kK)))
             return {};
         const std::vector<float>& t = fresnelAverageTables().conductor;
         return {{"facet_favg_conductor", t.data(), t.size() * sizeof(float)}};

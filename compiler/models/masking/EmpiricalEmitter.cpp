@@ -62,7 +62,7 @@ class SchlickSmithMasking final : public MaskingEmitter {  // G1(c) / c = 1 / (c
         MathEmitter& pm = lane.preciseMath();
         Value *ci = geo.wiD[2], *co = geo.woD[2];
         Value* one = pm.c(1.0);
-        Value* k = pm.convert(lane.scalarParam(lane.material.masking, kSchlickK), pm.type());
+        Value* k = pm.convert(lane.scalarParam(lane.material.singleLobe().masking, kSchlickK), pm.type());
         Value* omk = pm.sub(one, k);
         return lane.overProduct(D, pm.fma(ci, omk, k), pm.fma(co, omk, k));
     }

@@ -25,7 +25,7 @@ Value* expm1OverXDouble(MathEmitter& dm, Value* y) {
 }
 
 ShapeParams shapeParams(LaneEmitter& lane, int p0, int p1) {
-    const ModelUse& use = lane.material.ndf;
+    const ModelUse& use = lane.material.singleLobe().ndf;
     MathEmitter& dm = lane.doubleMath();
     ShapeParams s;
     s.n.isotropic = true;

@@ -150,7 +150,7 @@ public:
     }
 
     NdfParams params(LaneEmitter& lane) const override {
-        return lane.roundedAlphaParams(lane.material.ndf, kAlphaX, kAlphaY);
+        return lane.roundedAlphaParams(lane.material.singleLobe().ndf, kAlphaX, kAlphaY);
     }
 
     // From u = geo.slopeH, h up to scale: e is a ratio of squares of u's

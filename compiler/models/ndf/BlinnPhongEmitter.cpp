@@ -248,7 +248,7 @@ public:
 
     NdfParams params(LaneEmitter& lane) const override {
         NdfParams n;
-        n.own[kOwnExponent] = lane.scalarParam(lane.material.ndf, kExponent, false);
+        n.own[kOwnExponent] = lane.scalarParam(lane.material.singleLobe().ndf, kExponent, false);
         return n;
     }
 

@@ -52,7 +52,7 @@ public:
     // The normalization's log once per kernel for a constant p, per lane
     // otherwise.
     NdfParams params(LaneEmitter& lane) const override {
-        const ModelUse& use = lane.material.ndf;
+        const ModelUse& use = lane.material.singleLobe().ndf;
         NdfParams n = lane.roundedAlphaParams(use, kAlphaX, kAlphaY, {kP});
         MathEmitter& pm = lane.preciseMath();
         const Expr& arg = *use.args[kP];

@@ -54,7 +54,7 @@ public:
     }
 
     NdfParams params(LaneEmitter& lane) const override {
-        const ModelUse& use = lane.material.ndf;
+        const ModelUse& use = lane.material.singleLobe().ndf;
         NdfParams n = lane.alphaParams(use, kAlpha, kAlpha, true);
         const Expr& arg = *use.args[kAlpha];
         if (isConstantExpr(arg)) {
@@ -174,7 +174,7 @@ std::vector<TermEmitterEntry> facetEmitters_ndf_GaussianEmitter() {
     // (params()), and the Lambda table under a Smith masking.
     auto tables = [](const CheckedMaterial& material) -> std::vector<EmbeddedTable> {
         std::vector<EmbeddedTable> out = lambdaTableEmbedding(material);
-        if (isConstantExpr(*material.ndf.args[kAlpha])) return out;
+        if (isConstantExpr(*material.singleLobe().ndf.args[kAlpha])) return out;
         const std::vector<double>& q = gaussianNormTable().q;
         out.push_back({"facet_gaussian_norm_table", q.data(), q.size() * sizeof(double)});
         return out;

@@ -27,7 +27,7 @@ public:
     }
 
     NdfParams params(LaneEmitter& lane) const override {
-        return lane.roundedAlphaParams(lane.material.ndf, kAlphaX, kAlphaY);
+        return lane.roundedAlphaParams(lane.material.singleLobe().ndf, kAlphaX, kAlphaY);
     }
 
     // D(h) in the precise type; even the float value is carried on in it,

@@ -20,7 +20,7 @@ public:
     }
 
     NdfParams params(LaneEmitter& lane) const override {
-        return lane.roundedAlphaParams(lane.material.ndf, kAlpha, kAlpha, {kGamma});  // own[kOwnGamma]
+        return lane.roundedAlphaParams(lane.material.singleLobe().ndf, kAlpha, kAlpha, {kGamma});  // own[kOwnGamma]
     }
 
     // D = c / t^gamma, c = phi(L) / (pi phi((1 - gamma) L)), L = ln a^2,

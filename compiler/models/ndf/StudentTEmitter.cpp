@@ -30,7 +30,7 @@ public:
     }
 
     NdfParams params(LaneEmitter& lane) const override {
-        return lane.roundedAlphaParams(lane.material.ndf, kAlphaX, kAlphaY, {kGamma});  // own[kOwnGamma]
+        return lane.roundedAlphaParams(lane.material.singleLobe().ndf, kAlphaX, kAlphaY, {kGamma});  // own[kOwnGamma]
     }
 
     // D = exp(-gamma log(1 + x) - 2 log mz^2) / (pi ax ay), x = s / ((gamma
@@ -203,8 +203,8 @@ Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfPar
 }
 
 std::vector<EmbeddedTable> lambdaTableEmbedding(const CheckedMaterial& material) {
-    if (!material.masking.model || !material.masking.model->smith) return {};
-    const NdfEntry& ndf = ndfEntry(*material.ndf.model);
+    if (!material.singleLobe().masking.model || !material.singleLobe().masking.model->smith) return {};
+    const NdfEntry& ndf = ndfEntry(*material.singleLobe().ndf.model);
     std::shared_ptr<const LambdaTable> t = lambdaTable(ndf, tabulatedLambdaShape(material));
     return {{"facet_lambda_" + t->name(), t->z.data(), t->z.size() * sizeof(double)}};  // kept by lambdaTable()
 }

@@ -19,7 +19,7 @@ public:
     }
 
     NdfParams params(LaneEmitter& lane) const override {
-        return lane.roundedAlphaParams(lane.material.ndf, kAlphaX, kAlphaY);
+        return lane.roundedAlphaParams(lane.material.singleLobe().ndf, kAlphaX, kAlphaY);
     }
 
     // exp(-tan^2-weighted slope) / (4 pi ax ay sqrt(ci co)), precise type.

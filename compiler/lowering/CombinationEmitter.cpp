@@ -1,0 +1,190 @@
+// CombinationEmitter: the lane body of a combination of lobes (see
+// CombinationEmitter.h).
+#include "CombinationEmitter.h"
+
+#include "Diagnostics.h"
+#include "LaneEmitter.h"
+#include "LayerAlbedo.h"
+
+#include <cmath>
+#include <optional>
+
+namespace facet {
+
+
+namespace {
+
+class CombinationBody {
+public:
+    CombinationBody(const CheckedMaterial& material, const LoweringPlan& plan, const LoweringOptions& options,
+                    bool scalar, llvm::IRBuilder<>& b, llvm::Type* laneType, llvm::Module& module,
+                    const std::string& tablePrefix)
+        : material_(material), plan_(plan), options_(options), scalar_(scalar), b_(b), laneType_(laneType),
+          module_(module), tablePrefix_(tablePrefix) {}
+
+    CombinationLanes emit(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
+                          const std::vector<llvm::Value*>& slots) {
+        // Every lobe by the one-lobe emitter; each checks the directions and
+        // the inputs its models read, and gives 0 for its invalid lanes.
+        llvm::Value* invalid = nullptr;
+        for (size_t l = 0; l < plan_.lobes.size(); ++l) {
+            const LobeLowering& lobe = *plan_.lobes[l];
+            const EnergyTable* table = l < options_.lobeEnergyTables.size() ? options_.lobeEnergyTables[l] : nullptr;
+            internal_assert(!lobe.plan.compensatesEnergy || table) << "lobe " << l << " without its energy table";
+            const BodyPlan& body = scalar_ ? lobe.plan.scalarBody : lobe.plan.batchBody;
+            internal_assert(!body.guarded()) << "a combination's lobe with a guarded body";
+            LaneEmitter lanes(lobe.material, lobe.plan, body, table, b_, laneType_, module_);
+            LaneEmitter::Result r = lanes.emit(wi, wo, slots);
+            lobeValues_.push_back(r.rgb);
+            invalid = invalid ? b_.CreateOr(invalid, r.invalid) : r.invalid;
+        }
+        // The weights, in an emitter of lobe 0's body whose plan reads what
+        // the whole combination reads (its inputs are checked there too).
+        weightPlan_ = plan_.lobes[0]->plan;
+        weightPlan_.reads = plan_.reads;
+        const BodyPlan& body0 = scalar_ ? weightPlan_.scalarBody : weightPlan_.batchBody;
+        weights_.emplace(plan_.lobes[0]->material, weightPlan_, body0, nullptr, b_, laneType_, module_);
+        weights_->lowerExpressions(slots);
+        wiZ_ = unitZ(wi), woZ_ = unitZ(wo);
+
+        MathEmitter& fm = weights_->floatMath();
+        std::array<llvm::Value*, 3> fd = node(int(material_.bsdf.size()) - 1), f;
+        for (int ch = 0; ch < 3; ++ch) f[ch] = fm.convert(fd[ch], fm.type());
+        invalid = b_.CreateOr(invalid, weights_->invalidLanes());
+        // Sums of finite float values can still overflow.
+        invalid = b_.CreateOr(invalid, fm.anyNanInfOrNegative({f[0], f[1], f[2]}));
+        for (llvm::Value*& x : f) x = fm.select(invalid, fm.c(0.0), x);
+        return {f, invalid};
+    }
+
+private:
+    using Rgb = std::array<llvm::Value*, 3>;
+
+    // The combination in double: a mix's (1 - w) and a layer's 1 - W + W S
+    // would lose the accuracy of a weight near 1 in float.
+    Rgb node(int index) {
+        const BsdfNode& n = material_.bsdf.at(size_t(index));
+        MathEmitter& dm = weights_->doubleMath();
+        switch (n.kind) {
+            case BsdfKind::Lobe: {
+                const Rgb& f = lobeValues_.at(size_t(n.lobe));
+                return channels([&](int ch) { return dm.convert(f[ch], dm.type()); });
+            }
+            case BsdfKind::Scale: {
+                Rgb x = node(n.a);
+                LVal w = weights_->clampedExpression(*n.weight, 0, INFINITY);
+                // A zero weight gives 0 even where the lobe is large (no 0 * Inf).
+                return channels([&](int ch) {
+                    return dm.select(dm.eq(w.c[ch], dm.c(0.0)), dm.c(0.0), dm.mul(w.c[ch], x[ch]));
+                });
+            }
+            case BsdfKind::Sum: {
+                Rgb x = node(n.a), y = node(n.b);
+                return channels([&](int ch) { return dm.add(x[ch], y[ch]); });
+            }
+            case BsdfKind::Mix: {
+                Rgb x = node(n.a), y = node(n.b);
+                LVal w = weights_->clampedExpression(*n.weight, 0, 1);
+                return channels(
+                    [&](int ch) { return dm.fma(w.c[ch], y[ch], dm.mul(dm.sub(dm.c(1.0), w.c[ch]), x[ch])); });
+            }
+            case BsdfKind::Layer: return layer(index, n);
+        }
+        internal_error << "unknown combination node";
+    }
+
+    template <typename F>
+    static Rgb channels(F f) {
+        return {f(0), f(1), f(2)};
+    }
+
+    // W f_top + (1 - W + W g(mu_i) g(mu_o)) f_base (LayerAlbedo.h). Below
+    // the horizon both lobes are 0, and so is f; the table is read at the
+    // clamped cosine there, harmlessly.
+    Rgb layer(int index, const BsdfNode& n) {
+        MathEmitter& dm = weights_->doubleMath();
+        Rgb top = node(n.a), base = node(n.b);
+        LVal w = n.weight ? weights_->clampedExpression(*n.weight, 0, 1) : LVal::scalar(dm.c(1.0));
+        const MuTable* g = plan_.layerG.at(size_t(index)).get();
+        internal_assert(g) << "layer node " << index << " without its table";
+        // Gray: one channel of lookups.
+        bool gray = true;
+        for (const auto& node : g->v) gray = gray && node[0] == node[1] && node[1] == node[2];
+        std::vector<double> data;
+        for (int ch = 0; ch < (gray ? 1 : 3); ++ch)
+            for (const auto& node : g->v) data.push_back(node[ch]);
+        llvm::GlobalVariable* table = weights_->doubleTable(data, tablePrefix_ + ".layer" + std::to_string(index));
+        std::array<llvm::Value*, 3> gi = lookUp(table, wiZ_, gray), go = lookUp(table, woZ_, gray);
+        return channels([&](int ch) {
+            llvm::Value* scale = dm.fma(w.c[ch], dm.sub(dm.mul(gi[ch], go[ch]), dm.c(1.0)), dm.c(1.0));
+            llvm::Value* coat = dm.select(dm.eq(w.c[ch], dm.c(0.0)), dm.c(0.0), dm.mul(w.c[ch], top[ch]));
+            return dm.fma(scale, base[ch], coat);
+        });
+    }
+
+    // n.w of the unit w, in double (the tables are read at the cosines of
+    // the renormalized directions, as the reference reads them).
+    llvm::Value* unitZ(const std::array<llvm::Value*, 3>& w) {
+        MathEmitter& dm = weights_->doubleMath();
+        llvm::Value *x = dm.convert(w[0], dm.type()), *y = dm.convert(w[1], dm.type()), *z = dm.convert(w[2], dm.type());
+        llvm::Value* len2 = dm.fma(x, x, dm.fma(y, y, dm.mul(z, z)));
+        return dm.div(z, dm.sqrt(len2));
+    }
+
+    // g at the cosine z (double lanes) per channel, in double: linear in
+    // x = log(1 + mu (e^6 - 1)) / 6 over the 65 nodes, mu clamped to [1e-4, 1].
+    std::array<llvm::Value*, 3> lookUp(llvm::GlobalVariable* table, llvm::Value* z, bool gray) {
+        MathEmitter& dm = weights_->doubleMath();
+        const int nodes = MuTable::kNodes;
+        llvm::Value* mu = dm.minnum(dm.maxnum(z, dm.c(MuTable::kMuMin)), dm.c(1.0));
+        llvm::Value* x = dm.mul(dm.log1p(dm.mul(mu, dm.c(std::expm1(6.0)))), dm.c(1.0 / 6));
+        llvm::Value* t = dm.mul(x, dm.c(nodes - 1.0));
+        llvm::Value* j = dm.minnum(weights_->intrinsic(llvm::Intrinsic::floor, t), dm.c(nodes - 2.0));
+        llvm::Value* s = dm.sub(t, j);
+        llvm::Type* i32 = b_.getInt32Ty();
+        llvm::Type* idxTy = dm.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, dm.width()) : i32;
+        llvm::Value* idx = b_.CreateFPToSI(j, idxTy);
+        auto at = [&](int offset) -> llvm::Value* {
+            llvm::Value* ptr = b_.CreateGEP(b_.getDoubleTy(), table, b_.CreateAdd(idx, llvm::ConstantInt::get(idxTy, offset)));
+            if (dm.width() == 1) return b_.CreateLoad(b_.getDoubleTy(), ptr);
+            return b_.CreateMaskedGather(dm.type(), ptr, llvm::Align(8));
+        };
+        std::array<llvm::Value*, 3> out{};
+        for (int ch = 0; ch < 3; ++ch) {
+            if (gray && ch > 0) {
+                out[ch] = out[0];
+                continue;
+            }
+            llvm::Value *a = at(ch * nodes), *c = at(ch * nodes + 1);
+            out[ch] = dm.fma(s, dm.sub(c, a), a);
+        }
+        return out;
+    }
+
+    const CheckedMaterial& material_;
+    const LoweringPlan& plan_;
+    const LoweringOptions& options_;
+    bool scalar_;
+    llvm::IRBuilder<>& b_;
+    llvm::Type* laneType_;
+    llvm::Module& module_;
+    std::string tablePrefix_;
+    std::vector<Rgb> lobeValues_;
+    LoweringPlan weightPlan_;
+    std::optional<LaneEmitter> weights_;
+    llvm::Value *wiZ_ = nullptr, *woZ_ = nullptr;
+};
+
+}  // namespace
+
+CombinationLanes emitCombination(const CheckedMaterial& material, const LoweringPlan& plan,
+                                 const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                 llvm::Type* laneType, llvm::Module& module, const std::array<llvm::Value*, 3>& wi,
+                                 const std::array<llvm::Value*, 3>& wo, const std::vector<llvm::Value*>& slots,
+                                 const std::string& tablePrefix) {
+    internal_assert(plan.combines()) << "emitCombination of a one-lobe plan";
+    return CombinationBody(material, plan, options, scalar, builder, laneType, module, tablePrefix)
+        .emit(wi, wo, slots);
+}
+
+}  // namespace facet
