@@ -42,7 +42,7 @@ void Kernel::ensureSampler() const {
             LoweringOptions lowering = samplerLowering_;
             lowering.emitEval = false;
             lowering.emitSampling = true;
-            if (plannedSpecularSampling(material_) == SpecularSampling::None) return;
+            if (!hasCompiledSampler(material_)) return;
             std::optional<CachedKernel> cached =
                 lookUpCaches(*memoryCache_, *diskCache_, samplerKey_, samplerCachePath_, samplerCache_, origin);
             if (!cached) {

@@ -45,7 +45,7 @@ public:
         const BodyPlan& body0 = scalar_ ? weightPlan_.scalarBody : weightPlan_.batchBody;
         weights_.emplace(plan_.lobes[0]->material, weightPlan_, body0, nullptr, b_, laneType_, module_);
         weights_->lowerExpressions(slots);
-        wiZ_ = unitZ(wi), woZ_ = unitZ(wo);
+        wiZ_ = unitCosine(*weights_, wi), woZ_ = unitCosine(*weights_, wo);
 
         MathEmitter& fm = weights_->floatMath();
         std::array<llvm::Value*, 3> fd = node(int(material_.bsdf.size()) - 1), f;
@@ -107,58 +107,13 @@ private:
         LVal w = n.weight ? weights_->clampedExpression(*n.weight, 0, 1) : LVal::scalar(dm.c(1.0));
         const MuTable* g = plan_.layerG.at(size_t(index)).get();
         internal_assert(g) << "layer node " << index << " without its table";
-        // Gray: one channel of lookups.
-        bool gray = true;
-        for (const auto& node : g->v) gray = gray && node[0] == node[1] && node[1] == node[2];
-        std::vector<double> data;
-        for (int ch = 0; ch < (gray ? 1 : 3); ++ch)
-            for (const auto& node : g->v) data.push_back(node[ch]);
-        llvm::GlobalVariable* table = weights_->doubleTable(data, tablePrefix_ + ".layer" + std::to_string(index));
-        std::array<llvm::Value*, 3> gi = lookUp(table, wiZ_, gray), go = lookUp(table, woZ_, gray);
+        std::array<llvm::Value*, 3> gi = lookUpMuTable(*weights_, *g, tablePrefix_ + ".layer" + std::to_string(index), wiZ_),
+                                    go = lookUpMuTable(*weights_, *g, tablePrefix_ + ".layer" + std::to_string(index), woZ_);
         return channels([&](int ch) {
             llvm::Value* scale = dm.fma(w.c[ch], dm.sub(dm.mul(gi[ch], go[ch]), dm.c(1.0)), dm.c(1.0));
             llvm::Value* coat = dm.select(dm.eq(w.c[ch], dm.c(0.0)), dm.c(0.0), dm.mul(w.c[ch], top[ch]));
             return dm.fma(scale, base[ch], coat);
         });
-    }
-
-    // n.w of the unit w, in double (the tables are read at the cosines of
-    // the renormalized directions, as the reference reads them).
-    llvm::Value* unitZ(const std::array<llvm::Value*, 3>& w) {
-        MathEmitter& dm = weights_->doubleMath();
-        llvm::Value *x = dm.convert(w[0], dm.type()), *y = dm.convert(w[1], dm.type()), *z = dm.convert(w[2], dm.type());
-        llvm::Value* len2 = dm.fma(x, x, dm.fma(y, y, dm.mul(z, z)));
-        return dm.div(z, dm.sqrt(len2));
-    }
-
-    // g at the cosine z (double lanes) per channel, in double: linear in
-    // x = log(1 + mu (e^6 - 1)) / 6 over the 65 nodes, mu clamped to [1e-4, 1].
-    std::array<llvm::Value*, 3> lookUp(llvm::GlobalVariable* table, llvm::Value* z, bool gray) {
-        MathEmitter& dm = weights_->doubleMath();
-        const int nodes = MuTable::kNodes;
-        llvm::Value* mu = dm.minnum(dm.maxnum(z, dm.c(MuTable::kMuMin)), dm.c(1.0));
-        llvm::Value* x = dm.mul(dm.log1p(dm.mul(mu, dm.c(std::expm1(6.0)))), dm.c(1.0 / 6));
-        llvm::Value* t = dm.mul(x, dm.c(nodes - 1.0));
-        llvm::Value* j = dm.minnum(weights_->intrinsic(llvm::Intrinsic::floor, t), dm.c(nodes - 2.0));
-        llvm::Value* s = dm.sub(t, j);
-        llvm::Type* i32 = b_.getInt32Ty();
-        llvm::Type* idxTy = dm.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, dm.width()) : i32;
-        llvm::Value* idx = b_.CreateFPToSI(j, idxTy);
-        auto at = [&](int offset) -> llvm::Value* {
-            llvm::Value* ptr = b_.CreateGEP(b_.getDoubleTy(), table, b_.CreateAdd(idx, llvm::ConstantInt::get(idxTy, offset)));
-            if (dm.width() == 1) return b_.CreateLoad(b_.getDoubleTy(), ptr);
-            return b_.CreateMaskedGather(dm.type(), ptr, llvm::Align(8));
-        };
-        std::array<llvm::Value*, 3> out{};
-        for (int ch = 0; ch < 3; ++ch) {
-            if (gray && ch > 0) {
-                out[ch] = out[0];
-                continue;
-            }
-            llvm::Value *a = at(ch * nodes), *c = at(ch * nodes + 1);
-            out[ch] = dm.fma(s, dm.sub(c, a), a);
-        }
-        return out;
     }
 
     const CheckedMaterial& material_;
@@ -176,6 +131,50 @@ private:
 };
 
 }  // namespace
+
+llvm::Value* unitCosine(LaneEmitter& lanes, const std::array<llvm::Value*, 3>& w) {
+    MathEmitter& dm = lanes.doubleMath();
+    llvm::Value *x = dm.convert(w[0], dm.type()), *y = dm.convert(w[1], dm.type()), *z = dm.convert(w[2], dm.type());
+    llvm::Value* len2 = dm.fma(x, x, dm.fma(y, y, dm.mul(z, z)));
+    return dm.div(z, dm.sqrt(len2));
+}
+
+std::array<llvm::Value*, 3> lookUpMuTable(LaneEmitter& lanes, const MuTable& table, const std::string& name,
+                                          llvm::Value* mu) {
+    MathEmitter& dm = lanes.doubleMath();
+    llvm::IRBuilder<>& b = lanes.builder;
+    const int nodes = MuTable::kNodes;
+    // Gray: one channel of lookups.
+    bool gray = true;
+    for (const auto& node : table.v) gray = gray && node[0] == node[1] && node[1] == node[2];
+    std::vector<double> data;
+    for (int ch = 0; ch < (gray ? 1 : 3); ++ch)
+        for (const auto& node : table.v) data.push_back(node[ch]);
+    llvm::GlobalVariable* gv = lanes.doubleTable(data, name);
+    llvm::Value* m = dm.minnum(dm.maxnum(mu, dm.c(MuTable::kMuMin)), dm.c(1.0));
+    llvm::Value* x = dm.mul(dm.log1p(dm.mul(m, dm.c(std::expm1(6.0)))), dm.c(1.0 / 6));
+    llvm::Value* t = dm.mul(x, dm.c(nodes - 1.0));
+    llvm::Value* j = dm.minnum(lanes.intrinsic(llvm::Intrinsic::floor, t), dm.c(nodes - 2.0));
+    llvm::Value* s = dm.sub(t, j);
+    llvm::Type* i32 = b.getInt32Ty();
+    llvm::Type* idxTy = dm.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, dm.width()) : i32;
+    llvm::Value* idx = b.CreateFPToSI(j, idxTy);
+    auto at = [&](int offset) -> llvm::Value* {
+        llvm::Value* ptr = b.CreateGEP(b.getDoubleTy(), gv, b.CreateAdd(idx, llvm::ConstantInt::get(idxTy, offset)));
+        if (dm.width() == 1) return b.CreateLoad(b.getDoubleTy(), ptr);
+        return b.CreateMaskedGather(dm.type(), ptr, llvm::Align(8));
+    };
+    std::array<llvm::Value*, 3> out{};
+    for (int ch = 0; ch < 3; ++ch) {
+        if (gray && ch > 0) {
+            out[ch] = out[0];
+            continue;
+        }
+        llvm::Value *a = at(ch * nodes), *c = at(ch * nodes + 1);
+        out[ch] = dm.fma(s, dm.sub(c, a), a);
+    }
+    return out;
+}
 
 CombinationLanes emitCombination(const CheckedMaterial& material, const LoweringPlan& plan,
                                  const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,

@@ -9,6 +9,7 @@
 // demand, per resolved parameter set).
 #pragma once
 
+#include "LayerAlbedo.h"
 #include "Lowering.h"
 
 #include <llvm/IR/IRBuilder.h>
@@ -33,5 +34,40 @@ CombinationLanes emitCombination(const CheckedMaterial& material, const Lowering
                                  llvm::Type* laneType, llvm::Module& module, const std::array<llvm::Value*, 3>& wi,
                                  const std::array<llvm::Value*, 3>& wo, const std::vector<llvm::Value*>& slots,
                                  const std::string& tablePrefix);
+
+class LaneEmitter;
+
+// n.w of the unit w (float lanes), in double.
+llvm::Value* unitCosine(LaneEmitter& lanes, const std::array<llvm::Value*, 3>& w);
+// A MuTable (LayerAlbedo.h) embedded as the double table `name` (one channel
+// when gray), read at the cosine mu (double lanes) as the reference reads
+// it: linear in x = log(1 + mu (e^6 - 1)) / 6, mu clamped to [1e-4, 1].
+std::array<llvm::Value*, 3> lookUpMuTable(LaneEmitter& lanes, const MuTable& table, const std::string& name,
+                                          llvm::Value* mu);
+
+// The combination's mixture sampler (CombinationSampling.cpp; SPEC 10): one
+// lobe per lane drawn with probabilities from the lobes' albedo estimates
+// (LoweringPlan::nodeAlbedo) and the weights the tree gives them, its
+// one-lobe sampler, pdf = the whole mixture's density, weight = f cos / pdf.
+struct CombinationSampleLanes {
+    std::array<llvm::Value*, 3> wi;
+    llvm::Value* pdf;
+    std::array<llvm::Value*, 3> weight;
+    llvm::Value* invalid;
+};
+CombinationSampleLanes emitCombinationSample(const CheckedMaterial& material, const LoweringPlan& plan,
+                                             const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                             llvm::Type* laneType, llvm::Module& module,
+                                             const std::array<llvm::Value*, 3>& wo, const std::array<llvm::Value*, 3>& u,
+                                             const std::vector<llvm::Value*>& slots, const std::string& tablePrefix);
+struct CombinationPdfLanes {
+    llvm::Value* pdf;
+    llvm::Value* invalid;
+};
+CombinationPdfLanes emitCombinationPdf(const CheckedMaterial& material, const LoweringPlan& plan,
+                                       const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                       llvm::Type* laneType, llvm::Module& module,
+                                       const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
+                                       const std::vector<llvm::Value*>& slots, const std::string& tablePrefix);
 
 }  // namespace facet

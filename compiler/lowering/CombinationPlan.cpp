@@ -37,17 +37,24 @@ LoweringPlan planCombination(const CheckedMaterial& material, const MathVariant&
     plan.batchBodies = BatchBodies::Plain;
     plan.scalarBody = plan.lobes[0]->plan.scalarBody;
     plan.batchBody = plan.lobes[0]->plan.batchBody;
-    // The combination's sampler is the reference's mixture (runtime), for now.
+    // The mixture sampler (CombinationSampling.cpp), in each lobe's plain body.
+    plan.sampling.compiled = hasCompiledSampler(material);
     plan.sampling.body = plan.sampling.batchBody = plan.scalarBody;
 
     plan.layerG.resize(material.bsdf.size());
-    if (!hasLayer(material)) return plan;
-    // The tables depend on constant parameters only: any slot values
-    // resolve them alike, the defaults included.
+    plan.nodeAlbedo.resize(material.bsdf.size());
+    // The layers' tables depend on constant parameters only: any slot
+    // values resolve them alike, the defaults included. The sampler's
+    // estimates are taken at the defaults.
     Interpreter<double> interp(material, lobeEnergyTables);
     ResolvedBsdf<double> resolved = interp.resolveAll(nullptr);
-    for (size_t i = 0; i < material.bsdf.size(); ++i)
-        if (material.bsdf[i].kind == BsdfKind::Layer) plan.layerG[i] = layerG(material, resolved, int(i));
+    for (size_t i = 0; i < material.bsdf.size(); ++i) {
+        const BsdfNode& n = material.bsdf[i];
+        if (n.kind == BsdfKind::Layer) plan.layerG[i] = layerG(material, resolved, int(i));
+        if (!plan.sampling.compiled || !resolved.valid) continue;
+        if (n.kind == BsdfKind::Lobe) plan.nodeAlbedo[i] = albedoTable(material, resolved, int(i));
+        if (n.kind == BsdfKind::Layer) plan.nodeAlbedo[i] = albedoTable(material, resolved, n.a);
+    }
     return plan;
 }
 
@@ -66,7 +73,7 @@ void printCombinationPlan(std::ostringstream& os, const CheckedMaterial& materia
            << " nodes, g(mu=1) = " << g->v.back()[0] << " " << g->v.back()[1] << " " << g->v.back()[2]
            << ", g(mu=0) = " << g->v.front()[0] << " " << g->v.front()[1] << " " << g->v.front()[2] << "\n";
     }
-    os << "sampling: reference mixture (no compiled sampler)\n";
+    os << "sampling: " << (plan.sampling.compiled ? "compiled mixture over the lobes" : "reference mixture (a lobe has no compiled sampler)") << "\n";
     for (size_t l = 0; l < plan.lobes.size(); ++l) {
         os << "\nlobe " << material.lobes[l].name << ":\n";
         std::istringstream lobeText(printPlan(plan.lobes[l]->material, plan.lobes[l]->plan));

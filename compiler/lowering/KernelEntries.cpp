@@ -245,6 +245,26 @@ LaneBody combinationBody(const KernelContext& k, llvm::Module& module, bool scal
     };
 }
 
+LaneBody combinationSampleBody(const KernelContext& k, llvm::Module& module, bool scalar) {
+    return [&k, &module, scalar](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
+                                 const std::vector<llvm::Value*>& slots) {
+        CombinationSampleLanes c = emitCombinationSample(k.material, k.plan, k.options, scalar, b, laneTy, module,
+                                                         {in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots,
+                                                         k.symbolPrefix);
+        return LaneOutputs{{c.wi[0], c.wi[1], c.wi[2], c.pdf, c.weight[0], c.weight[1], c.weight[2]}, c.invalid};
+    };
+}
+
+LaneBody combinationPdfBody(const KernelContext& k, llvm::Module& module, bool scalar) {
+    return [&k, &module, scalar](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
+                                 const std::vector<llvm::Value*>& slots) {
+        CombinationPdfLanes c = emitCombinationPdf(k.material, k.plan, k.options, scalar, b, laneTy, module,
+                                                   {in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots,
+                                                   k.symbolPrefix);
+        return LaneOutputs{{c.pdf}, c.invalid};
+    };
+}
+
 BodyLanes evalBody(LaneEmitter& lanes, const std::vector<llvm::Value*>& in, const std::vector<llvm::Value*>& slots) {
     LaneEmitter::Result r = lanes.emit({in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots);
     return {{r.rgb.begin(), r.rgb.end()}, r.invalid, r.untrusted};
@@ -495,7 +515,7 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
     out.plan = plan;
     const KernelContext k{material, out.plan, options, symbolPrefix};
     out.module = std::make_unique<llvm::Module>(symbolPrefix, context);
-    const bool sampling = options.emitSampling && plan.sampling.specular != SpecularSampling::None;
+    const bool sampling = options.emitSampling && plan.sampling.compiled;
     if (options.emitScalar) {
         if (options.emitEval) {
             out.scalarSymbol = symbolPrefix + "_scalar_status";
@@ -505,10 +525,13 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
             out.sampleScalarSymbol = symbolPrefix + "_sample_scalar";
             out.pdfScalarSymbol = symbolPrefix + "_pdf_scalar";
             const BodyPlan& body = out.plan.sampling.body;
+            const bool mixture = plan.combines();
             emitScalarFunction(k, *out.module, out.sampleScalarSymbol, kSampleShape, body,
-                               bodies(k, *out.module, body, nullptr, sampleBody));
+                               mixture ? combinationSampleBody(k, *out.module, true)
+                                       : bodies(k, *out.module, body, nullptr, sampleBody));
             emitScalarFunction(k, *out.module, out.pdfScalarSymbol, kPdfShape, body,
-                               bodies(k, *out.module, body, nullptr, pdfBody));
+                               mixture ? combinationPdfBody(k, *out.module, true)
+                                       : bodies(k, *out.module, body, nullptr, pdfBody));
         }
     }
     if (options.emitBatch) {
@@ -521,10 +544,13 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
             out.pdfBatchSymbol = symbolPrefix + "_pdf_batch";
             const SamplingPlan& sp = out.plan.sampling;
             const bool floatFirst = sp.batchBodies == BatchBodies::FloatFirst;
+            const bool mixture = plan.combines();
             emitBatchFunction(k, *out.module, out.sampleBatchSymbol, kSampleShape, false, sp.batchBody,
-                              bodies(k, *out.module, sp.batchBody, floatFirst ? &sp.body : nullptr, sampleBody));
+                              mixture ? combinationSampleBody(k, *out.module, false)
+                                      : bodies(k, *out.module, sp.batchBody, floatFirst ? &sp.body : nullptr, sampleBody));
             emitBatchFunction(k, *out.module, out.pdfBatchSymbol, kPdfShape, false, sp.body,
-                              bodies(k, *out.module, sp.body, nullptr, pdfBody));
+                              mixture ? combinationPdfBody(k, *out.module, false)
+                                      : bodies(k, *out.module, sp.body, nullptr, pdfBody));
         }
     }
     // Every constant table in the module is part of the cache key: the

@@ -244,6 +244,14 @@ SpecularSampling plannedSpecularSampling(const CheckedMaterial& material) {
     return visible ? SpecularSampling::VisibleNormals : SpecularSampling::NdfNormals;
 }
 
+bool hasCompiledSampler(const CheckedMaterial& material) {
+    if (!material.combinesLobes()) return plannedSpecularSampling(material) != SpecularSampling::None;
+    for (size_t l = 0; l < material.lobes.size(); ++l)
+        if (material.lobes[l].hasNdf() && plannedSpecularSampling(lobeView(material, int(l))) == SpecularSampling::None)
+            return false;
+    return true;
+}
+
 bool LoweringPlan::slotRead(int slot) const { return reads.slots.at(size_t(slot)); }
 
 LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs,
@@ -320,6 +328,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     }
 
     plan.sampling.specular = plannedSpecularSampling(material);
+    plan.sampling.compiled = plan.sampling.specular != SpecularSampling::None;
     plan.sampling.cosineLobe = em.diffuse.present() || material.singleLobe().compensatesEnergy();
     plan.sampling.compensationAlbedo = material.singleLobe().compensatesEnergy();
     plan.sampling.body = plan.scalarBody;
@@ -403,10 +412,20 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
 }
 
 bool walterLambdaApplies(const CheckedMaterial& material) {
+    if (material.combinesLobes() || !material.singleLobe().hasNdf()) {  // any of its lobes
+        for (size_t l = 0; material.combinesLobes() && l < material.lobes.size(); ++l)
+            if (material.lobes[l].hasNdf() && walterLambdaApplies(lobeView(material, int(l)))) return true;
+        return false;
+    }
     return termEmitters(material).ndf.traits.beckmannProfileLambda && material.singleLobe().masking.model->smith;
 }
 
 bool schlickDielectricApplies(const CheckedMaterial& material) {
+    if (material.combinesLobes()) {  // any of its lobes
+        for (size_t l = 0; l < material.lobes.size(); ++l)
+            if (schlickDielectricApplies(lobeView(material, int(l)))) return true;
+        return false;
+    }
     return termEmitters(material).fresnel.substitutableBySchlick();
 }
 

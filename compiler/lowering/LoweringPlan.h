@@ -171,6 +171,9 @@ enum class SpecularSampling {
 const char* specularSamplingName(SpecularSampling s);
 
 struct SamplingPlan {
+    // Whether the kernel has compiled sample and pdf entry points (one lobe:
+    // the NDF has a sampler in IR; a combination: every lobe that has an NDF).
+    bool compiled = false;
     SpecularSampling specular = SpecularSampling::None;
     bool cosineLobe = false;          // diffuse base or Kulla-Conty compensation
     bool compensationAlbedo = false;  // the lobe probability reads the Kulla-Conty table
@@ -241,6 +244,11 @@ struct LoweringPlan {
     // Per node of CheckedMaterial::bsdf: a layer's g table (LayerAlbedo.h),
     // baked from the constant parameters it depends on; null elsewhere.
     std::vector<std::shared_ptr<const MuTable>> layerG;
+    // The mixture sampler's estimates: per node of CheckedMaterial::bsdf, a
+    // lobe's directional albedo (at the default inputs: the probabilities
+    // are estimates, the pdf is the mixture's whatever they are) and a
+    // layer's top albedo E_top; null elsewhere.
+    std::vector<std::shared_ptr<const MuTable>> nodeAlbedo;
     bool combines() const { return !lobes.empty(); }
 };
 
@@ -264,6 +272,9 @@ void printCombinationPlan(std::ostringstream& os, const CheckedMaterial& materia
 // How the specular lobe of `material` is sampled in IR (None: the kernel
 // has no compiled sampler), as planLowering() plans it for every variant.
 SpecularSampling plannedSpecularSampling(const CheckedMaterial& material);
+// Whether planLowering() plans compiled sample and pdf entry points
+// (SamplingPlan::compiled).
+bool hasCompiledSampler(const CheckedMaterial& material);
 
 // The plan as text, one decision per line (`facet ir --plan`).
 std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan);

@@ -329,11 +329,20 @@ std::shared_ptr<const MuTable> albedoTable(const CheckedMaterial& m, const Resol
 
 std::shared_ptr<const MuTable> layerG(const CheckedMaterial& m, const ResolvedBsdf<double>& r, int layer) {
     // g depends on the top and the base, not on the layer's weight.
+    // Nor on what bakeG ignores of the base: all of a Lambertian base (the
+    // closed form), a microfacet base's Fresnel terms (it is whitened), so
+    // that lanes differing only there (a per-lane base color) share a bake.
     const BsdfNode& n = m.bsdf.at(size_t(layer));
     std::string key = "G";
     putSubtree(key, m, r, n.a);
     key.push_back('/');
-    putSubtree(key, m, r, n.b);
+    if (lambertian(m, r, n.b)) {
+        key.push_back('L');
+    } else {
+        ResolvedBsdf<double> white = r;
+        whiten(m, n.b, white);
+        putSubtree(key, m, white, n.b);
+    }
     return cached(key, [&] { return bakeG(m, r, layer); });
 }
 

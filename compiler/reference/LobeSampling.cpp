@@ -3,7 +3,9 @@
 //
 // Each leaf is picked with a probability proportional to its share of the
 // directional albedo at wo (channel mean): the leaf's own albedo (the
-// reference's quadrature, LayerAlbedo.h) times the weight the tree gives it
+// reference's quadrature, LayerAlbedo.h) at the material's default inputs
+// (an estimate: one table per leaf, not one per lane's parameters; the
+// compiled sampler makes the same choice) times the weight the tree gives it
 // (scale weights multiply; mix gives (1 - T) and T; a layer gives its top W
 // and its base 1 - W + W u(n.wo), u = 1 - E_top, which makes the base's
 // estimate (1 - W + W u) A_b exact by the balance of the design note). The
@@ -31,37 +33,43 @@ constexpr double kMinShare = 0.01;
 
 using Rgb = std::array<double, 3>;
 
-void collect(const CheckedMaterial& m, const ResolvedBsdf<double>& r, int node, const Rgb& factor, double muO,
-             std::vector<LeafChoice>& out) {
+// The albedo of the sub-expression `node` at muO from the estimates' tables
+// (1 where the estimates are not valid: the factors alone).
+Rgb estimate(const CheckedMaterial& m, const ResolvedBsdf<double>& est, int node, double muO) {
+    return est.valid ? albedoTable(m, est, node)->at(muO) : Rgb{1, 1, 1};
+}
+
+void collect(const CheckedMaterial& m, const ResolvedBsdf<double>& r, const ResolvedBsdf<double>& est, int node,
+             const Rgb& factor, double muO, std::vector<LeafChoice>& out) {
     const BsdfNode& n = m.bsdf.at(size_t(node));
     const Rgb& w = r.weights.at(size_t(node));
     auto times = [&](const Rgb& a) { return Rgb{factor[0] * a[0], factor[1] * a[1], factor[2] * a[2]}; };
     switch (n.kind) {
         case BsdfKind::Lobe: {
             if (factor[0] <= 0 && factor[1] <= 0 && factor[2] <= 0) return;
-            Rgb a = albedoTable(m, r, node)->at(muO);
+            Rgb a = estimate(m, est, node, muO);
             double share = 0;
             for (int ch = 0; ch < 3; ++ch) share += factor[ch] * std::max(a[ch], 0.0) / 3;
             out.push_back({n.lobe, std::isfinite(share) ? share : 0.0});
             return;
         }
-        case BsdfKind::Scale: collect(m, r, n.a, times(w), muO, out); return;
+        case BsdfKind::Scale: collect(m, r, est, n.a, times(w), muO, out); return;
         case BsdfKind::Sum:
-            collect(m, r, n.a, factor, muO, out);
-            collect(m, r, n.b, factor, muO, out);
+            collect(m, r, est, n.a, factor, muO, out);
+            collect(m, r, est, n.b, factor, muO, out);
             return;
         case BsdfKind::Mix:
-            collect(m, r, n.a, times({1 - w[0], 1 - w[1], 1 - w[2]}), muO, out);
-            collect(m, r, n.b, times(w), muO, out);
+            collect(m, r, est, n.a, times({1 - w[0], 1 - w[1], 1 - w[2]}), muO, out);
+            collect(m, r, est, n.b, times(w), muO, out);
             return;
         case BsdfKind::Layer: {
-            collect(m, r, n.a, times(w), muO, out);
+            collect(m, r, est, n.a, times(w), muO, out);
             Rgb base = {1 - w[0], 1 - w[1], 1 - w[2]};
             if (w[0] > 0 || w[1] > 0 || w[2] > 0) {
-                Rgb eTop = albedoTable(m, r, n.a)->at(muO);
+                Rgb eTop = estimate(m, est, n.a, muO);
                 for (int ch = 0; ch < 3; ++ch) base[ch] += w[ch] * std::max(0.0, 1 - eTop[ch]);
             }
-            collect(m, r, n.b, times(base), muO, out);
+            collect(m, r, est, n.b, times(base), muO, out);
             return;
         }
     }
@@ -76,9 +84,10 @@ Real leafPdf(const ResolvedMaterial<Real>& lobe, const Vec3<Real>& wi, const Vec
 
 }  // namespace
 
-std::vector<LeafChoice> leafProbabilities(const CheckedMaterial& m, const ResolvedBsdf<double>& r, double muO) {
+std::vector<LeafChoice> leafProbabilities(const CheckedMaterial& m, const ResolvedBsdf<double>& r,
+                                          const ResolvedBsdf<double>& estimates, double muO) {
     std::vector<LeafChoice> out;
-    collect(m, r, int(m.bsdf.size()) - 1, {1, 1, 1}, muO, out);
+    collect(m, r, estimates, int(m.bsdf.size()) - 1, {1, 1, 1}, muO, out);
     double top = 0, sum = 0;
     for (const LeafChoice& c : out) top = std::max(top, c.p);
     for (LeafChoice& c : out) sum += (c.p = top > 0 ? std::max(c.p, kMinShare * top) : 1.0);
@@ -102,7 +111,8 @@ SampleResult<Real> sampleCombination(const Interpreter<Real>& in, const Resolved
     SampleResult<Real> out;
     if (!(wo.z > 0)) return out;
     const CheckedMaterial& m = in.material();
-    std::vector<LeafChoice> leaves = leafProbabilities(m, bsdfToDouble(r), double(wo.z));
+    std::vector<LeafChoice> leaves =
+        leafProbabilities(m, bsdfToDouble(r), bsdfToDouble(in.resolveAll(nullptr)), double(wo.z));
     if (leaves.empty()) return out;
     // Pick the leaf with u0 and rescale u0 to [0, 1) within its interval
     // (the one-lobe sampler reads u0 again to choose its own technique).

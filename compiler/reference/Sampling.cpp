@@ -213,7 +213,7 @@ PdfResult<Real> Interpreter<Real>::pdf(const Real wi[3], const Real wo[3], const
         ResolvedBsdf<Real> all = resolveAll(slots);
         if (!all.valid) return invalid;
         if (o.z > 0)
-            out.pdf = combinationPdf(material_, all, leafProbabilities(material_, bsdfToDouble(all), double(o.z)), i, o);
+            out.pdf = combinationPdf(material_, all, leafProbabilities(material_, bsdfToDouble(all), bsdfToDouble(resolveAll(nullptr)), double(o.z)), i, o);
     } else {
         ResolvedMaterial<Real> r = resolve(slots);
         if (!r.valid) return invalid;

@@ -118,8 +118,11 @@ struct LeafChoice {
 };
 // The leaves of m's combination in tree order with their probabilities at
 // n.wo = muO (summing to 1): each proportional to its estimated share of
-// the albedo, at least 1 % of the largest share.
-std::vector<LeafChoice> leafProbabilities(const CheckedMaterial& m, const ResolvedBsdf<double>& r, double muO);
+// the albedo, at least 1 % of the largest share. The weights are r's, the
+// albedos those of `estimates` (the sampler passes the material at its
+// default inputs).
+std::vector<LeafChoice> leafProbabilities(const CheckedMaterial& m, const ResolvedBsdf<double>& r,
+                                          const ResolvedBsdf<double>& estimates, double muO);
 // The mixture density sum_k p_k pdf_k(wi) of those leaves.
 template <typename Real>
 Real combinationPdf(const CheckedMaterial& m, const ResolvedBsdf<Real>& r, const std::vector<LeafChoice>& leaves,

@@ -105,7 +105,7 @@ std::array<double, 2> estimate(const CheckedMaterial& m, double mu, int n, bool 
     std::mt19937_64 rng(12345);
     std::uniform_real_distribution<double> uni(0, 1);
     ResolvedBsdf<double> r = interp.resolveAll(nullptr);
-    std::vector<LeafChoice> leaves = leafProbabilities(m, r, mu);
+    std::vector<LeafChoice> leaves = leafProbabilities(m, r, r, mu);
     double sum = 0, sum2 = 0;
     for (int i = 0; i < n; ++i) {
         double u[3] = {(i + uni(rng)) / n, uni(rng), uni(rng)};  // u0 stratified
