@@ -2,6 +2,7 @@
 #include "BenchRunner.h"
 
 #include "Checker.h"
+#include "CompileStack.h"
 #include "ReferenceComparison.h"
 #include "Jit.h"
 #include "Kernel.h"
@@ -56,17 +57,14 @@ std::string ErrorStats::Worst::str() const {
 
 namespace {
 
-// Every time here is the CPU time of this thread (CLOCK_THREAD_CPUTIME_ID):
-// on a shared machine a wall clock also counts the time slices other
-// processes take, which turns long runs into noise. On an idle machine the
-// two agree (the compile and the kernels run on this thread only).
+// Every time here is the CPU time of this thread (CLOCK_THREAD_CPUTIME_ID),
+// with the compile-stack threads it waits for counted as its own
+// (callerCpuNanos, CompileStack.h: LLVM's stages run there): on a shared
+// machine a wall clock also counts the time slices other processes take,
+// which turns long runs into noise. On an idle machine the two agree.
 struct Clock {
     using time_point = double;  // ns
-    static double now() {
-        timespec ts;
-        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-        return double(ts.tv_sec) * 1e9 + double(ts.tv_nsec);
-    }
+    static double now() { return callerCpuNanos(); }
 };
 
 double millisSince(Clock::time_point start) { return (Clock::now() - start) * 1e-6; }
@@ -196,8 +194,9 @@ const char* const kBackends[] = {"interp", "scalar", "simd"};
 // Chunk sizes of the lane-by-lane timings (about 0.2-0.5 ms each).
 constexpr size_t kScalarChunk = 4096, kInterpChunk = 256;
 
-// A private, empty cache directory for the disk-hit measurement; removed
-// when the bench of a material ends.
+// A private, empty kernel cache directory for the bench of one file (its
+// compiles write there, and the disk-hit measurement reads it); removed when
+// that bench ends.
 struct TempDir {
     std::string path;
     TempDir() {
@@ -216,16 +215,23 @@ struct TempDir {
 
 class MaterialRunner {
 public:
-    MaterialRunner(const CheckedMaterial& m, const BenchSettings& settings, Compiler& compiler, std::FILE* progress)
-        : m_(m), settings_(settings), compiler_(compiler), progress_(progress) {}
+    // `compiler` keeps its kernels in `kernelDir` (empty: memory only).
+    MaterialRunner(const CheckedMaterial& m, const BenchSettings& settings, Compiler& compiler,
+                   std::string kernelDir, std::FILE* progress)
+        : m_(m), settings_(settings), compiler_(compiler), kernelDir_(std::move(kernelDir)), progress_(progress) {}
 
     void run(MaterialBench& mb) {
         regular_ = regularSample(m_, settings_.lanes, settings_.seed);
         hard_ = hardCaseSample(m_);
         mb.regularLanes = regular_.size();
         mb.hardLanes = hard_.size();
-        refRegular_ = evaluateReference(m_, regular_);
-        refHard_ = evaluateReference(m_, hard_);
+        // The reference with the energy tables the kernels are built with
+        // (the compiler's table cache), not a build of its own per sample.
+        CompileOptions interp;
+        interp.backend = Backend::Interp;
+        std::unique_ptr<Kernel> tables = compileNoWait(compiler_, interp);
+        refRegular_ = evaluateReference(m_, regular_, tables->lobeEnergyTables());
+        refHard_ = evaluateReference(m_, hard_, tables->lobeEnergyTables());
 
         std::optional<ErrorStats> interpRegular, interpHard;
         for (const char* backend : kBackends)
@@ -304,16 +310,21 @@ private:
         if (!error.empty()) throw std::runtime_error("bench: " + error);
         bool interp = options.backend == Backend::Interp;
 
-        // Cold compiles: cache=off, after one untimed compile (one-time LLVM
-        // set-up is not the material's compile time).
+        // One untimed compile first (one-time LLVM set-up is not the
+        // material's compile time); it fills the memory cache and the kernel
+        // directory for the hits below, and its kernel is the one timed and
+        // measured.
+        CompileOptions mem = options, disk = options;
+        mem.cache = CompileOptions::Cache::Memory;
+        disk.cache = CompileOptions::Cache::On;
+        std::unique_ptr<Kernel> kernel = compile(compiler_, kernelDir_.empty() ? mem : disk);
+        // Cold compiles: cache=off.
         options.cache = CompileOptions::Cache::Off;
         std::vector<std::unique_ptr<Kernel>> keep;
-        keep.push_back(compile(compiler_, options));
         std::vector<double> cold, tierUp;
         for (int i = 0; i < settings_.compileRuns; ++i)
             cold.push_back(timedCompile(compiler_, options, keep, nullptr, &tierUp));
         row.coldMs = median(cold);
-        std::unique_ptr<Kernel> kernel = std::move(keep.back());
         keep.clear();
         if (!interp) {
             row.tierUpMs = median(tierUp);
@@ -330,30 +341,19 @@ private:
         row.width = kernel->width();
 
         if (!interp) {
-            // Memory-cache hits: the first compile fills the cache.
-            CompileOptions mem = options;
-            mem.cache = CompileOptions::Cache::Memory;
-            keep.push_back(compile(compiler_, mem));
+            // Memory-cache hits of the entry the first compile made.
             std::vector<double> hits;
             for (int i = 0; i < settings_.compileRuns; ++i)
                 hits.push_back(timedCompile(compiler_, mem, keep, "memory cache"));
             row.memoryHitMs = median(hits);
             keep.clear();
-            // Disk-cache hits: a fresh Compiler (empty memory cache) on a
-            // directory that one earlier compile filled.
-            TempDir dir;
-            if (!dir.path.empty()) {
-                CompileOptions disk = options;
-                disk.cache = CompileOptions::Cache::On;
-                {
-                    Compiler writer;
-                    writer.setCacheDir(dir.path);
-                    compile(writer, disk);
-                }
+            // Disk-cache hits: a fresh Compiler (empty memory cache) on the
+            // directory the first compile filled.
+            if (!kernelDir_.empty()) {
                 std::vector<double> diskHits;
                 for (int i = 0; i < settings_.diskRuns; ++i) {
                     Compiler reader;
-                    reader.setCacheDir(dir.path);
+                    reader.setCacheDir(kernelDir_);
                     std::vector<std::unique_ptr<Kernel>> k;
                     diskHits.push_back(timedCompile(reader, disk, k, "disk cache"));
                 }
@@ -579,6 +579,7 @@ private:
     const CheckedMaterial& m_;
     const BenchSettings& settings_;
     Compiler& compiler_;
+    const std::string kernelDir_;
     std::FILE* progress_;
     LaneBatch regular_, hard_;
     ReferenceValues refRegular_, refHard_;
@@ -739,7 +740,9 @@ bool benchFile(const std::string& path, const BenchSettings& settings, BenchRepo
     if (diags.hasErrors()) return false;
     double parseCheckMs = millisSince(start);
     std::string source = readText(path);
+    TempDir kernelDir;
     Compiler compiler;
+    if (!kernelDir.path.empty()) compiler.setCacheDir(kernelDir.path);
     for (const CheckedMaterial& m : program.materials) {
         if (std::string why = compiledBackendsRefuse(m); !why.empty()) {
             DiagnosticEngine refused;
@@ -765,7 +768,7 @@ bool benchFile(const std::string& path, const BenchSettings& settings, BenchRepo
         mb.energyTable = benchEnergyTable(m, std::max(3, settings.diskRuns));
         mb.lambdaTable = benchLambdaTable(m, std::max(3, settings.diskRuns));
         if (progress) std::fprintf(progress, "bench %s (%s)\n", m.name.c_str(), path.c_str());
-        MaterialRunner(m, settings, compiler, progress).run(mb);
+        MaterialRunner(m, settings, compiler, kernelDir.path, progress).run(mb);
         report.materials.push_back(std::move(mb));
     }
     return true;

@@ -10,9 +10,10 @@
 //   lanes) timed in chunks of a few thousand / hundred lanes;
 // - compile time: cold (cache=off), memory-cache hit, disk-cache hit (a
 //   fresh Compiler on a private cache directory), medians.
-// All times are CPU time of the benchmarking thread, so that other
-// processes on a shared machine do not inflate them (on an idle machine
-// CPU and wall time agree: compiles and kernels run on this thread);
+// All times are CPU time of the benchmarking thread, with the compile-stack
+// threads it waits for counted as its own (callerCpuNanos, CompileStack.h),
+// so that other processes on a shared machine do not inflate them (on an
+// idle machine CPU and wall time agree);
 // - error against the double interpreter on the regular and on the
 //   hard-case sample: max and p99.9 relative error, max ULP, and the input
 //   with the largest error.

@@ -21,6 +21,7 @@
 // work (see BenchRunner.cpp); speed and dumps use the optimized code.
 #include "BenchSamples.h"
 #include "Checker.h"
+#include "CompileStack.h"
 #include "Jit.h"
 #include "Kernel.h"
 #include "Pipeline.h"
@@ -40,11 +41,8 @@ using namespace facet;
 
 namespace {
 
-double nowNs() {
-    timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) * 1e9 + double(ts.tv_nsec);
-}
+// This thread's CPU time, LLVM's stages on the compile stack included.
+double nowNs() { return callerCpuNanos(); }
 
 double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());

@@ -1,6 +1,7 @@
 // CompileStack: running LLVM's stages on a large stack (CompileStack.h).
 #include "CompileStack.h"
 
+#include <ctime>
 #include <exception>
 #include <pthread.h>
 
@@ -11,7 +12,17 @@ namespace {
 struct StackJob {
     const std::function<void()>* work;
     std::exception_ptr error;
+    double cpuNanos = 0;  // the job thread's CPU time, read as it ends
 };
+
+double threadCpuNanos() {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) * 1e9 + double(ts.tv_nsec);
+}
+
+// CPU time of the compile-stack threads this thread has waited for.
+thread_local double tWaitedForNanos = 0;
 
 void* runJob(void* arg) {
     auto* job = static_cast<StackJob*>(arg);
@@ -20,6 +31,7 @@ void* runJob(void* arg) {
     } catch (...) {
         job->error = std::current_exception();
     }
+    job->cpuNanos = threadCpuNanos();
     return nullptr;
 }
 
@@ -41,7 +53,10 @@ void onCompileStack(const std::function<void()>& work) {
         return;
     }
     ::pthread_join(thread, nullptr);
+    tWaitedForNanos += job.cpuNanos;
     if (job.error) std::rethrow_exception(job.error);
 }
+
+double callerCpuNanos() { return threadCpuNanos() + tWaitedForNanos; }
 
 }  // namespace facet

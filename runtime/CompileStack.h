@@ -9,6 +9,11 @@
 // of stack (address space; only the pages touched are committed), and the
 // calling thread waits for it. Thread creation costs tens of microseconds
 // against milliseconds of compile.
+//
+// Because the work moves to another thread, a per-thread CPU clock of the
+// caller would not see it (the caller sleeps in pthread_join): callerCpuNanos
+// counts the compile-stack threads a thread waited for as its own time, and
+// every compile time Facet reports (the tier-up time, `facet bench`) reads it.
 #pragma once
 
 #include <cstddef>
@@ -22,5 +27,9 @@ constexpr size_t kCompileStackBytes = size_t(64) << 20;
 // for it; an exception `work` throws is rethrown here. If no such thread can
 // be created, runs `work` on the calling thread.
 void onCompileStack(const std::function<void()>& work);
+
+// CPU time of the calling thread in nanoseconds (CLOCK_THREAD_CPUTIME_ID)
+// plus the CPU time of every compile-stack thread it has waited for.
+double callerCpuNanos();
 
 }  // namespace facet

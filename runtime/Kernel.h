@@ -128,6 +128,9 @@ public:
     // energy = kulla_conty: the E table the kernel was built with (null
     // otherwise); a reference Interpreter of material() should use it too.
     const std::shared_ptr<const EnergyTable>& energyTable() const { return energyTable_; }
+    // The same per lobe (CheckedMaterial::lobes order; null for a lobe without
+    // energy compensation): what a reference of a combination should use.
+    const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables() const { return lobeEnergyTables_; }
     double measuredError() const { return measuredError_; }
     double compileMillis() const { return compileMillis_; }
     // The code the entry points run now: "quick" or "optimized" (tiered

@@ -33,10 +33,10 @@ double floatUlpDistance(float a, float b) {
 
 bool beyondFloatRange(double want) { return std::fabs(want) > double(FLT_MAX); }
 
-ReferenceValues evaluateReference(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> energyTable,
-                                  size_t n, const float* const wi[3], const float* const wo[3],
-                                  const float* const* slots) {
-    Interpreter<double> interp(material, std::move(energyTable));
+ReferenceValues evaluateReference(const CheckedMaterial& material,
+                                  const std::vector<std::shared_ptr<const EnergyTable>>& lobeTables, size_t n,
+                                  const float* const wi[3], const float* const wo[3], const float* const* slots) {
+    Interpreter<double> interp(material, lobeTables);
     ReferenceValues ref;
     for (auto& c : ref.rgb) c.resize(n);
     ref.valid.resize(n);
@@ -52,8 +52,8 @@ ReferenceValues evaluateReference(const CheckedMaterial& material, std::shared_p
 }
 
 ReferenceValues evaluateReference(const CheckedMaterial& material, const LaneBatch& batch,
-                                  std::shared_ptr<const EnergyTable> energyTable) {
-    return evaluateReference(material, std::move(energyTable), batch.size(), batch.wi(), batch.wo(), batch.inputs());
+                                  const std::vector<std::shared_ptr<const EnergyTable>>& lobeTables) {
+    return evaluateReference(material, lobeTables, batch.size(), batch.wi(), batch.wo(), batch.inputs());
 }
 
 size_t ReferenceComparison::countWithin(double bound) const {

@@ -49,16 +49,18 @@ struct ReferenceValues {
     size_t size() const { return valid.size(); }
 };
 
-// Evaluates Interpreter<double> of `material` (with `energyTable` when the
-// material's energy term needs one; nullptr builds it as the interpreter does)
-// on n lanes: wi[3], wo[3] and one column per slot of `material`, in its slot
-// order (nullptr when it has none).
-ReferenceValues evaluateReference(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> energyTable,
-                                  size_t n, const float* const wi[3], const float* const wo[3],
-                                  const float* const* slots);
+// Evaluates Interpreter<double> of `material` on n lanes: wi[3], wo[3] and
+// one column per slot of `material`, in its slot order (nullptr when it has
+// none). `lobeTables` holds, per lobe, the Kulla-Conty E table of a lobe that
+// compensates energy (Kernel::lobeEnergyTables: the tables a kernel was built
+// with); a missing or null entry is built here, as the interpreter does,
+// which for a combination of several compensated lobes costs seconds.
+ReferenceValues evaluateReference(const CheckedMaterial& material,
+                                  const std::vector<std::shared_ptr<const EnergyTable>>& lobeTables, size_t n,
+                                  const float* const wi[3], const float* const wo[3], const float* const* slots);
 // The same for a batch whose slot columns are those of `material`.
 ReferenceValues evaluateReference(const CheckedMaterial& material, const LaneBatch& batch,
-                                  std::shared_ptr<const EnergyTable> energyTable = nullptr);
+                                  const std::vector<std::shared_ptr<const EnergyTable>>& lobeTables = {});
 
 // The largest error of one comparison and where it happened.
 struct WorstLane {

@@ -75,7 +75,7 @@ double measureKernelError(const Kernel& kernel, const CheckedMaterial& material,
     float* rgb[3] = {out[0].data(), out[1].data(), out[2].data()};
     kernel.evalBatch(int64_t(samples), batch.wi(), batch.wo(), batch.inputs(), rgb);
     const float* const written[3] = {rgb[0], rgb[1], rgb[2]};
-    return compareWithReference(evaluateReference(material, batch, kernel.energyTable()), written).maxRel;
+    return compareWithReference(evaluateReference(material, batch, kernel.lobeEnergyTables()), written).maxRel;
 }
 
 CachedKernel Compiler::searchVariants(const CheckedMaterial& material, LoweringOptions lowering, double tolerance,

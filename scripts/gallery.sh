@@ -11,10 +11,11 @@ cd "$(dirname "$0")/.."
 out=${1:-docs/gallery}
 facet=build/bin/facet
 mkdir -p "$out"
-for m in materials/*.mat; do
-  name=$(basename "$m" .mat)
-  $facet render "$m" -o "$out/$name.png" --size 256 --samples 64 | grep -E "^rendered"
-done
+# The spheres two at a time (each render is one thread; the images do not
+# depend on what else runs).
+ls materials/*.mat | xargs -P 2 -I{} sh -c \
+  'set -e; f="$1"; n=$(basename "$f" .mat); "$2" render "$f" -o "$3/$n.png" --size 256 --samples 64 | grep -E "^rendered"' \
+  sh {} "$facet" "$out"
 $facet render --plot ndf --compare gtr:gamma=1,beckmann,blinn_phong,ggx,gtr:gamma=1.5,student_t:gamma=3,gaussian,epd:p=0.5,abc:c=1.5,sgd:p=1 \
   --alpha 0.3 -o "$out/ndf_compare.png"
 $facet render materials/plastic.mat --plot lobe -o "$out/lobe_plastic.png"

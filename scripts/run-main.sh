@@ -14,7 +14,7 @@
 #                                times longer
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bench_settings=(--runs 7 --lanes 16384 --compile-runs 2)
+bench_settings=(--runs 7 --lanes 16384 --compile-runs 1)
 case "${1:-}" in
     --full) bench_settings=() ;;
     "") ;;

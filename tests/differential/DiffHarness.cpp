@@ -129,7 +129,7 @@ void compare(const Kernel& kernel, const CheckedMaterial& reference, const LaneB
     // inputs are folded, on the kernel's remaining inputs.
     std::optional<ReferenceValues> own;
     std::optional<ReferenceValues>& slot = shared ? *shared : own;
-    if (!slot) slot = evaluateReference(kernel.material(), kernel.energyTable(), n, wi, wo, inputs.data());
+    if (!slot) slot = evaluateReference(kernel.material(), kernel.lobeEnergyTables(), n, wi, wo, inputs.data());
     const ReferenceValues& ref = *slot;
     const float* const written[3] = {rgb[0], rgb[1], rgb[2]};
     ReferenceComparison cmp = compareWithReference(ref, written);
