@@ -7,8 +7,9 @@
 # a lit sphere per material and the plots in build/gallery
 # (scripts/gallery.sh, the same command that made docs/gallery).
 #
-#   scripts/run-main.sh          a few minutes: 7 timed runs of 16384 lanes and
-#                                2 timed compiles of each kind a row
+#   scripts/run-main.sh          under 3 minutes after the build: 7 timed runs
+#                                of 16384 lanes and 1 timed compile of each kind
+#                                a row
 #   scripts/run-main.sh --full   the bench's own defaults (15 runs of 65536
 #                                lanes, 7 compiles): steadier figures, several
 #                                times longer
