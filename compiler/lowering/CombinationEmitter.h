@@ -23,14 +23,16 @@ namespace facet {
 struct CombinationLanes {
     std::array<llvm::Value*, 3> rgb;  // float lanes, 0 where invalid
     llvm::Value* invalid;
+    llvm::Value* untrusted;  // `guarded`: lanes to recompute in the plain bodies (includes invalid ones)
 };
 
 // f of the combination at (wi, wo) for lanes of type `laneType`, in each
-// lobe's scalar body (`scalar`) or batch body. Tables are named
+// lobe's plain body or (`guarded`) each lobe's batch body, which may be a
+// guarded body (LoweringPlan::batchBodies of the combination). Tables are named
 // `tablePrefix`.layerN (covered by the cache key through the material's
 // text and the codegen sources).
 CombinationLanes emitCombination(const CheckedMaterial& material, const LoweringPlan& plan,
-                                 const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                 const LoweringOptions& options, bool guarded, llvm::IRBuilder<>& builder,
                                  llvm::Type* laneType, llvm::Module& module, const std::array<llvm::Value*, 3>& wi,
                                  const std::array<llvm::Value*, 3>& wo, const std::vector<llvm::Value*>& slots,
                                  const std::string& tablePrefix);
@@ -56,7 +58,7 @@ struct CombinationSampleLanes {
     llvm::Value* invalid;
 };
 CombinationSampleLanes emitCombinationSample(const CheckedMaterial& material, const LoweringPlan& plan,
-                                             const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                             const LoweringOptions& options, llvm::IRBuilder<>& builder,
                                              llvm::Type* laneType, llvm::Module& module,
                                              const std::array<llvm::Value*, 3>& wo, const std::array<llvm::Value*, 3>& u,
                                              const std::vector<llvm::Value*>& slots, const std::string& tablePrefix);
@@ -65,7 +67,7 @@ struct CombinationPdfLanes {
     llvm::Value* invalid;
 };
 CombinationPdfLanes emitCombinationPdf(const CheckedMaterial& material, const LoweringPlan& plan,
-                                       const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                       const LoweringOptions& options, llvm::IRBuilder<>& builder,
                                        llvm::Type* laneType, llvm::Module& module,
                                        const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
                                        const std::vector<llvm::Value*>& slots, const std::string& tablePrefix);
