@@ -30,7 +30,7 @@ public:
         llvm::Value* untrusted = nullptr;
         for (size_t l = 0; l < plan_.lobes.size(); ++l) {
             const LobeLowering& lobe = *plan_.lobes[l];
-            const EnergyTable* table = l < options_.lobeEnergyTables.size() ? options_.lobeEnergyTables[l] : nullptr;
+            const EnergyTable* table = lobeEnergyTable(options_, l);
             internal_assert(!lobe.plan.compensatesEnergy || table) << "lobe " << l << " without its energy table";
             const BodyPlan& body = guarded_ ? lobe.plan.batchBody : lobe.plan.scalarBody;
             internal_assert(guarded_ || !body.guarded()) << "a plain combination body with a guarded lobe";
@@ -40,15 +40,8 @@ public:
             invalid = invalid ? b_.CreateOr(invalid, r.invalid) : r.invalid;
             untrusted = untrusted ? b_.CreateOr(untrusted, r.untrusted) : r.untrusted;
         }
-        // The weights, in an emitter of lobe 0's plain body whose plan reads
-        // what the whole combination reads (its inputs are checked there
-        // too); the expressions in double.
-        weightPlan_ = plan_.lobes[0]->plan;
-        weightPlan_.reads = plan_.reads;
-        weightBody_ = weightPlan_.scalarBody;
-        weightBody_.expressions = Precision::Double;
-        weights_.emplace(plan_.lobes[0]->material, weightPlan_, weightBody_, nullptr, b_, laneType_, module_);
-        weights_->lowerExpressions(slots);
+        expressions_.emplace(plan_, b_, laneType_, module_, slots);
+        weights_ = &expressions_->lanes();
         wiZ_ = unitCosine(*weights_, wi), woZ_ = unitCosine(*weights_, wo);
 
         MathEmitter& fm = weights_->floatMath();
@@ -131,13 +124,29 @@ private:
     llvm::Module& module_;
     std::string tablePrefix_;
     std::vector<Rgb> lobeValues_;
-    LoweringPlan weightPlan_;
-    BodyPlan weightBody_;
-    std::optional<LaneEmitter> weights_;
+    std::optional<CombinationExpressions> expressions_;
+    LaneEmitter* weights_ = nullptr;
     llvm::Value *wiZ_ = nullptr, *woZ_ = nullptr;
 };
 
 }  // namespace
+
+CombinationExpressions::CombinationExpressions(const LoweringPlan& combination, llvm::IRBuilder<>& builder,
+                                               llvm::Type* laneType, llvm::Module& module,
+                                               const std::vector<llvm::Value*>& slots)
+    : plan_(combination.lobes.at(0)->plan), body_(plan_.scalarBody) {
+    plan_.reads = combination.reads;
+    body_.expressions = Precision::Double;
+    lanes_ = std::make_unique<LaneEmitter>(combination.lobes[0]->material, plan_, body_, nullptr, builder, laneType,
+                                           module);
+    lanes_->lowerExpressions(slots);
+}
+
+CombinationExpressions::~CombinationExpressions() = default;
+
+const EnergyTable* lobeEnergyTable(const LoweringOptions& options, size_t lobe) {
+    return lobe < options.lobeEnergyTables.size() ? options.lobeEnergyTables[lobe] : nullptr;
+}
 
 llvm::Value* unitCosine(LaneEmitter& lanes, const std::array<llvm::Value*, 3>& w) {
     MathEmitter& dm = lanes.doubleMath();

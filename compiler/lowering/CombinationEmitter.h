@@ -15,6 +15,7 @@
 #include <llvm/IR/IRBuilder.h>
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,29 @@ CombinationLanes emitCombination(const CheckedMaterial& material, const Lowering
                                  const std::string& tablePrefix);
 
 class LaneEmitter;
+
+// The emitter of a combination's weights and table reads, shared by eval
+// and the sampler: a LaneEmitter of lobe 0's plain body whose plan reads
+// what the whole combination reads (the inputs are checked there too),
+// expressions in double, inputs and lets lowered. Not movable: the
+// LaneEmitter refers to the plan and body held here.
+class CombinationExpressions {
+public:
+    CombinationExpressions(const LoweringPlan& combination, llvm::IRBuilder<>& builder, llvm::Type* laneType,
+                           llvm::Module& module, const std::vector<llvm::Value*>& slots);
+    CombinationExpressions(const CombinationExpressions&) = delete;
+    CombinationExpressions& operator=(const CombinationExpressions&) = delete;
+    ~CombinationExpressions();
+    LaneEmitter& lanes() { return *lanes_; }
+
+private:
+    LoweringPlan plan_;
+    BodyPlan body_;
+    std::unique_ptr<LaneEmitter> lanes_;
+};
+
+// The Kulla-Conty table of lobe `lobe` (null without one).
+const EnergyTable* lobeEnergyTable(const LoweringOptions& options, size_t lobe);
 
 // n.w of the unit w (float lanes), in double.
 llvm::Value* unitCosine(LaneEmitter& lanes, const std::array<llvm::Value*, 3>& w);

@@ -126,21 +126,14 @@ private:
 
     const LobeLowering& lobe(const Leaf& leaf) const { return *plan_.lobes.at(size_t(leaf.lobe)); }
     const BodyPlan& body(const Leaf& leaf) const { return lobe(leaf).plan.sampling.body; }
-    const EnergyTable* energyTable(const Leaf& leaf) const {
-        return size_t(leaf.lobe) < options_.lobeEnergyTables.size() ? options_.lobeEnergyTables[size_t(leaf.lobe)]
-                                                                    : nullptr;
-    }
+    const EnergyTable* energyTable(const Leaf& leaf) const { return lobeEnergyTable(options_, size_t(leaf.lobe)); }
     llvm::Type* chosenType() { return weights_->invalidLanes()->getType(); }
     llvm::Value* allOnes() { return llvm::Constant::getAllOnesValue(chosenType()); }
 
     // The weights, n.wo, the leaves and their probabilities.
     void start(const Vec& wo, const std::vector<llvm::Value*>& slots) {
-        weightPlan_ = plan_.lobes[0]->plan;
-        weightPlan_.reads = plan_.reads;
-        weightBody_ = weightPlan_.scalarBody;  // plain, expressions in double
-        weightBody_.expressions = Precision::Double;
-        weights_.emplace(plan_.lobes[0]->material, weightPlan_, weightBody_, nullptr, b_, laneType_, module_);
-        weights_->lowerExpressions(slots);
+        expressions_.emplace(plan_, b_, laneType_, module_, slots);
+        weights_ = &expressions_->lanes();
         MathEmitter& dm = weights_->doubleMath();
         muO_ = unitCosine(*weights_, wo);
         above_ = dm.gt(muO_, dm.c(0.0));
@@ -259,9 +252,8 @@ private:
     llvm::Type* laneType_;
     llvm::Module& module_;
     std::string tablePrefix_;
-    LoweringPlan weightPlan_;
-    BodyPlan weightBody_;
-    std::optional<LaneEmitter> weights_;
+    std::optional<CombinationExpressions> expressions_;
+    LaneEmitter* weights_ = nullptr;
     llvm::Value *muO_ = nullptr, *above_ = nullptr, *total_ = nullptr;
     std::vector<Leaf> leaves_;
     std::vector<llvm::Value*> probability_;  // double, per leaf
