@@ -725,6 +725,37 @@ std::optional<LambdaTableBench> benchLambdaTable(const CheckedMaterial& m, int l
     return e;
 }
 
+static LobesAlone benchLobesAlone(const CheckedMaterial& m, const BenchSettings& settings, Compiler& compiler) {
+    const LaneBatch sample = regularSample(m, settings.lanes, settings.seed);
+    auto compile = [&](const CheckedMaterial& material) {
+        CompileOptions o;
+        std::string error = CompileOptions::parse("backend=simd;math=exact;cache=memory", o);
+        internal_assert(error.empty()) << error;
+        DiagnosticEngine diags;
+        std::unique_ptr<Kernel> k = compiler.compileMaterial(material, o, diags);
+        if (!k) throw std::runtime_error(diags.str());
+        k->waitOptimized();
+        return k;
+    };
+    std::vector<std::unique_ptr<Kernel>> kernels;
+    kernels.push_back(compile(m));
+    for (size_t l = 0; l < m.lobes.size(); ++l) kernels.push_back(compile(lobeView(m, int(l))));
+    // Interleaved: one run of each kernel in turn, so that a busy moment of
+    // the machine falls on all of them alike.
+    Output out(sample.size());
+    std::vector<std::vector<double>> t(kernels.size());
+    for (int run = 0; run < settings.warmup + settings.runs; ++run)
+        for (size_t k = 0; k < kernels.size(); ++k) {
+            auto start = Clock::now();
+            evalBatchRange(*kernels[k], sample, 0, sample.size(), out);
+            if (run >= settings.warmup) t[k].push_back(nanosSince(start) / double(sample.size()));
+        }
+    LobesAlone r;
+    r.combination = median(t[0]);
+    for (size_t l = 0; l < m.lobes.size(); ++l) r.lobes.push_back({m.lobes[l].name, median(t[l + 1])});
+    return r;
+}
+
 void describeHost(BenchReport& report) {
     Compiler compiler;
     report.cpu = compiler.jit().cpuName();
@@ -769,6 +800,7 @@ bool benchFile(const std::string& path, const BenchSettings& settings, BenchRepo
         mb.lambdaTable = benchLambdaTable(m, std::max(3, settings.diskRuns));
         if (progress) std::fprintf(progress, "bench %s (%s)\n", m.name.c_str(), path.c_str());
         MaterialRunner(m, settings, compiler, kernelDir.path, progress).run(mb);
+        if (m.combinesLobes()) mb.lobesAlone = benchLobesAlone(m, settings, compiler);
         report.materials.push_back(std::move(mb));
     }
     return true;

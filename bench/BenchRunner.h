@@ -161,6 +161,19 @@ struct BatchSizeRow {
     std::vector<double> nsPerEval;    // per kBatchSizes entry; NaN where not measured
 };
 
+// A combination of lobes (SPEC 10): its SIMD exact ns/eval against each
+// lobe's alone (the lobe as a material of its own, lobeView), timed on the
+// same sample in interleaved runs.
+struct LobesAlone {
+    std::vector<std::pair<std::string, double>> lobes;  // name, ns/eval
+    double combination = 0;                              // ns/eval
+    double sum() const {
+        double s = 0;
+        for (const auto& l : lobes) s += l.second;
+        return s;
+    }
+};
+
 struct MaterialBench {
     std::string file, material;
     std::string aotModel;  // "" when the file has no AOT twin
@@ -168,6 +181,7 @@ struct MaterialBench {
     double parseCheckMs = 0;
     std::optional<EnergyTableBench> energyTable;  // energy = kulla_conty only
     std::optional<LambdaTableBench> lambdaTable;  // a tabulated Smith Lambda only
+    std::optional<LobesAlone> lobesAlone;         // a combination of lobes only
     size_t regularLanes = 0, hardLanes = 0;
     std::vector<BenchRow> rows;
     std::vector<SamplerRow> samplerRows;  // empty with BenchSettings::sampling off

@@ -17,9 +17,9 @@ namespace {
 class CombinationBody {
 public:
     CombinationBody(const CheckedMaterial& material, const LoweringPlan& plan, const LoweringOptions& options,
-                    bool scalar, llvm::IRBuilder<>& b, llvm::Type* laneType, llvm::Module& module,
+                    bool guarded, llvm::IRBuilder<>& b, llvm::Type* laneType, llvm::Module& module,
                     const std::string& tablePrefix)
-        : material_(material), plan_(plan), options_(options), scalar_(scalar), b_(b), laneType_(laneType),
+        : material_(material), plan_(plan), options_(options), guarded_(guarded), b_(b), laneType_(laneType),
           module_(module), tablePrefix_(tablePrefix) {}
 
     CombinationLanes emit(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
@@ -27,24 +27,21 @@ public:
         // Every lobe by the one-lobe emitter; each checks the directions and
         // the inputs its models read, and gives 0 for its invalid lanes.
         llvm::Value* invalid = nullptr;
+        llvm::Value* untrusted = nullptr;
         for (size_t l = 0; l < plan_.lobes.size(); ++l) {
             const LobeLowering& lobe = *plan_.lobes[l];
-            const EnergyTable* table = l < options_.lobeEnergyTables.size() ? options_.lobeEnergyTables[l] : nullptr;
+            const EnergyTable* table = lobeEnergyTable(options_, l);
             internal_assert(!lobe.plan.compensatesEnergy || table) << "lobe " << l << " without its energy table";
-            const BodyPlan& body = scalar_ ? lobe.plan.scalarBody : lobe.plan.batchBody;
-            internal_assert(!body.guarded()) << "a combination's lobe with a guarded body";
+            const BodyPlan& body = guarded_ ? lobe.plan.batchBody : lobe.plan.scalarBody;
+            internal_assert(guarded_ || !body.guarded()) << "a plain combination body with a guarded lobe";
             LaneEmitter lanes(lobe.material, lobe.plan, body, table, b_, laneType_, module_);
             LaneEmitter::Result r = lanes.emit(wi, wo, slots);
             lobeValues_.push_back(r.rgb);
             invalid = invalid ? b_.CreateOr(invalid, r.invalid) : r.invalid;
+            untrusted = untrusted ? b_.CreateOr(untrusted, r.untrusted) : r.untrusted;
         }
-        // The weights, in an emitter of lobe 0's body whose plan reads what
-        // the whole combination reads (its inputs are checked there too).
-        weightPlan_ = plan_.lobes[0]->plan;
-        weightPlan_.reads = plan_.reads;
-        const BodyPlan& body0 = scalar_ ? weightPlan_.scalarBody : weightPlan_.batchBody;
-        weights_.emplace(plan_.lobes[0]->material, weightPlan_, body0, nullptr, b_, laneType_, module_);
-        weights_->lowerExpressions(slots);
+        expressions_.emplace(plan_, b_, laneType_, module_, slots);
+        weights_ = &expressions_->lanes();
         wiZ_ = unitCosine(*weights_, wi), woZ_ = unitCosine(*weights_, wo);
 
         MathEmitter& fm = weights_->floatMath();
@@ -54,7 +51,9 @@ public:
         // Sums of finite float values can still overflow.
         invalid = b_.CreateOr(invalid, fm.anyNanInfOrNegative({f[0], f[1], f[2]}));
         for (llvm::Value*& x : f) x = fm.select(invalid, fm.c(0.0), x);
-        return {f, invalid};
+        // A guarded body's invalid lanes are untrusted: the plain bodies
+        // decide their validity.
+        return {f, invalid, b_.CreateOr(untrusted, invalid)};
     }
 
 private:
@@ -119,18 +118,35 @@ private:
     const CheckedMaterial& material_;
     const LoweringPlan& plan_;
     const LoweringOptions& options_;
-    bool scalar_;
+    bool guarded_;
     llvm::IRBuilder<>& b_;
     llvm::Type* laneType_;
     llvm::Module& module_;
     std::string tablePrefix_;
     std::vector<Rgb> lobeValues_;
-    LoweringPlan weightPlan_;
-    std::optional<LaneEmitter> weights_;
+    std::optional<CombinationExpressions> expressions_;
+    LaneEmitter* weights_ = nullptr;
     llvm::Value *wiZ_ = nullptr, *woZ_ = nullptr;
 };
 
 }  // namespace
+
+CombinationExpressions::CombinationExpressions(const LoweringPlan& combination, llvm::IRBuilder<>& builder,
+                                               llvm::Type* laneType, llvm::Module& module,
+                                               const std::vector<llvm::Value*>& slots)
+    : plan_(combination.lobes.at(0)->plan), body_(plan_.scalarBody) {
+    plan_.reads = combination.reads;
+    body_.expressions = Precision::Double;
+    lanes_ = std::make_unique<LaneEmitter>(combination.lobes[0]->material, plan_, body_, nullptr, builder, laneType,
+                                           module);
+    lanes_->lowerExpressions(slots);
+}
+
+CombinationExpressions::~CombinationExpressions() = default;
+
+const EnergyTable* lobeEnergyTable(const LoweringOptions& options, size_t lobe) {
+    return lobe < options.lobeEnergyTables.size() ? options.lobeEnergyTables[lobe] : nullptr;
+}
 
 llvm::Value* unitCosine(LaneEmitter& lanes, const std::array<llvm::Value*, 3>& w) {
     MathEmitter& dm = lanes.doubleMath();
@@ -177,12 +193,12 @@ std::array<llvm::Value*, 3> lookUpMuTable(LaneEmitter& lanes, const MuTable& tab
 }
 
 CombinationLanes emitCombination(const CheckedMaterial& material, const LoweringPlan& plan,
-                                 const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                 const LoweringOptions& options, bool guarded, llvm::IRBuilder<>& builder,
                                  llvm::Type* laneType, llvm::Module& module, const std::array<llvm::Value*, 3>& wi,
                                  const std::array<llvm::Value*, 3>& wo, const std::vector<llvm::Value*>& slots,
                                  const std::string& tablePrefix) {
     internal_assert(plan.combines()) << "emitCombination of a one-lobe plan";
-    return CombinationBody(material, plan, options, scalar, builder, laneType, module, tablePrefix)
+    return CombinationBody(material, plan, options, guarded, builder, laneType, module, tablePrefix)
         .emit(wi, wo, slots);
 }
 

@@ -15,6 +15,7 @@
 #include <llvm/IR/IRBuilder.h>
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -23,19 +24,44 @@ namespace facet {
 struct CombinationLanes {
     std::array<llvm::Value*, 3> rgb;  // float lanes, 0 where invalid
     llvm::Value* invalid;
+    llvm::Value* untrusted;  // `guarded`: lanes to recompute in the plain bodies (includes invalid ones)
 };
 
 // f of the combination at (wi, wo) for lanes of type `laneType`, in each
-// lobe's scalar body (`scalar`) or batch body. Tables are named
+// lobe's plain body or (`guarded`) each lobe's batch body, which may be a
+// guarded body (LoweringPlan::batchBodies of the combination). Tables are named
 // `tablePrefix`.layerN (covered by the cache key through the material's
 // text and the codegen sources).
 CombinationLanes emitCombination(const CheckedMaterial& material, const LoweringPlan& plan,
-                                 const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                 const LoweringOptions& options, bool guarded, llvm::IRBuilder<>& builder,
                                  llvm::Type* laneType, llvm::Module& module, const std::array<llvm::Value*, 3>& wi,
                                  const std::array<llvm::Value*, 3>& wo, const std::vector<llvm::Value*>& slots,
                                  const std::string& tablePrefix);
 
 class LaneEmitter;
+
+// The emitter of a combination's weights and table reads, shared by eval
+// and the sampler: a LaneEmitter of lobe 0's plain body whose plan reads
+// what the whole combination reads (the inputs are checked there too),
+// expressions in double, inputs and lets lowered. Not movable: the
+// LaneEmitter refers to the plan and body held here.
+class CombinationExpressions {
+public:
+    CombinationExpressions(const LoweringPlan& combination, llvm::IRBuilder<>& builder, llvm::Type* laneType,
+                           llvm::Module& module, const std::vector<llvm::Value*>& slots);
+    CombinationExpressions(const CombinationExpressions&) = delete;
+    CombinationExpressions& operator=(const CombinationExpressions&) = delete;
+    ~CombinationExpressions();
+    LaneEmitter& lanes() { return *lanes_; }
+
+private:
+    LoweringPlan plan_;
+    BodyPlan body_;
+    std::unique_ptr<LaneEmitter> lanes_;
+};
+
+// The Kulla-Conty table of lobe `lobe` (null without one).
+const EnergyTable* lobeEnergyTable(const LoweringOptions& options, size_t lobe);
 
 // n.w of the unit w (float lanes), in double.
 llvm::Value* unitCosine(LaneEmitter& lanes, const std::array<llvm::Value*, 3>& w);
@@ -56,7 +82,7 @@ struct CombinationSampleLanes {
     llvm::Value* invalid;
 };
 CombinationSampleLanes emitCombinationSample(const CheckedMaterial& material, const LoweringPlan& plan,
-                                             const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                             const LoweringOptions& options, llvm::IRBuilder<>& builder,
                                              llvm::Type* laneType, llvm::Module& module,
                                              const std::array<llvm::Value*, 3>& wo, const std::array<llvm::Value*, 3>& u,
                                              const std::vector<llvm::Value*>& slots, const std::string& tablePrefix);
@@ -65,7 +91,7 @@ struct CombinationPdfLanes {
     llvm::Value* invalid;
 };
 CombinationPdfLanes emitCombinationPdf(const CheckedMaterial& material, const LoweringPlan& plan,
-                                       const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                       const LoweringOptions& options, llvm::IRBuilder<>& builder,
                                        llvm::Type* laneType, llvm::Module& module,
                                        const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
                                        const std::vector<llvm::Value*>& slots, const std::string& tablePrefix);

@@ -22,21 +22,23 @@ LoweringPlan planCombination(const CheckedMaterial& material, const MathVariant&
     plan.variant = variant;
     plan.trustInputs = trustInputs;
     plan.reads = material.readByModels();
-    // One plain body per lobe: a lane needs every lobe's value, so a
-    // guarded body would send a lane to the fallback when any lobe
-    // distrusts it, and the fallback would be the whole combination.
-    MathVariant lobeVariant = variant;
-    lobeVariant.floatFirst = false;
+    // Each lobe as its own kernel would plan it. The batch entry has two
+    // bodies when some lobe has a guarded batch body: first every lobe in
+    // its batch body, then, for the lanes any of them distrusts, the whole
+    // combination in the lobes' plain bodies (a lane needs every lobe).
+    bool guarded = false;
     for (size_t l = 0; l < material.lobes.size(); ++l) {
         auto lobe = std::make_shared<LobeLowering>();
         lobe->material = lobeView(material, int(l));
-        lobe->plan = planLowering(lobe->material, lobeVariant, trustInputs);
+        lobe->plan = planLowering(lobe->material, variant, trustInputs);
         plan.compensatesEnergy = plan.compensatesEnergy || lobe->plan.compensatesEnergy;
+        guarded = guarded || lobe->plan.batchBodies != BatchBodies::Plain;
         plan.lobes.push_back(std::move(lobe));
     }
-    plan.batchBodies = BatchBodies::Plain;
     plan.scalarBody = plan.lobes[0]->plan.scalarBody;
+    plan.batchBodies = !guarded ? BatchBodies::Plain : variant.precise ? BatchBodies::FloatFirst : BatchBodies::GuardedFast;
     plan.batchBody = plan.lobes[0]->plan.batchBody;
+    if (guarded) plan.fallbackBody = plan.scalarBody;
     // The mixture sampler (CombinationSampling.cpp), in each lobe's plain body.
     plan.sampling.compiled = hasCompiledSampler(material);
     plan.sampling.body = plan.sampling.batchBody = plan.scalarBody;
@@ -62,6 +64,9 @@ void printCombinationPlan(std::ostringstream& os, const CheckedMaterial& materia
     os << "material " << material.name << "\n";
     os << "combination: " << printBsdf(material, material.bsdfRoot()) << "\n";
     os << "variant: " << plan.variant.name() << "\n";
+    os << "batch-bodies: " << batchBodiesName(plan.batchBodies)
+       << (plan.fallbackBody ? " (each lobe's batch body, then the plain bodies for the lanes any distrusts)" : "")
+       << "\n";
     os << "trust-inputs: " << (plan.trustInputs ? "yes" : "no") << "\n";
     auto count = [](const std::vector<bool>& v) { return std::count(v.begin(), v.end(), true); };
     os << "reads: inputs " << count(plan.reads.inputs) << " of " << plan.reads.inputs.size() << ", lets "

@@ -22,9 +22,9 @@ constexpr double kMinShare = 0.01;
 
 class MixtureBody {
 public:
-    MixtureBody(const CheckedMaterial& material, const LoweringPlan& plan, const LoweringOptions& options, bool scalar,
+    MixtureBody(const CheckedMaterial& material, const LoweringPlan& plan, const LoweringOptions& options,
                 llvm::IRBuilder<>& b, llvm::Type* laneType, llvm::Module& module, const std::string& tablePrefix)
-        : material_(material), plan_(plan), options_(options), scalar_(scalar), b_(b), laneType_(laneType),
+        : material_(material), plan_(plan), options_(options), b_(b), laneType_(laneType),
           module_(module), tablePrefix_(tablePrefix) {}
 
     CombinationSampleLanes sample(const Vec& wo, const Vec& u, const std::vector<llvm::Value*>& slots) {
@@ -85,7 +85,7 @@ public:
         Vec wiEval = {fm.select(none, fm.c(0.0), wi[0]), fm.select(none, fm.c(0.0), wi[1]),
                       fm.select(none, fm.c(1.0), wi[2])};
         CombinationPdfLanes pdf = mixturePdf(wiEval, wo, slots);
-        CombinationLanes f = emitCombination(material_, plan_, options_, scalar_, b_, laneType_, module_, wiEval, wo,
+        CombinationLanes f = emitCombination(material_, plan_, options_, false, b_, laneType_, module_, wiEval, wo,
                                              slots, tablePrefix_);
         CombinationSampleLanes out;
         out.wi = wi;
@@ -126,20 +126,14 @@ private:
 
     const LobeLowering& lobe(const Leaf& leaf) const { return *plan_.lobes.at(size_t(leaf.lobe)); }
     const BodyPlan& body(const Leaf& leaf) const { return lobe(leaf).plan.sampling.body; }
-    const EnergyTable* energyTable(const Leaf& leaf) const {
-        return size_t(leaf.lobe) < options_.lobeEnergyTables.size() ? options_.lobeEnergyTables[size_t(leaf.lobe)]
-                                                                    : nullptr;
-    }
+    const EnergyTable* energyTable(const Leaf& leaf) const { return lobeEnergyTable(options_, size_t(leaf.lobe)); }
     llvm::Type* chosenType() { return weights_->invalidLanes()->getType(); }
     llvm::Value* allOnes() { return llvm::Constant::getAllOnesValue(chosenType()); }
 
     // The weights, n.wo, the leaves and their probabilities.
     void start(const Vec& wo, const std::vector<llvm::Value*>& slots) {
-        weightPlan_ = plan_.lobes[0]->plan;
-        weightPlan_.reads = plan_.reads;
-        const BodyPlan& body0 = scalar_ ? weightPlan_.scalarBody : weightPlan_.batchBody;
-        weights_.emplace(plan_.lobes[0]->material, weightPlan_, body0, nullptr, b_, laneType_, module_);
-        weights_->lowerExpressions(slots);
+        expressions_.emplace(plan_, b_, laneType_, module_, slots);
+        weights_ = &expressions_->lanes();
         MathEmitter& dm = weights_->doubleMath();
         muO_ = unitCosine(*weights_, wo);
         above_ = dm.gt(muO_, dm.c(0.0));
@@ -254,13 +248,12 @@ private:
     const CheckedMaterial& material_;
     const LoweringPlan& plan_;
     const LoweringOptions& options_;
-    bool scalar_;
     llvm::IRBuilder<>& b_;
     llvm::Type* laneType_;
     llvm::Module& module_;
     std::string tablePrefix_;
-    LoweringPlan weightPlan_;
-    std::optional<LaneEmitter> weights_;
+    std::optional<CombinationExpressions> expressions_;
+    LaneEmitter* weights_ = nullptr;
     llvm::Value *muO_ = nullptr, *above_ = nullptr, *total_ = nullptr;
     std::vector<Leaf> leaves_;
     std::vector<llvm::Value*> probability_;  // double, per leaf
@@ -269,19 +262,19 @@ private:
 }  // namespace
 
 CombinationSampleLanes emitCombinationSample(const CheckedMaterial& material, const LoweringPlan& plan,
-                                             const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                             const LoweringOptions& options, llvm::IRBuilder<>& builder,
                                              llvm::Type* laneType, llvm::Module& module, const Vec& wo, const Vec& u,
                                              const std::vector<llvm::Value*>& slots, const std::string& tablePrefix) {
     internal_assert(plan.combines() && plan.sampling.compiled) << "a combination sampler the plan did not plan";
-    return MixtureBody(material, plan, options, scalar, builder, laneType, module, tablePrefix).sample(wo, u, slots);
+    return MixtureBody(material, plan, options, builder, laneType, module, tablePrefix).sample(wo, u, slots);
 }
 
 CombinationPdfLanes emitCombinationPdf(const CheckedMaterial& material, const LoweringPlan& plan,
-                                       const LoweringOptions& options, bool scalar, llvm::IRBuilder<>& builder,
+                                       const LoweringOptions& options, llvm::IRBuilder<>& builder,
                                        llvm::Type* laneType, llvm::Module& module, const Vec& wi, const Vec& wo,
                                        const std::vector<llvm::Value*>& slots, const std::string& tablePrefix) {
     internal_assert(plan.combines() && plan.sampling.compiled) << "a combination pdf the plan did not plan";
-    return MixtureBody(material, plan, options, scalar, builder, laneType, module, tablePrefix).pdf(wi, wo, slots);
+    return MixtureBody(material, plan, options, builder, laneType, module, tablePrefix).pdf(wi, wo, slots);
 }
 
 }  // namespace facet

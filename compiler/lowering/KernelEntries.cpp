@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <optional>
 
 namespace facet {
 namespace {
@@ -79,13 +80,18 @@ using BodyEmit = std::function<BodyLanes(LaneEmitter& lanes, const std::vector<l
 // the untrusted lanes keep. Each lane's value is decided by the lane alone,
 // never by its neighbours in the vector, so a lane gives the same result in
 // any batch.
-LaneOutputs emitBodies(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type* laneTy, llvm::Module& module,
-                       const std::vector<llvm::Value*>& in, const std::vector<llvm::Value*>& slots,
-                       const BodyPlan& first, const BodyPlan* fallback, const BodyEmit& emitBody) {
-    const LoweringPlan& plan = k.plan;
-    LaneEmitter firstLanes(k.material, plan, first, k.options.energyTable, b, laneTy, module);
-    BodyLanes fl = emitBody(firstLanes, in, slots);
-    if (!fallback) return {fl.values, fl.invalid};
+// One body's lanes, emitted through the builder given (KernelEntries' own
+// or the fallback function's).
+using BodyFn = std::function<BodyLanes(llvm::IRBuilder<>& b, const std::vector<llvm::Value*>& in,
+                                       const std::vector<llvm::Value*>& slots)>;
+
+// The same for any pair of bodies (`fallback` null: `first` alone);
+// `fallbackPlan` gives the fallback function its attributes.
+LaneOutputs emitTwoBodies(llvm::IRBuilder<>& b, llvm::Type* laneTy, llvm::Module& module,
+                          const std::vector<llvm::Value*>& in, const std::vector<llvm::Value*>& slots,
+                          const BodyFn& first, const BodyFn* fallbackBody, const BodyPlan* fallback) {
+    BodyLanes fl = first(b, in, slots);
+    if (!fallbackBody) return {fl.values, fl.invalid};
 
     llvm::LLVMContext& ctx = module.getContext();
     llvm::Function* fn = b.GetInsertBlock()->getParent();
@@ -125,8 +131,7 @@ LaneOutputs emitBodies(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type*
         std::vector<llvm::Value*> pin, pslots(slots.size(), nullptr);
         for (size_t a = 0; a < in.size(); ++a) pin.push_back(preciseFn->getArg(unsigned(a)));
         for (size_t p = 0; p < passed.size(); ++p) pslots[passed[p]] = preciseFn->getArg(unsigned(in.size() + p));
-        LaneEmitter preciseLanes(k.material, plan, *fallback, k.options.energyTable, pb, laneTy, module);
-        BodyLanes pr = emitBody(preciseLanes, pin, pslots);
+        BodyLanes pr = (*fallbackBody)(pb, pin, pslots);
         llvm::Value* agg = llvm::UndefValue::get(resultTy);
         for (unsigned c = 0; c < outputs; ++c) agg = pb.CreateInsertValue(agg, pr.values[c], c);
         agg = pb.CreateInsertValue(agg, pr.invalid, unsigned(outputs));
@@ -163,6 +168,23 @@ LaneOutputs emitBodies(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type*
     inv->addIncoming(mixedInvalid, precise);
     out.invalid = inv;
     return out;
+}
+
+LaneOutputs emitBodies(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type* laneTy, llvm::Module& module,
+                       const std::vector<llvm::Value*>& in, const std::vector<llvm::Value*>& slots,
+                       const BodyPlan& first, const BodyPlan* fallback, const BodyEmit& emitBody) {
+    auto inBody = [&](const BodyPlan& body) {
+        return BodyFn([&k, &module, &body, &emitBody, laneTy](llvm::IRBuilder<>& builder,
+                                                              const std::vector<llvm::Value*>& lanesIn,
+                                                              const std::vector<llvm::Value*>& lanesSlots) {
+            LaneEmitter lanes(k.material, k.plan, body, k.options.energyTable, builder, laneTy, module);
+            return emitBody(lanes, lanesIn, lanesSlots);
+        });
+    };
+    BodyFn firstFn = inBody(first);
+    std::optional<BodyFn> fallbackFn;
+    if (fallback) fallbackFn = inBody(*fallback);
+    return emitTwoBodies(b, laneTy, module, in, slots, firstFn, fallbackFn ? &*fallbackFn : nullptr, fallback);
 }
 
 using LaneBody = std::function<LaneOutputs(llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
@@ -235,30 +257,45 @@ LaneBody bodies(const KernelContext& k, llvm::Module& module, const BodyPlan& fi
 }
 
 // The lane body of a combination of lobes (CombinationEmitter.h): every
-// lobe in its one plain body, no fallback.
+// lobe in its plain body; in a batch entry whose plan has two bodies, first
+// every lobe in its batch body (guarded where the lobe's own kernel would
+// guard it), and the lanes any of them distrusts again in the plain bodies.
 LaneBody combinationBody(const KernelContext& k, llvm::Module& module, bool scalar) {
     return [&k, &module, scalar](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
                                  const std::vector<llvm::Value*>& slots) {
-        CombinationLanes c = emitCombination(k.material, k.plan, k.options, scalar, b, laneTy, module,
-                                             {in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots, k.symbolPrefix);
-        return LaneOutputs{{c.rgb.begin(), c.rgb.end()}, c.invalid};
+        auto inBodies = [&k, &module, laneTy](bool guarded) {
+            return BodyFn([&k, &module, laneTy, guarded](llvm::IRBuilder<>& builder,
+                                                         const std::vector<llvm::Value*>& lanesIn,
+                                                         const std::vector<llvm::Value*>& lanesSlots) {
+                CombinationLanes c =
+                    emitCombination(k.material, k.plan, k.options, guarded, builder, laneTy, module,
+                                    {lanesIn[0], lanesIn[1], lanesIn[2]}, {lanesIn[3], lanesIn[4], lanesIn[5]},
+                                    lanesSlots, k.symbolPrefix);
+                return BodyLanes{{c.rgb.begin(), c.rgb.end()}, c.invalid, c.untrusted};
+            });
+        };
+        const bool twoBodies = !scalar && k.plan.fallbackBody;
+        BodyFn plain = inBodies(false);
+        if (!twoBodies) return emitTwoBodies(b, laneTy, module, in, slots, plain, nullptr, nullptr);
+        BodyFn guarded = inBodies(true);
+        return emitTwoBodies(b, laneTy, module, in, slots, guarded, &plain, &*k.plan.fallbackBody);
     };
 }
 
-LaneBody combinationSampleBody(const KernelContext& k, llvm::Module& module, bool scalar) {
-    return [&k, &module, scalar](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
+LaneBody combinationSampleBody(const KernelContext& k, llvm::Module& module) {
+    return [&k, &module](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
                                  const std::vector<llvm::Value*>& slots) {
-        CombinationSampleLanes c = emitCombinationSample(k.material, k.plan, k.options, scalar, b, laneTy, module,
+        CombinationSampleLanes c = emitCombinationSample(k.material, k.plan, k.options, b, laneTy, module,
                                                          {in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots,
                                                          k.symbolPrefix);
         return LaneOutputs{{c.wi[0], c.wi[1], c.wi[2], c.pdf, c.weight[0], c.weight[1], c.weight[2]}, c.invalid};
     };
 }
 
-LaneBody combinationPdfBody(const KernelContext& k, llvm::Module& module, bool scalar) {
-    return [&k, &module, scalar](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
+LaneBody combinationPdfBody(const KernelContext& k, llvm::Module& module) {
+    return [&k, &module](llvm::IRBuilder<>& b, llvm::Type* laneTy, const std::vector<llvm::Value*>& in,
                                  const std::vector<llvm::Value*>& slots) {
-        CombinationPdfLanes c = emitCombinationPdf(k.material, k.plan, k.options, scalar, b, laneTy, module,
+        CombinationPdfLanes c = emitCombinationPdf(k.material, k.plan, k.options, b, laneTy, module,
                                                    {in[0], in[1], in[2]}, {in[3], in[4], in[5]}, slots,
                                                    k.symbolPrefix);
         return LaneOutputs{{c.pdf}, c.invalid};
@@ -527,10 +564,10 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
             const BodyPlan& body = out.plan.sampling.body;
             const bool mixture = plan.combines();
             emitScalarFunction(k, *out.module, out.sampleScalarSymbol, kSampleShape, body,
-                               mixture ? combinationSampleBody(k, *out.module, true)
+                               mixture ? combinationSampleBody(k, *out.module)
                                        : bodies(k, *out.module, body, nullptr, sampleBody));
             emitScalarFunction(k, *out.module, out.pdfScalarSymbol, kPdfShape, body,
-                               mixture ? combinationPdfBody(k, *out.module, true)
+                               mixture ? combinationPdfBody(k, *out.module)
                                        : bodies(k, *out.module, body, nullptr, pdfBody));
         }
     }
@@ -546,10 +583,10 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
             const bool floatFirst = sp.batchBodies == BatchBodies::FloatFirst;
             const bool mixture = plan.combines();
             emitBatchFunction(k, *out.module, out.sampleBatchSymbol, kSampleShape, false, sp.batchBody,
-                              mixture ? combinationSampleBody(k, *out.module, false)
+                              mixture ? combinationSampleBody(k, *out.module)
                                       : bodies(k, *out.module, sp.batchBody, floatFirst ? &sp.body : nullptr, sampleBody));
             emitBatchFunction(k, *out.module, out.pdfBatchSymbol, kPdfShape, false, sp.body,
-                              mixture ? combinationPdfBody(k, *out.module, false)
+                              mixture ? combinationPdfBody(k, *out.module)
                                       : bodies(k, *out.module, sp.body, nullptr, pdfBody));
         }
     }
