@@ -147,7 +147,9 @@ void plan(PipelineRun& run, const PipelineControl& control, const PipelineTarget
     internal_assert(run.specialized.combinesLobes() || !run.specialized.singleLobe().compensatesEnergy() ||
                     run.lowering.energyTable)
         << "energy compensation planned without its table";
-    run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.trustInputs, run.lobeEnergyTables);
+    // The sampler's tables only for a run that emits the sampler.
+    run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.trustInputs, run.lobeEnergyTables,
+                            run.lowering.emitSampling);
 }
 
 void lower(PipelineRun& run, const PipelineControl& control) {

@@ -15,7 +15,8 @@
 namespace facet {
 
 LoweringPlan planCombination(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs,
-                             const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables) {
+                             const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables,
+                             bool samplerTables) {
     internal_assert(compiledBackendsRefuse(material).empty())
         << "planning material '" << material.name << "', which the compiled backends refuse";
     LoweringPlan plan;
@@ -53,7 +54,7 @@ LoweringPlan planCombination(const CheckedMaterial& material, const MathVariant&
     for (size_t i = 0; i < material.bsdf.size(); ++i) {
         const BsdfNode& n = material.bsdf[i];
         if (n.kind == BsdfKind::Layer) plan.layerG[i] = layerG(material, resolved, int(i));
-        if (!plan.sampling.compiled || !resolved.valid) continue;
+        if (!samplerTables || !plan.sampling.compiled || !resolved.valid) continue;
         if (n.kind == BsdfKind::Lobe) plan.nodeAlbedo[i] = albedoTable(material, resolved, int(i));
         if (n.kind == BsdfKind::Layer) plan.nodeAlbedo[i] = albedoTable(material, resolved, n.a);
     }

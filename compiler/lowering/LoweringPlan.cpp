@@ -255,8 +255,9 @@ bool hasCompiledSampler(const CheckedMaterial& material) {
 bool LoweringPlan::slotRead(int slot) const { return reads.slots.at(size_t(slot)); }
 
 LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs,
-                          const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables) {
-    if (material.combinesLobes()) return planCombination(material, variant, trustInputs, lobeEnergyTables);
+                          const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables, bool samplerTables) {
+    if (material.combinesLobes())
+        return planCombination(material, variant, trustInputs, lobeEnergyTables, samplerTables);
     const MaterialEmitters em = termEmitters(material);
     LoweringPlan plan;
     plan.variant = variant;

@@ -247,7 +247,8 @@ struct LoweringPlan {
     // The mixture sampler's estimates: per node of CheckedMaterial::bsdf, a
     // lobe's directional albedo (at the default inputs: the probabilities
     // are estimates, the pdf is the mixture's whatever they are) and a
-    // layer's top albedo E_top; null elsewhere.
+    // layer's top albedo E_top; null elsewhere, and all null in a plan made
+    // without the sampler's tables (planLowering's samplerTables).
     std::vector<std::shared_ptr<const MuTable>> nodeAlbedo;
     bool combines() const { return !lobes.empty(); }
 };
@@ -262,11 +263,16 @@ struct LobeLowering {
 // A combination of lobes is planned lobe by lobe (CombinationPlan.cpp);
 // `lobeEnergyTables` (per lobe, null for none) spare the layers' bake
 // building the lobes' Kulla-Conty tables again.
+// `samplerTables` false leaves out the mixture sampler's albedo tables
+// (LoweringPlan::nodeAlbedo), which only sample and pdf entry points read:
+// an eval-only compile of a combination does not integrate them.
 LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs = false,
-                          const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables = {});
+                          const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables = {},
+                          bool samplerTables = true);
 // CombinationPlan.cpp: planLowering() and printPlan() of a combination.
 LoweringPlan planCombination(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs,
-                             const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables);
+                             const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables,
+                             bool samplerTables);
 void printCombinationPlan(std::ostringstream& os, const CheckedMaterial& material, const LoweringPlan& plan);
 
 // How the specular lobe of `material` is sampled in IR (None: the kernel

@@ -22,6 +22,7 @@
 
 #include <array>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 namespace facet {
@@ -150,10 +151,21 @@ public:
 
     const CheckedMaterial& material() const { return material_; }
 
+    // The material resolved at its inputs' defaults, in double: what the
+    // sampler estimates a combination's leaf probabilities from (LobeSampling.h).
+    // Resolved on first use, once per interpreter and its copies, not once
+    // per sample or pdf call. Defined in Sampling.cpp.
+    const ResolvedBsdf<double>& resolvedDefaults() const;
+
 private:
     const CheckedMaterial& material_;
     CheckedMaterial::Reads read_;  // what the models read: nothing else is evaluated
     std::vector<std::shared_ptr<EnergyTableSlot>> energy_;  // per lobe; kulla_conty lobes only
+    struct ResolvedDefaults {
+        std::once_flag once;
+        ResolvedBsdf<double> value;
+    };
+    std::shared_ptr<ResolvedDefaults> defaults_ = std::make_shared<ResolvedDefaults>();
 };
 
 extern template class Interpreter<float>;

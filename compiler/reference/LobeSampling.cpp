@@ -112,7 +112,7 @@ SampleResult<Real> sampleCombination(const Interpreter<Real>& in, const Resolved
     if (!(wo.z > 0)) return out;
     const CheckedMaterial& m = in.material();
     std::vector<LeafChoice> leaves =
-        leafProbabilities(m, bsdfToDouble(r), bsdfToDouble(in.resolveAll(nullptr)), double(wo.z));
+        leafProbabilities(m, bsdfToDouble(r), in.resolvedDefaults(), double(wo.z));
     if (leaves.empty()) return out;
     // Pick the leaf with u0 and rescale u0 to [0, 1) within its interval
     // (the one-lobe sampler reads u0 again to choose its own technique).

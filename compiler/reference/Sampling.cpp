@@ -213,7 +213,7 @@ PdfResult<Real> Interpreter<Real>::pdf(const Real wi[3], const Real wo[3], const
         ResolvedBsdf<Real> all = resolveAll(slots);
         if (!all.valid) return invalid;
         if (o.z > 0)
-            out.pdf = combinationPdf(material_, all, leafProbabilities(material_, bsdfToDouble(all), bsdfToDouble(resolveAll(nullptr)), double(o.z)), i, o);
+            out.pdf = combinationPdf(material_, all, leafProbabilities(material_, bsdfToDouble(all), resolvedDefaults(), double(o.z)), i, o);
     } else {
         ResolvedMaterial<Real> r = resolve(slots);
         if (!r.valid) return invalid;
@@ -222,7 +222,14 @@ PdfResult<Real> Interpreter<Real>::pdf(const Real wi[3], const Real wo[3], const
     return finite(out.pdf) && out.pdf >= 0 ? out : invalid;
 }
 
+template <typename Real>
+const ResolvedBsdf<double>& Interpreter<Real>::resolvedDefaults() const {
+    std::call_once(defaults_->once, [&] { defaults_->value = bsdfToDouble(resolveAll(nullptr)); });
+    return defaults_->value;
+}
+
 #define FACET_SAMPLING(Real)                                                                                 \
+    template const ResolvedBsdf<double>& Interpreter<Real>::resolvedDefaults() const;                        \
     template Real specularProbability(const ResolvedMaterial<Real>&, const Vec3<Real>&, SamplingTechnique);  \
     template Real specularNormalPdf(const ResolvedMaterial<Real>&, const Vec3<Real>&, const Vec3<Real>&,     \
                                     SamplingTechnique);                                                      \
