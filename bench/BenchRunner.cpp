@@ -15,7 +15,6 @@
 #include <algorithm>
 #include <array>
 #include <cfloat>
-#include <ctime>
 #include <cmath>
 #include <cstring>
 #include <filesystem>

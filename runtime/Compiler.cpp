@@ -17,7 +17,6 @@
 #include "ToleranceSearch.h"
 
 #include <chrono>
-#include <ctime>
 
 namespace facet {
 
