@@ -105,7 +105,7 @@ bool verifyMaterial(const CheckedMaterial& m, const std::string& path, Compiler&
                 "max relerr", "bound");
     // Condition numbers (in __float128), computed on demand and shared by the
     // JIT and the reference checks.
-    QuadReference quad(m);
+    QuadReference quad(m, table);
     std::map<size_t, double> kappas;
     auto condition = [&](size_t i) {
         auto it = kappas.find(i);

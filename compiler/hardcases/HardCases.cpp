@@ -424,12 +424,14 @@ struct QuadReference::Impl {
     std::shared_ptr<const EnergyTable> table;
     Interpreter<double> d;
     Interpreter<Quad> q;
-    static std::shared_ptr<const EnergyTable> tableFor(const CheckedMaterial& m) {
+    static std::shared_ptr<const EnergyTable> tableFor(const CheckedMaterial& m,
+                                                       std::shared_ptr<const EnergyTable> given) {
         // (a combination's lobes build theirs in the interpreters)
-        if (!m.combinesLobes() && m.singleLobe().compensatesEnergy()) return buildEnergyTable(energyTableKey(m));
-        return nullptr;
+        if (m.combinesLobes() || !m.singleLobe().compensatesEnergy()) return nullptr;
+        return given ? given : buildEnergyTable(energyTableKey(m));
     }
-    explicit Impl(const CheckedMaterial& m) : material(m), table(tableFor(m)), d(m, table), q(m, table) {}
+    Impl(const CheckedMaterial& m, std::shared_ptr<const EnergyTable> given)
+        : material(m), table(tableFor(m, std::move(given))), d(m, table), q(m, table) {}
 
     // Quad evaluation at inputs x = (wi, wo, slots).
     bool evalQ(const std::vector<Quad>& x, std::array<Quad, 3>& rgb) const {
@@ -448,7 +450,8 @@ struct QuadReference::Impl {
     }
 };
 
-QuadReference::QuadReference(const CheckedMaterial& material) : impl_(new Impl(material)) {}
+QuadReference::QuadReference(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> table)
+    : impl_(new Impl(material, std::move(table))) {}
 QuadReference::~QuadReference() { delete impl_; }
 
 bool QuadReference::evalQuad(const HardCase& c, std::array<double, 3>& rgb) const {

@@ -33,9 +33,11 @@
 // estimated in __float128 (compareWithQuad).
 #pragma once
 
+#include "KullaConty.h"
 #include "Material.h"
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -90,10 +92,11 @@ struct QuadComparison {
 };
 
 // The double reference interpreter and the __float128 one for one material
-// (both built once: a kulla_conty material shares one energy table).
+// (both built once: a kulla_conty material shares one energy table, the
+// caller's `table` when it has one, else one built here).
 class QuadReference {
 public:
-    explicit QuadReference(const CheckedMaterial& material);
+    explicit QuadReference(const CheckedMaterial& material, std::shared_ptr<const EnergyTable> table = nullptr);
     ~QuadReference();
     QuadReference(const QuadReference&) = delete;
     QuadReference& operator=(const QuadReference&) = delete;

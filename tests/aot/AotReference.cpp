@@ -363,7 +363,7 @@ int main(int argc, char** argv) {
     if (mode == "against-interpreter") {
         Interpreter<double> interp(*material, kernel->energyTable());
         HardCaseReference ref = evaluateHardCaseReference(interp, cases);
-        QuadReference quad(*material);
+        QuadReference quad(*material, kernel->energyTable());
         std::vector<double> kappa(n, -1);
         auto condition = [&](size_t i) { return kappa[i] >= 0 ? kappa[i] : kappa[i] = quad.condition(cases[i]); };
         KernelRun target;

@@ -29,6 +29,7 @@
 #include "HardCases.h"
 #include "Interpreter.h"
 #include "Kernel.h"
+#include "TableCache.h"
 #include "Verify.h"
 
 #include <doctest/doctest.h>
@@ -258,7 +259,12 @@ MaterialResult runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& c
     std::vector<HardCase> raw = hardCases(m, rawOptions);
     r.cases = cases.size();
 
-    QuadReference quad(m);
+    // One table per key for the whole run (the Fresnel variants of an NDF x
+    // masking pair share it), from the test's cache directory like the kernels'.
+    static TableCache referenceTables;
+    std::shared_ptr<const EnergyTable> table;
+    if (m.singleLobe().compensatesEnergy()) table = referenceTables.getFor(m);
+    QuadReference quad(m, table);
     std::map<size_t, double> kappas, kappasRaw;
     auto condition = [&](size_t i) {
         auto it = kappas.find(i);
@@ -270,8 +276,6 @@ MaterialResult runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& c
     };
 
     // The reference on both samples (float-rounded and with double-only values).
-    std::shared_ptr<const EnergyTable> table;
-    if (m.singleLobe().compensatesEnergy()) table = buildEnergyTable(energyTableKey(m));
     Interpreter<double> interp(m, table);
     HardCaseReference ref = evaluateHardCaseReference(interp, cases), refRaw = evaluateHardCaseReference(interp, raw);
     std::vector<EvalResult<float>> inFloat = evaluateInFloat(Interpreter<float>(m, table), cases);
