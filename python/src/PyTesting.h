@@ -17,7 +17,7 @@ py::dict chi2(const PyKernel& kernel, py::handle wo, py::handle wi, py::dict inp
               double firstPhi, bool equalArea, double level, double tolerance, py::object pdf);
 
 // Seconds per call of the kernel's batch entry (Kernel::evalBatch) on wi,
-// wo ((3, N) float32), the median of 5 rounds of `calls` calls, with the
+// wo ((3, N) float32), the median of 5 rounds of calls/5 calls, with the
 // GIL released: the library's own cost, next to which the Python call's
 // is measured (examples/python/call_overhead.py).
 double timeEvalBatch(const PyKernel& kernel, py::handle wi, py::handle wo, int calls);
