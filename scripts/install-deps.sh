@@ -9,6 +9,7 @@ packages=(
   libopenimageio-dev openimageio-tools libfmt-dev doctest-dev  # OIIO's CMake config lists the tools
   fonts-dejavu-core   # the TrueType font `facet render` labels its plots with (OIIO render_text)
   gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user  # tests: link and run `facet build --target aarch64-linux-gnu` objects
+  python3-dev python3-numpy pybind11-dev python3-pytest python3-matplotlib  # import facet (for /usr/bin/python3), its tests and examples
 )
 missing=()
 for p in "${packages[@]}"; do

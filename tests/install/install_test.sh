@@ -23,3 +23,18 @@ for exe in consumer_c consumer_cxx consumer_aot; do
   awk -v g="$got" 'BEGIN { d = g - 1.27323954; exit !(d < 2e-6 && d > -2e-6) }' ||
     { echo "$exe printed $got, expected 1.27323954"; exit 1; }
 done
+# The Python package, when this build has one: installed below the prefix
+# (FACET_PYTHON_INSTALL_DIR) and importable from there alone.
+py_dir=$(sed -n 's/^FACET_PYTHON_INSTALL_DIR:[A-Z]*=//p' "$build_dir/CMakeCache.txt")
+python=$(sed -n 's/^Python3_EXECUTABLE:[A-Z]*=//p' "$build_dir/CMakeCache.txt")
+if [ -n "$py_dir" ] && [ -n "$python" ]; then
+  case $py_dir in /*) site=$py_dir ;; *) site=$work/prefix/$py_dir ;; esac
+  [ -f "$site/facet/__init__.py" ] || { echo "no facet package in $site"; exit 1; }
+  got=$(cd "$work" && PYTHONPATH="$site" PYTHONDONTWRITEBYTECODE=1 "$python" -c "
+import facet, sys
+assert facet.__file__.startswith('$site'), facet.__file__
+print('%.8f' % facet.compile('$work/m.mat').eval([0, 0, 1], [0, 0, 1])[0])")
+  echo "python: $got"
+  awk -v g="$got" 'BEGIN { d = g - 1.27323954; exit !(d < 2e-6 && d > -2e-6) }' ||
+    { echo "the installed package printed $got, expected 1.27323954"; exit 1; }
+fi
