@@ -10,6 +10,7 @@
 #include "RandomMaterial.h"
 
 #include "Checker.h"
+#include "Specialize.h"
 
 #include <doctest/doctest.h>
 #include <filesystem>
@@ -34,8 +35,8 @@ std::vector<std::string> materialFiles() {
 // Random materials are compiled with quick codegen: the same bits as
 // optimized code (JitTierUpTests, "tiered compile"), without a tier-up compiling
 // every kernel a second time; the shipped materials go the default way.
-CompileOptions optionsFor(Backend b, int width, bool floatFirst = false,
-                          CompileOptions::Codegen codegen = CompileOptions::Codegen::Tiered) {
+CompileOptions differentialOptions(Backend b, int width, bool floatFirst = false,
+                                   CompileOptions::Codegen codegen = CompileOptions::Codegen::Tiered) {
     CompileOptions o;
     o.backend = b;
     o.width = width;
@@ -57,14 +58,34 @@ void checkStats(const DiffStats& stats, const std::string& what) {
 
 TEST_CASE("every shipped and corpus material agrees with the interpreter on every backend") {
     Compiler compiler;
-    size_t materials = 0, floatFirstMaterials = 0;
+    size_t materials = 0, floatFirstMaterials = 0, boundMaterials = 0;
     double worst = 0, worstFloatFirst = 0;
     for (const std::string& path : materialFiles()) {
         DiagnosticEngine diags;
         CheckedProgram program = loadProgramFile(path, diags);
         if (diags.hasErrors()) continue;  // error cases of the corpus
-        for (const CheckedMaterial& m : program.materials) {
+        for (const CheckedMaterial& checked : program.materials) {
             ++materials;
+            // A material the compiled backends take only with constant layer
+            // parameters (compiledBackendsRefuse) is compiled as a user would:
+            // every input bound to its default (`--set`), and compared with the
+            // interpreter of that bound material.
+            InputBindings defaults;
+            const bool bindDefaults = !compiledBackendsRefuse(checked).empty();
+            if (bindDefaults)
+                for (const CheckedInput& in : checked.inputs)
+                    defaults[in.name] = std::vector<double>(in.defaultValue.begin(),
+                                                            in.defaultValue.begin() + in.slotCount());
+            DiagnosticEngine bindDiags;
+            const CheckedMaterial bound = bindDefaults ? specializeMaterial(checked, defaults, bindDiags) : checked;
+            REQUIRE_MESSAGE(!bindDiags.hasErrors(), bindDiags.str());
+            const CheckedMaterial& m = bound;
+            boundMaterials += bindDefaults;
+            auto optionsFor = [&](Backend b, int width, bool floatFirst = false) {
+                CompileOptions o = differentialOptions(b, width, floatFirst);
+                o.bindings = defaults;
+                return o;
+            };
             LaneBatch random = randomSample(m, 100000, 42 + materials);
             LaneBatch hard = hardSample(m);
             // One reference per sample for all the material's kernels.
@@ -103,8 +124,9 @@ TEST_CASE("every shipped and corpus material agrees with the interpreter on ever
             }
         }
     }
-    MESSAGE(fmt::format("{} materials compared; worst relative error {:.3g}; float-first SIMD16 on {} of them, "
-                        "worst {:.3g}", materials, worst, floatFirstMaterials, worstFloatFirst));
+    MESSAGE(fmt::format("{} materials compared ({} with their inputs bound); worst relative error {:.3g}; "
+                        "float-first SIMD16 on {} of them, worst {:.3g}", materials, boundMaterials, worst,
+                        floatFirstMaterials, worstFloatFirst));
     CHECK(materials >= 10);
     CHECK(floatFirstMaterials >= 3);
 }
@@ -123,8 +145,8 @@ TEST_CASE("random materials agree across interpreter, scalar and SIMD") {
         const CheckedMaterial& m = program.materials.front();
         LaneBatch s = randomSample(m, 1500, 99 + i);
         DiagnosticEngine kd;
-        auto scalar = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Scalar, 0, false, kQuick), kd);
-        auto simd = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Simd, widths[i % 3], false, kQuick), kd);
+        auto scalar = compiler.compileText(rm.text, "random.mat", "", differentialOptions(Backend::Scalar, 0, false, kQuick), kd);
+        auto simd = compiler.compileText(rm.text, "random.mat", "", differentialOptions(Backend::Simd, widths[i % 3], false, kQuick), kd);
         REQUIRE_MESSAGE((scalar && simd), kd.str() << rm.text);
         DiffStats stats;
         std::optional<ReferenceValues> ref;
@@ -140,7 +162,7 @@ TEST_CASE("random materials agree across interpreter, scalar and SIMD") {
         }
         if (planLowering(m, MathVariant::exact()).batchBodies == BatchBodies::FloatFirst) {
             ++floatFirstCount;
-            auto floatFirst = compiler.compileText(rm.text, "random.mat", "", optionsFor(Backend::Simd, widths[i % 3], true, kQuick), kd);
+            auto floatFirst = compiler.compileText(rm.text, "random.mat", "", differentialOptions(Backend::Simd, widths[i % 3], true, kQuick), kd);
             REQUIRE_MESSAGE(floatFirst, kd.str() << rm.text);
             DiffStats ff;
             compare(*floatFirst, m, s, ff, &ref);
