@@ -47,10 +47,14 @@ void Kernel::ensureSampler() const {
                 lookUpCaches(*memoryCache_, *diskCache_, samplerKey_, samplerCachePath_, samplerCache_, origin);
             if (!cached) {
                 PipelineRun run = PipelineRun::fromSpecialized(material_, energyTable_);
+                // A combination's lobes' tables too: the eval compile's own
+                // objects, not tables built again (~0.3 s each) in the empty
+                // cache below.
+                if (material_.combinesLobes()) run.lobeEnergyTables = lobeEnergyTables_;
                 PipelineControl control;
                 control.symbolPrefix = samplerPrefix_;
                 control.lowering = lowering;
-                TableCache tables("");  // unused: the run starts specialized, with its table
+                TableCache tables("");  // unused: the run starts specialized, with its tables
                 DiagnosticEngine diags;
                 if (!runKernelPipeline(run, control, PipelineTarget::forJit(*code.jit, samplerLevel_), tables, diags)) {
                     std::string text = diags.str();
