@@ -141,25 +141,37 @@ void putArgs(std::string& key, const ModelArgs<double>& a) {
     for (bool g : a.given) key.push_back(g ? '1' : '0');
     for (double d : a.derived) put(key, d);
 }
-void putSubtree(std::string& key, const CheckedMaterial& m, const ResolvedBsdf<double>& r, int node) {
+const FresnelEntry* noFresnel() {
+    static const FresnelEntry* none = &fresnelEntry(*findModel(ModelSlot::Fresnel, "none"));
+    return none;
+}
+
+// The key of a subtree. `white`: as whiten() would leave it (every Fresnel
+// term 1 where whiten() reaches), without copying the resolved material.
+void putSubtree(std::string& key, const CheckedMaterial& m, const ResolvedBsdf<double>& r, int node,
+                bool white = false) {
     const BsdfNode& n = m.bsdf.at(size_t(node));
     key.push_back(char('a' + int(n.kind)));
     put(key, r.weights.at(size_t(node)));
     if (n.kind == BsdfKind::Lobe) {
         const ResolvedMaterial<double>& l = r.lobes.at(size_t(n.lobe));
-        for (const void* p : {(const void*)l.ndf, (const void*)l.masking, (const void*)l.fresnel,
+        const FresnelEntry* fresnel = white ? noFresnel() : l.fresnel;
+        for (const void* p : {(const void*)l.ndf, (const void*)l.masking, (const void*)fresnel,
                               (const void*)l.energy, (const void*)l.diffuse})
             put(key, p);
-        putArgs(key, l.ndfArgs), putArgs(key, l.maskingArgs), putArgs(key, l.fresnelArgs), putArgs(key, l.diffuseArgs);
+        putArgs(key, l.ndfArgs), putArgs(key, l.maskingArgs);
+        putArgs(key, white ? ModelArgs<double>{} : l.fresnelArgs);
+        putArgs(key, l.diffuseArgs);
         if (l.energy && l.energy->compensates) {
             key += l.energyTable ? l.energyTable->key.name() : std::string("-");
-            put(key, l.energyAlpha), put(key, l.ecAvg), put(key, l.favg);
+            put(key, l.energyAlpha), put(key, l.ecAvg), put(key, white ? Rgb{1, 1, 1} : l.favg);
         }
         return;
     }
-    if (n.a >= 0) putSubtree(key, m, r, n.a);
+    // whiten() leaves a nested layer's top as it is.
+    if (n.a >= 0) putSubtree(key, m, r, n.a, white && n.kind != BsdfKind::Layer);
     key.push_back('|');
-    if (n.b >= 0) putSubtree(key, m, r, n.b);
+    if (n.b >= 0) putSubtree(key, m, r, n.b, white);
     key.push_back(')');
 }
 
@@ -190,8 +202,7 @@ void whiten(const CheckedMaterial& m, int node, ResolvedBsdf<double>& r) {
     const BsdfNode& n = m.bsdf.at(size_t(node));
     if (n.kind == BsdfKind::Lobe) {
         ResolvedMaterial<double>& l = r.lobes.at(size_t(n.lobe));
-        static const FresnelEntry* none = &fresnelEntry(*findModel(ModelSlot::Fresnel, "none"));
-        l.fresnel = none;
+        l.fresnel = noFresnel();
         l.fresnelArgs = {};
         l.favg = {1, 1, 1};
         return;
@@ -339,9 +350,7 @@ std::shared_ptr<const MuTable> layerG(const CheckedMaterial& m, const ResolvedBs
     if (lambertian(m, r, n.b)) {
         key.push_back('L');
     } else {
-        ResolvedBsdf<double> white = r;
-        whiten(m, n.b, white);
-        putSubtree(key, m, white, n.b);
+        putSubtree(key, m, r, n.b, /*white=*/true);
     }
     return cached(key, [&] { return bakeG(m, r, layer); });
 }
