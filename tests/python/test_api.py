@@ -57,10 +57,14 @@ def test_bad_compile_calls():
         facet.compile("/nonexistent/x.mat")
     with pytest.raises(TypeError, match="exactly one of path= and text="):
         facet.compile()
-    with pytest.raises(ValueError, match="width=3 is not 4, 8 or 16"):
+    with pytest.raises(ValueError, match="width '3' is not 4, 8 or 16"):
         facet.compile(material("plastic"), width=3)
-    with pytest.raises(ValueError, match="backend='gpu' is not one of"):
+    with pytest.raises(TypeError, match="width: expected an int"):
+        facet.compile(material("plastic"), width="8")
+    with pytest.raises(ValueError, match="backend 'gpu' is not scalar, simd or interp"):
         facet.compile(material("plastic"), backend="gpu")
+    with pytest.raises(ValueError, match="';' separates options"):
+        facet.compile(material("plastic"), backend="simd;math=fast")
     with pytest.raises(TypeError, match="unexpected option 'speed'"):
         facet.compile(material("plastic"), speed="fast")
     with pytest.raises(TypeError, match="float_first"):
