@@ -141,6 +141,11 @@ void putArgs(std::string& key, const ModelArgs<double>& a) {
     for (bool g : a.given) key.push_back(g ? '1' : '0');
     for (double d : a.derived) put(key, d);
 }
+// whiten() makes every Fresnel term of a layer's base 1, except inside a
+// nested layer's top, which its own bake sees as it is: the one rule both
+// whiten() and the whitened key (putSubtree) follow.
+bool whitensFirstChild(const BsdfNode& n) { return n.kind != BsdfKind::Layer; }
+
 const FresnelEntry* noFresnel() {
     static const FresnelEntry* none = &fresnelEntry(*findModel(ModelSlot::Fresnel, "none"));
     return none;
@@ -168,8 +173,7 @@ void putSubtree(std::string& key, const CheckedMaterial& m, const ResolvedBsdf<d
         }
         return;
     }
-    // whiten() leaves a nested layer's top as it is.
-    if (n.a >= 0) putSubtree(key, m, r, n.a, white && n.kind != BsdfKind::Layer);
+    if (n.a >= 0) putSubtree(key, m, r, n.a, white && whitensFirstChild(n));
     key.push_back('|');
     if (n.b >= 0) putSubtree(key, m, r, n.b, white);
     key.push_back(')');
@@ -207,7 +211,7 @@ void whiten(const CheckedMaterial& m, int node, ResolvedBsdf<double>& r) {
         l.favg = {1, 1, 1};
         return;
     }
-    if (n.kind != BsdfKind::Layer && n.a >= 0) whiten(m, n.a, r);
+    if (whitensFirstChild(n) && n.a >= 0) whiten(m, n.a, r);
     if (n.b >= 0) whiten(m, n.b, r);
 }
 
