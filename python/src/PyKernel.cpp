@@ -86,19 +86,19 @@ PyKernel::InputColumns<T> PyKernel::readInputs(const py::dict& given, int64_t n,
         for (int k = 0; k < input.slotCount(); ++k)
             in.defaults[size_t(input.firstSlot + k)] = input.defaultValue[size_t(k)];
     size_t used = 0;
+    // Inputs not given stay null slots: a call that gives none reads nothing here.
     for (const CheckedInput& input : m.inputs) {
-        std::string arg = fmt::format("{}(): input '{}'", call, input.name);
+        if (given.empty()) break;
         py::str key(input.name);
-        bool present = given.contains(key);
-        used += present;
+        if (!given.contains(key)) continue;
+        ++used;
+        std::string arg = fmt::format("{}(): input '{}'", call, input.name);
         if (input.type == ValueType::Rgb) {
-            if (present) {
-                Vectors3<T> v = readVectors3<T>(given[key], arg.c_str());
-                matchLanes(v, n, arg.c_str(), "the directions");
-                for (int k = 0; k < 3; ++k) in.slots[size_t(input.firstSlot + k)] = v.rows[k];
-                in.vectors.push_back(std::move(v));
-            }
-        } else if (present) {
+            Vectors3<T> v = readVectors3<T>(given[key], arg.c_str());
+            matchLanes(v, n, arg.c_str(), "the directions");
+            for (int k = 0; k < 3; ++k) in.slots[size_t(input.firstSlot + k)] = v.rows[k];
+            in.vectors.push_back(std::move(v));
+        } else {
             double range[2] = {input.lo, input.hi};
             LaneValues<T> v = readLaneValues<T>(given[key], n, arg, input.hasRange ? range : nullptr);
             in.slots[size_t(input.firstSlot)] = v.data;
