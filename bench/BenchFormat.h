@@ -26,7 +26,7 @@ std::string samplerSummaryLine(const MaterialBench& m);
 // (cold, 64 x 64 grid; ...) / loaded from cache in Y ms" for a material with
 // energy = kulla_conty, "" for the others.
 std::string energyTableLine(const MaterialBench& m);
-// "Smith Lambda table: student_t_g3, built in X ms (cold, 4128 nodes; one
+// "Smith Lambda table: student_t_g3, built in X ms (cold, 4129 nodes; one
 // thread) / loaded from cache in Y ms" for a material whose Smith masking
 // uses its NDF's Lambda table, "" for the others.
 std::string lambdaTableLine(const MaterialBench& m);

@@ -111,9 +111,11 @@ LambdaGrid lambdaGrid(const NdfEntry& ndf, const std::vector<double>& shape, Lam
 
 double lambdaTableNode(const NdfEntry& ndf, const std::vector<double>& shape, const LambdaGrid& g, int k,
                        CosLambdaSource cosLambdaAt) {
-    // tan(theta) = 1/(a alpha), and f = a Lambda = (n.v) Lambda / (alpha sin(theta)).
-    double a = std::exp(g.x0 + (k % g.size) * g.step);
-    double alpha = g.alphaAt(k / g.size);
+    // tan(theta) = 1/(a alpha), and f = a Lambda = (n.v) Lambda / (alpha sin(theta));
+    // a grazing node (after the rows) has a = 0, theta = pi/2.
+    bool grazing = k >= g.size * g.rows;
+    double a = grazing ? 0 : std::exp(g.x0 + (k % g.size) * g.step);
+    double alpha = g.alphaAt(grazing ? k - g.size * g.rows : k / g.size);
     double theta = std::atan2(1.0, a * alpha);
     double f = cosLambdaAt(ndf, shape, alpha, theta) / (alpha * std::sin(theta));
     internal_assert(std::isfinite(f) && f >= 0) << "tabulated Lambda of " << lambdaTableName(ndf, shape) << ": f("
@@ -132,7 +134,7 @@ std::shared_ptr<LambdaTable> tabulateCosLambda(const NdfEntry& ndf, const std::v
     table->axes = axes;
     table->grid = lambdaGrid(ndf, shape, axes);
     const LambdaGrid& g = table->grid;
-    table->z.resize(size_t(g.size) * g.rows);
+    table->z.resize(size_t(g.nodeCount()));
     // Two threads for a SlopeAlpha table (45k-146k nodes): even and odd nodes.
     int threads = axes == LambdaAxes::Slope ? 1 : 2;
     table->buildThreads = threads;
@@ -174,21 +176,25 @@ double LambdaTable::endSlope(int j) const {
 
 double LambdaTable::fAt(double u, double v) const {
     const LambdaGrid& g = grid;
-    double uc = std::min(u, g.size - 1.0);
+    double uc = std::clamp(u, 0.0, g.size - 1.0);
     // 4 points along x for a Slope table, kAlphaOrder along both axes else.
     int nx = g.rows == 1 ? 4 : LambdaTable::kAlphaOrder, ny = g.rows == 1 ? 1 : LambdaTable::kAlphaOrder;
     double wx[LambdaTable::kAlphaOrder], wy[LambdaTable::kAlphaOrder] = {1};
     int i = lagrangeStencil(uc, g.size, nx, wx);
     int j = g.rows == 1 ? 0 : lagrangeStencil(std::clamp(v, 0.0, g.rows - 1.0), g.rows, ny, wy);
-    double zz = 0;
+    double zz = 0, zGrazing = 0;
     for (int r = 0; r < ny; ++r) {
         const double* row = z.data() + size_t(j + r) * g.size;
         double zr = 0;
         for (int k = 0; k < nx; ++k) zr += wx[k] * row[i + k];
         if (u > uc) zr += (u - uc) * endSlope(j + r);
         zz += wy[r] * zr;
+        zGrazing += wy[r] * z[g.grazingNode(j + r)];
     }
-    return std::exp(zz);
+    if (!(u < 0)) return std::exp(zz);
+    // Below the grid: the chord in a from f(0) to f(a0), a / a0 = exp(u step).
+    double f0 = std::exp(zGrazing);
+    return f0 + (std::exp(zz) - f0) * std::exp(u * g.step);
 }
 
 double LambdaTable::cosLambda(double proj, double vz, double alpha) const {
@@ -201,7 +207,7 @@ double LambdaTable::cosLambda(double proj, double vz, double alpha) const {
         v = std::clamp(g.rowOf(clamped), 0.0, g.rows - 1.0);
     }
     double root = std::sqrt(proj);
-    double u = std::max((std::log(vz) - std::log(root) - g.x0) / g.step, 0.0);
+    double u = (std::log(vz) - std::log(root) - g.x0) / g.step;  // -inf at vz = 0
     return root * fAt(u, v);
 }
 

@@ -31,10 +31,16 @@
 // decaying like a power of a or a Gaussian in a at normal incidence.
 // Nodes: x uniform in [log 1e-7, log 1e7], step 1/128 (4127 steps);
 // z below log(1e-300) is stored as log(1e-300) (Lambda is then 0 to double
-// precision in 1 + Lambda).
-// Lookup: u = (x - x0) / h; below the grid z(x0) (f(a) = f(0) - a/2 + ...,
-// relative error < 1e-6 for a < 1e-7); 4-point Lagrange inside; beyond the
-// grid's end linear in x from the last two nodes (the power-law tail).
+// precision in 1 + Lambda); then one grazing node, z = log f(0) (theta =
+// pi/2, by the same quadrature).
+// Lookup: u = (x - x0) / h; 4-point Lagrange inside; beyond the grid's end
+// linear in x from the last two nodes (the power-law tail); below the grid
+// (a < a0 = exp(x0), down to a = 0 at n.v = 0) the chord in a between f(0)
+// and f(a0): f(0) + (f(a0) - f(0)) a / a0. With P the density of one slope
+// component, f(a) = Int_a^inf (q - a) P(q) dq = f(0) - a/2 + P(0) a^2/2 +
+// ..., so the chord is off by at most P(0) a0^2 / 8 (an earlier table held
+// f(a0) there, off by a0 / 2: 1e-5 relative at n.v = 1e-6 on the (a,
+// alpha) grid below, whose a0 is 1e-5).
 // Then (n.v) Lambda(v) = sqrt(proj) f(a), proj = (vx ax)^2 + (vy ay)^2,
 // a = vz / sqrt(proj) (the anisotropic stretch), 0 where proj = 0.
 // Accuracy (tests/energy, LambdaTableTests): within 1e-6 relative of Lambda
@@ -61,15 +67,17 @@
 // gamma far from 2 the dependence runs along the diagonal (a uniform D has
 // Lambda(theta) alone), which 6-point Lagrange across the rows resolves;
 // along x a Gaussian-like cutoff (z ~ -a^2) needs 6 points too at this
-// step. Lookup: 6 x 6-point Lagrange (the first node below the grid, each
-// row's linear tail beyond it, as above); alpha outside the rows' range is
+// step. After the rows, one grazing node per row (log f(0) at the row's
+// alpha). Lookup: 6 x 6-point Lagrange (each row's chord to its grazing
+// node below the grid, its linear tail beyond it, as above); alpha outside the rows' range is
 // clamped, with proj rescaled to the clamped alpha (beyond lambdaAlphaHi,
 // Lambda is that of lambdaAlphaHi at the same direction). The quadrature
 // is the one above at the row's alpha; the build runs on two threads.
 // Accuracy (LambdaTableTests): within 1e-6 relative of the independent 2D
 // quadrature for alpha in [1e-3, 1] and theta up to 89.99 deg (or 1e-11
 // absolute where Lambda is tiny), for every tabulated NDF at the extremes
-// of its shape parameter.
+// of its shape parameter; (n.v) Lambda within 1e-7 from n.v = 1e-4 down to
+// n.v = 0.
 //
 // ---- sharing and caching -----------------------------------------------------
 //
@@ -96,7 +104,7 @@ struct CheckedMaterial;
 struct CheckedLobe;
 
 // Bumped whenever the table contents would change.
-constexpr int kLambdaTableVersion = 3;
+constexpr int kLambdaTableVersion = 4;
 
 // What a table's nodes span. Slope: the Lambda of a shape-invariant NDF, a
 // function of a alone (one row, alpha = 1). SlopeAlpha: the Lambda of an
@@ -117,6 +125,9 @@ struct LambdaGrid {
     double alphaLo = 1, alphaHi = 1;   // of the last and the first row
     double rowOf(double alpha) const;  // (y(alpha) - y0) / yStep, unclamped
     double alphaAt(double row) const;  // the inverse
+    // The grazing nodes follow the rows: z[grazingNode(j)] = log f(0) of row j.
+    int grazingNode(int row) const { return size * rows + row; }
+    int nodeCount() const { return size * rows + rows; }
 };
 // The grid of the table of `ndf` with `shape` on `axes`.
 LambdaGrid lambdaGrid(const NdfEntry& ndf, const std::vector<double>& shape, LambdaAxes axes);
@@ -137,7 +148,7 @@ public:
     std::vector<double> shape;  // the values of the NDF's tableShapeParams
     LambdaAxes axes = LambdaAxes::Slope;
     LambdaGrid grid{};          // lambdaGrid(*ndf, shape, axes)
-    std::vector<double> z;      // grid.rows x grid.size nodes, z = log f
+    std::vector<double> z;      // grid.nodeCount() nodes, z = log f: the rows, then each row's f(0)
     double buildMillis = 0;     // the quadrature's time (read back from a cache file)
     int buildThreads = 0;       // the threads the quadrature ran on (0: not built here)
     std::string origin = "built";  // or "disk"
@@ -145,8 +156,8 @@ public:
     // The slope of z per node beyond the last one of row j.
     double endSlope(int j = 0) const;
     // f = a Lambda from the nodes as described above at the node
-    // coordinates u = (log(a) - x0) / step >= 0 and v = grid.rowOf(alpha)
-    // in [0, rows - 1] (0 for a Slope table).
+    // coordinates u = (log(a) - x0) / step (-inf at a = 0) and v =
+    // grid.rowOf(alpha) in [0, rows - 1] (0 for a Slope table).
     double fAt(double u, double v = 0) const;
     // (n.v) Lambda(v) for proj = (vx ax)^2 + (vy ay)^2 and vz >= 0; a
     // SlopeAlpha table also needs the (isotropic) alpha, which it clamps

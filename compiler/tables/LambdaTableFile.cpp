@@ -22,9 +22,10 @@ constexpr const char* kMagic = "facet lambda table";
 constexpr const char* kKind = "smith_lambda";
 // The nodes' meaning per table axes (LambdaAxes).
 const char* axisText(LambdaAxes axes) {
-    return axes == LambdaAxes::Slope ? "z[i] = log(a Lambda(a)) at a = exp(x0 + i step), alpha = 1"
+    return axes == LambdaAxes::Slope ? "z[i] = log(a Lambda(a)) at a = exp(x0 + i step), alpha = 1; "
+                                       "z[count] = its limit at a = 0"
                                      : "z[j count + i] = log(a Lambda(a, alpha)) at a = exp(x0 + i step), "
-                                       "alpha = exp(y0 + j ystep)";
+                                       "alpha of row coordinate y0 + j ystep; z[rows count + j] = its limit at a = 0";
 }
 constexpr const char* kEncoding = "float64 little-endian";
 constexpr size_t kMaxHeaderBytes = 4096;
@@ -152,7 +153,7 @@ LambdaTableFileResult decodeLambdaTable(const std::string& bytes, const std::str
     t->axes = lambdaAxes(*t->ndf);
     t->grid = lambdaGrid(*t->ndf, t->shape, t->axes);
     const LambdaGrid& g = t->grid;
-    size_t count = size_t(g.size) * g.rows;
+    size_t count = size_t(g.nodeCount());
     if (field("x0") != exact(g.x0) || field("step") != exact(g.step) || field("count") != std::to_string(g.size) ||
         field("y0") != exact(g.y0) || field("ystep") != exact(g.yStep) || field("rows") != std::to_string(g.rows) ||
         field("rowscale") != exact(g.rowScale) ||

@@ -130,13 +130,25 @@ private:
 
 }  // namespace
 
+namespace {
+
+// Below the grid (a < a0): the chord in a from the grazing value g = root
+// f(0) to e = root f(a0) (LambdaTable.h), e + (1 - a / a0)(g - e), with a /
+// a0 = vz / (root a0) (1 at and above the grid, where the sum is e exactly).
+Value* belowGrid(MathEmitter& dm, Value* vz, Value* root, double a0, Value* e, Value* g) {
+    Value* ratio = dm.minnum(dm.div(vz, dm.mul(root, dm.c(a0))), dm.c(1.0));
+    return dm.fma(dm.sub(dm.c(1.0), ratio), dm.sub(g, e), e);
+}
+
+}  // namespace
+
 // (n.v) Lambda(v) = sqrt(proj) f(a), a = vz / sqrt(proj), from the plan's
 // table of z = log f at u = (log a - x0) / h (LambdaTable.h): 4-point
-// Lagrange up to the last node, linear in u beyond it, the first node below
-// the grid; in double (z reaches -690). A SlopeAlpha table interpolates
-// with kAlphaOrder points along u and across its rows at v =
-// LambdaGrid::rowOf(alpha), alpha clamped to the rows' range (proj rescaled
-// to the clamped alpha).
+// Lagrange up to the last node, linear in u beyond it, the chord to the
+// grazing node f(0) below the grid; in double (z reaches -690). A
+// SlopeAlpha table interpolates with kAlphaOrder points along u and across
+// its rows at v = LambdaGrid::rowOf(alpha), alpha clamped to the rows'
+// range (proj rescaled to the clamped alpha).
 Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
                           const std::array<Value*, 3>& v) {
     internal_assert(lane.plan.lambda == LambdaForm::Table && lane.plan.lambdaTable)
@@ -149,12 +161,15 @@ Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfPar
         Value* proj = lane.smithProjection(ndf, n, v);
         Value* projD = dm.convert(proj, dm.type());
         Value* logRoot = dm.mul(dm.log(projD), dm.c(0.5));
-        Value* x = dm.sub(dm.log(dm.convert(v[2], dm.type())), logRoot);
+        Value* vz = dm.convert(v[2], dm.type());
+        Value* x = dm.sub(dm.log(vz), logRoot);
         Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(LambdaTable::kX0)), dm.c(LambdaTable::kStep)), dm.c(0.0));
         Value* uc = dm.minnum(u, dm.c(LambdaTable::kSize - 1.0));
         Value* z = lane.lagrangeFetch(gv, LambdaTable::kSize, uc);
         if (table.endSlope() != 0) z = dm.fma(dm.sub(u, uc), dm.c(table.endSlope()), z);
-        Value* cl = dm.exp(dm.add(z, logRoot));
+        Value* root = dm.sqrt(projD);
+        Value* grazing = dm.mul(root, dm.c(std::exp(table.z[table.grid.grazingNode(0)])));
+        Value* cl = belowGrid(dm, vz, root, std::exp(LambdaTable::kX0), dm.exp(dm.add(z, logRoot)), grazing);
         return fm.select(fm.gt(proj, fm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
     }
     // Isotropic: at the clamped alpha c the projection is c^2 (vx^2 + vy^2),
@@ -171,7 +186,8 @@ Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfPar
     Value* vy = dm.convert(v[1], dm.type());
     Value* side2 = dm.fma(vx, vx, dm.mul(vy, vy));
     Value* logRoot = dm.add(dm.mul(dm.log(side2), dm.c(0.5)), logClamped);
-    Value* x = dm.sub(dm.log(dm.convert(v[2], dm.type())), logRoot);
+    Value* vz = dm.convert(v[2], dm.type());
+    Value* x = dm.sub(dm.log(vz), logRoot);
     Value* u = dm.maxnum(dm.div(dm.sub(x, dm.c(g.x0)), dm.c(g.step)), dm.c(0.0));
     Value* uc = dm.minnum(u, dm.c(size - 1.0));
     // The row: asinh(s b), b = (1 - c)(1 + c) / c^2 (LambdaGrid::rowOf), as
@@ -198,7 +214,11 @@ Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfPar
         slope = slope ? dm.fma(sy.w[r], sr, slope) : dm.mul(sy.w[r], sr);
     }
     z = dm.fma(dm.sub(u, uc), slope, z);
-    Value* cl = dm.exp(dm.add(z, logRoot));
+    // The rows' grazing nodes, across the rows with the same weights.
+    Value* zGrazing = lane.stencilFetch(gv, sy, dm.c(double(g.grazingNode(0))));
+    Value* root = dm.mul(dm.sqrt(side2), clamped);
+    Value* cl = belowGrid(dm, vz, root, std::exp(g.x0), dm.exp(dm.add(z, logRoot)),
+                          dm.exp(dm.add(zGrazing, logRoot)));
     return fm.select(dm.gt(side2, dm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
 }
 
