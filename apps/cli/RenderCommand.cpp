@@ -370,36 +370,36 @@ int pdfPlotCommand(const RenderArgs& r) {
     std::unique_ptr<Interpreter<double>> sampler = referenceInterpreter(*m);
 
     SphereGrid grid = SphereGrid::equalArea(kPdfPlotRows, kPdfPlotColumns);
-    preview::SampleHistogram h;
-    h.rows = grid.rings(), h.columns = grid.sectors();
-    h.observed.assign(size_t(grid.cellCount()), 0.0);
+    CellHistogram samples(grid);
     SampleUniforms uniforms(r.seed);  // those of `facet sample`: a seed draws the same samples
     auto uniform = [&] { return uniforms.next(); };
-    long invalid = 0, none = 0;
+    long invalid = 0;
     for (long i = 0; i < r.samples; ++i) {
         double u[3] = {uniform(), uniform(), uniform()};
         SampleResult<double> s = sampler->sample(wo.data(), u, nullptr);
         invalid += !s.valid;
-        int cell = s.valid && s.pdf > 0 ? grid.cellOf(s.wi) : -1;
-        if (cell < 0) ++none;
-        else h.observed[size_t(cell)] += 1;
+        if (s.valid && s.pdf > 0) samples.add(grid, s.wi);
+        else samples.addNone();
     }
     if (invalid) {
         std::fprintf(stderr, "facet: render: %ld of %ld samples are invalid (the material's default inputs are not "
                      "finite, or a result overflowed)\n", invalid, r.samples);
         return kExitFailed;
     }
-    double n = double(r.samples);
     auto pdf = [&](const Vec3<double>& wi) {
         double w[3] = {wi.x, wi.y, wi.z};
         PdfResult<double> p = sampler->pdf(w, wo.data(), nullptr);
         return p.valid ? p.pdf : 0.0;
     };
     // Cell integrals to 1% of a sample: far below the counts' noise.
-    h.expected = integrateCells(grid, pdf, 0.01 / n);
-    double mass = 0;
-    for (double& e : h.expected) mass += e, e *= n;
-    Chi2Outcome chi2 = chi2Test(h.observed, h.expected, 0.01);
+    FitOutcome fit = fitToPdf(grid, samples, pdf, FitSettings{0.01 / double(r.samples)});
+    const Chi2Outcome& chi2 = fit.chi2;
+    double mass = fit.integral;
+    long none = samples.unbinned;
+    preview::SampleHistogram h;
+    h.rows = grid.rings(), h.columns = grid.sectors();
+    h.observed = std::move(samples.observed);
+    h.expected = std::move(fit.expected);
 
     preview::PdfPlotOptions opt;
     if (r.size) opt.width = *r.size, opt.height = *r.size * 3 / 8;

@@ -136,6 +136,22 @@ std::vector<double> integrateCells(const SphereGrid& grid, const PdfFunction& pd
     return out;
 }
 
+FitOutcome fitToPdf(const SphereGrid& grid, const CellHistogram& samples, const PdfFunction& pdf,
+                    const FitSettings& s) {
+    FitOutcome out;
+    out.expected = integrateCells(grid, pdf, s.tolerance);
+    for (int i = 0; i < grid.rings(); ++i)
+        for (int j = 0; j < grid.sectors(); ++j) {
+            double p = out.expected[size_t(i * grid.sectors() + j)];
+            out.integral += p;
+            if (grid.thetaEdges()[size_t(i)] >= std::numbers::pi / 2) out.belowHorizon += p;
+        }
+    double scale = s.renormalize ? double(samples.draws - samples.unbinned) / out.integral : double(samples.draws);
+    for (double& e : out.expected) e *= scale;
+    out.chi2 = chi2Test(samples.observed, out.expected, s.level, s.minExpected);
+    return out;
+}
+
 Chi2Outcome chi2Test(const std::vector<double>& observed, const std::vector<double>& expected, double level,
                      double minExpected) {
     Chi2Outcome out;

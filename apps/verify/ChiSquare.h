@@ -77,6 +77,42 @@ struct Chi2Outcome {
 Chi2Outcome chi2Test(const std::vector<double>& observed, const std::vector<double>& expected, double level,
                      double minExpected = 5);
 
+// Sampled directions binned into the cells of a grid; a draw that gives no
+// direction (pdf 0, or a wi in no cell: non-finite or zero) is counted apart.
+struct CellHistogram {
+    explicit CellHistogram(const SphereGrid& grid) : observed(size_t(grid.cellCount()), 0.0) {}
+    std::vector<double> observed;  // per cell
+    long draws = 0, unbinned = 0;
+    void add(const SphereGrid& grid, const Vec3<double>& wi) {
+        ++draws;
+        int cell = grid.cellOf(wi);
+        if (cell < 0) ++unbinned;
+        else observed[size_t(cell)] += 1;
+    }
+    void addNone() { ++draws, ++unbinned; }
+};
+
+struct FitSettings {
+    double tolerance;          // integrateCells' tolerance: per cell, in probability
+    double level = 0.01;       // per test (already Sidak-corrected)
+    double minExpected = 5;
+    bool renormalize = false;  // expected counts scaled to the binned draws (the shape only)
+};
+
+struct FitOutcome {
+    std::vector<double> expected;  // per cell: its probability times the draws (see renormalize)
+    double integral = 0;           // the pdf over the whole sphere
+    double belowHorizon = 0;       // ... over n.wi < 0 (a grid edge lies on the horizon)
+    Chi2Outcome chi2;
+};
+
+// The whole goodness-of-fit run once the samples are binned: the pdf
+// integrated over the same cells, its integral, the expected counts and
+// Pearson's test (what the sampling tests, `facet render --plot pdf` and
+// facet.testing.chi2 share).
+FitOutcome fitToPdf(const SphereGrid& grid, const CellHistogram& samples, const PdfFunction& pdf,
+                    const FitSettings& settings);
+
 // P(X >= x) for X chi-square distributed with dof degrees of freedom.
 double chi2Survival(double x, int dof);
 

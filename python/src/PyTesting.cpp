@@ -32,13 +32,8 @@ py::dict chi2(const PyKernel& kernel, py::handle wo, py::handle wi, py::dict inp
     double theta = std::atan2(std::hypot(out.x, out.y), out.z), phi = std::atan2(-out.y, -out.x);
     SphereGrid grid = equalArea ? SphereGrid::equalArea(int(std::lround(1 / firstTheta)), int(std::lround(1 / firstPhi)))
                                 : SphereGrid::forLobe(theta, theta, phi, firstTheta, firstPhi);
-    std::vector<double> observed(size_t(grid.cellCount()), 0.0);
-    int64_t unbinned = 0;
-    for (int64_t i = 0; i < samples.n; ++i) {
-        int cell = grid.cellOf({samples.rows[0][i], samples.rows[1][i], samples.rows[2][i]});
-        if (cell < 0) ++unbinned;
-        else observed[size_t(cell)] += 1;
-    }
+    CellHistogram binned(grid);
+    for (int64_t i = 0; i < samples.n; ++i) binned.add(grid, {samples.rows[0][i], samples.rows[1][i], samples.rows[2][i]});
     // The density: the kernel's own, another kernel's, or a Python callable
     // taking wi as a (3,) float64 array (the deliberately wrong pdfs of tests).
     const PyKernel* other = pdf.is_none() ? &kernel : py::isinstance<PyKernel>(pdf) ? &pdf.cast<const PyKernel&>() : nullptr;
@@ -52,20 +47,18 @@ py::dict chi2(const PyKernel& kernel, py::handle wo, py::handle wi, py::dict inp
         std::copy(a, a + 3, arg.mutable_data());
         return pdf(arg).cast<double>();
     };
-    std::vector<double> expected = integrateCells(grid, density, tolerance);
-    double integral = 0;
-    for (double e : expected) integral += e;
-    double n = double(samples.n);
-    for (double& e : expected) e *= n;
-    Chi2Outcome outcome = chi2Test(observed, expected, level);
+    FitOutcome fit = fitToPdf(grid, binned, density, FitSettings{tolerance, level});
+    const Chi2Outcome& outcome = fit.chi2;
+    const std::vector<double>& observed = binned.observed;
+    const std::vector<double>& expected = fit.expected;
 
     py::dict result;
     result["statistic"] = outcome.statistic;
     result["dof"] = outcome.dof;
     result["p_value"] = outcome.pValue;
     result["failure"] = outcome.failure;
-    result["integral"] = integral;
-    result["unbinned"] = unbinned;
+    result["integral"] = fit.integral;
+    result["unbinned"] = binned.unbinned;
     py::array_t<double> obs({grid.rings(), grid.sectors()}), exp({grid.rings(), grid.sectors()});
     std::copy(observed.begin(), observed.end(), obs.mutable_data());
     std::copy(expected.begin(), expected.end(), exp.mutable_data());

@@ -19,28 +19,23 @@ std::string CheckOutcome::describe() const {
 
 CheckOutcome checkSampler(const Sampler& sampler, const PdfFunction& pdf, const SphereGrid& grid,
                           const CheckSettings& s) {
-    CheckOutcome out;
-    std::vector<double> observed(grid.cellCount(), 0.0);
+    CellHistogram samples(grid);
     std::mt19937_64 rng(s.seed);
     std::uniform_real_distribution<double> uniform(0, 1);
     for (int i = 0; i < s.samples; ++i) {
         std::array<double, 3> u{uniform(rng), uniform(rng), uniform(rng)};
         facet::SampleResult<double> r = sampler(u);
-        int cell = r.pdf > 0 ? grid.cellOf(r.wi) : -1;
-        if (cell < 0) ++out.noSample;
-        else observed[cell] += 1;
+        if (r.pdf > 0) samples.add(grid, r.wi);
+        else samples.addNone();
     }
-    std::vector<double> expected =
-        integrateCells(grid, pdf, s.normalizationTolerance / (10.0 * double(grid.cellCount())));
-    for (int i = 0; i < grid.rings(); ++i)
-        for (int j = 0; j < grid.sectors(); ++j) {
-            double p = expected[i * grid.sectors() + j];
-            out.integral += p;
-            if (grid.thetaEdges()[i] >= std::numbers::pi / 2) out.belowHorizon += p;  // an edge is at the horizon
-        }
-    double scale = s.renormalize ? (s.samples - out.noSample) / out.integral : s.samples;
-    for (double& e : expected) e *= scale;
-    out.chi2 = chi2Test(observed, expected, s.level, s.minExpected);
+    FitSettings fit{s.normalizationTolerance / (10.0 * double(grid.cellCount())), s.level, s.minExpected,
+                    s.renormalize};
+    FitOutcome f = fitToPdf(grid, samples, pdf, fit);
+    CheckOutcome out;
+    out.integral = f.integral;
+    out.belowHorizon = f.belowHorizon;
+    out.noSample = int(samples.unbinned);
+    out.chi2 = f.chi2;
     return out;
 }
 
