@@ -1,6 +1,8 @@
 // Specialize: input binding and constant folding (see Specialize.h).
 #include "Specialize.h"
 
+#include "BsdfFolding.h"
+
 #include "ExprEval.h"
 
 #include <fmt/format.h>
@@ -168,6 +170,7 @@ CheckedMaterial specializeMaterial(const CheckedMaterial& material, const InputB
                 if (arg) arg = folder.mutate(arg);
     for (BsdfNode& node : out.bsdf)
         if (node.weight) node.weight = folder.mutate(node.weight);
+    foldBsdfWeights(out);
     return out;
 }
 

@@ -6,7 +6,9 @@
 // replaces their uses by the clamped constant, and folds constant
 // subexpressions in double precision, so that lets and model arguments that
 // no longer depend on any input become plain numbers. Lowering then sees
-// constants and can drop work (a constant F0 is computed once, not per lane).
+// constants and can drop work (a constant F0 is computed once, not per lane),
+// and the combination's constant weights fold (BsdfFolding.h: a lobe whose
+// weight is 0 is dropped, a weight of 1 disappears).
 #pragma once
 
 #include "Diagnostics.h"

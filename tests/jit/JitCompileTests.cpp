@@ -8,6 +8,7 @@
 #include "Lowering.h"
 #include "Pipeline.h"
 
+#include <cstring>
 #include <ctime>
 
 #include <fstream>
@@ -176,4 +177,45 @@ TEST_CASE("compile times count the CPU time of the compile stack's thread") {
     CHECK(own < 20);                // the caller only waited
     CHECK(caller >= worked + own);  // ...and is charged with the work
     CHECK(caller < worked + own + 20);
+}
+
+// SPEC 10, "Specialization": a lobe whose weight is bound to 0 is not
+// compiled (the kernel is the other lobe's alone, to the bit); a weight
+// bound to 1 is folded (the kernel is the unweighted layer's, to the bit).
+TEST_CASE("a lobe weighted 0 by a binding is not compiled, a weight bound to 1 is folded") {
+    const std::string lobes = R"(
+    lobe flakes {
+        ndf = ggx(0.16);
+        masking = smith_height_correlated;
+        fresnel = conductor(eta = rgb(0.2, 0.92, 1.1), k = rgb(3.9, 2.45, 2.14));
+    }
+    lobe clearcoat {
+        ndf = ggx(0.03);
+        masking = smith_height_correlated;
+        fresnel = dielectric(eta = 1.5);
+    })";
+    const std::string paint = "material paint {\n    input coat = 0.5 in 0 .. 1;" + lobes +
+                              "\n    bsdf = layer(clearcoat, flakes, weight = coat);\n}\n";
+    const std::string coated = "material coated {" + lobes + "\n    bsdf = layer(clearcoat, flakes);\n}\n";
+    const std::string flakes = "material flakes {" + lobes.substr(0, lobes.find("lobe clearcoat")) +
+                               "\n    bsdf = flakes;\n}\n";
+    Compiler c;
+    for (const char* backend : {"backend=scalar", "backend=simd"}) {
+        CAPTURE(std::string(backend));
+        auto bare = compile(c, paint, std::string(backend) + ";set.coat=0");
+        auto alone = compile(c, flakes, backend);
+        auto full = compile(c, paint, std::string(backend) + ";set.coat=1");
+        auto unweighted = compile(c, coated, backend);
+        CHECK(!bare->material().combinesLobes());
+        CHECK(bare->material().lobes.size() == 1);
+        CHECK(full->material().bsdfRoot().weight == nullptr);
+        Batch a(2000, 7), b(2000, 7), x(2000, 7), y(2000, 7);
+        a.run(*bare), b.run(*alone), x.run(*full), y.run(*unweighted);
+        for (int ch = 0; ch < 3; ++ch) {
+            CHECK(std::memcmp(a.out[ch].data(), b.out[ch].data(), a.out[ch].size() * sizeof(float)) == 0);
+            CHECK(std::memcmp(x.out[ch].data(), y.out[ch].data(), x.out[ch].size() * sizeof(float)) == 0);
+        }
+        // The flakes lobe alone is not the coated paint: the test can fail.
+        CHECK(std::memcmp(a.out[0].data(), x.out[0].data(), a.out[0].size() * sizeof(float)) != 0);
+    }
 }

@@ -4,6 +4,7 @@
 // values, a scale and a mix likewise), with inputs read through weights.
 #include "Checker.h"
 #include "Interpreter.h"
+#include "Specialize.h"
 
 #include <doctest/doctest.h>
 
@@ -167,6 +168,57 @@ TEST_CASE("only what a lobe or a weight reads invalidates a lane") {
     CheckedProgram unread = checkText(combined("spec + 0.5 * base"));
     CHECK(unread.materials.at(0).readByModels().inputs == std::vector<bool>{true, false});
     CHECK(Interpreter<double>(unread.materials.at(0)).eval(wi.data(), wo.data(), nanWeight).valid);
+}
+
+// SPEC 10, "Specialization": with the weights constant (written so, or
+// bound), a lobe whose weight is 0 is dropped and a weight of 1 disappears
+// (BsdfFolding.h); the folded material gives the same numbers, to the bit,
+// as the combination it came from with the same values. Weights that are
+// not all 0 or all 1, or not constant, stay.
+TEST_CASE("specialization folds constant weights: a lobe weighted 0 is dropped, a weight of 1 disappears") {
+    struct Case {
+        const char* bsdf;
+        double w;  // bound when >= 0
+        const char* folded;
+    };
+    const Case cases[] = {
+        {"0 * spec + base", -1, "base"},
+        {"1 * spec + base", -1, "(spec + base)"},
+        {"rgb(1, 1, 1) * spec + 0 * base", -1, "spec"},
+        {"mix(spec, base, w)", 0, "spec"},
+        {"mix(spec, base, w)", 1, "base"},
+        {"layer(spec, base, weight = w)", 0, "base"},
+        {"layer(spec, base, weight = w)", 1, "layer(spec, base)"},
+        {"w * spec + base", 0, "base"},
+        {"rgb(0, 0, 1) * spec + base", -1, "((rgb(0, 0, 1) * spec) + base)"},
+        {"mix(spec, base, w)", -1, "mix(spec, base, w)"},
+        {"mix(0 * spec, base, w)", -1, "mix((0 * spec), base, w)"},
+        {"0 * spec + 0 * base", -1, "((0 * spec) + (0 * base))"},  // nothing at all: as written
+    };
+    for (const Case& c : cases) {
+        std::string bsdf = c.bsdf;
+        CAPTURE(bsdf);
+        CAPTURE(c.w);
+        CheckedProgram p = checkText(combined(c.bsdf));
+        const CheckedMaterial& written = p.materials.at(0);
+        DiagnosticEngine d;
+        InputBindings bind;
+        if (c.w >= 0) bind["w"] = {c.w};
+        CheckedMaterial folded = specializeMaterial(written, bind, d);
+        REQUIRE(!d.hasErrors());
+        CHECK(printBsdf(folded, folded.bsdfRoot()) == c.folded);
+        // Every lobe left is referred to; a combination folded to one lobe
+        // is a one-lobe material (what the compiled backends lower alone).
+        for (const CheckedLobe& lobe : folded.lobes)
+            CHECK(std::string(c.folded).find(lobe.name) != std::string::npos);
+        CHECK(folded.combinesLobes() == (folded.bsdf.size() != 1));
+        const double writtenSlots[2] = {0.4, c.w >= 0 ? c.w : 0.3};
+        const double foldedSlots[2] = {0.4, 0.3};
+        for (const auto& [wi, wo] : kPairs) {
+            std::array<double, 3> a = evalOf(written, wi, wo, writtenSlots), b = evalOf(folded, wi, wo, foldedSlots);
+            for (int ch = 0; ch < 3; ++ch) CHECK(a[ch] == b[ch]);
+        }
+    }
 }
 
 }  // TEST_SUITE
