@@ -116,15 +116,36 @@ std::vector<std::string> batchSizeCells(const BatchSizeRow& r) {
     return c;
 }
 
-const std::vector<Column>& batchSizeColumns() {
-    static const std::vector<Column> c = [] {
-        static std::vector<std::string> titles;
-        for (size_t n : kBatchSizes) titles.push_back(fmt::format("n={}", n));
-        std::vector<Column> cols{{"ns/eval by batch size", 32, true}};
-        for (const std::string& t : titles) cols.push_back({t.c_str(), 8, false});
-        return cols;
+// The batch-size table's columns, the first titled `what`.
+std::vector<Column> batchSizeColumns(const char* what) {
+    static const std::vector<std::string> titles = [] {
+        std::vector<std::string> t;
+        for (size_t n : kBatchSizes) t.push_back(fmt::format("n={}", n));
+        return t;
     }();
-    return c;
+    std::vector<Column> cols{{what, 32, true}};
+    for (const std::string& t : titles) cols.push_back({t.c_str(), 8, false});
+    return cols;
+}
+constexpr const char* kBatchNsTitle = "ns/eval by batch size";
+constexpr const char* kBatchRatioTitle = "ratio to aot bare, same n";
+
+// The batch-size rows over the bare loop's ns/eval at the same batch size
+// (SPEC 6: the hand-written loop pays the same per-call costs on short
+// batches), when the material has an AOT bare twin; else none.
+std::vector<BatchSizeRow> batchRatioRows(const std::vector<BatchSizeRow>& rows) {
+    const BatchSizeRow* bare = nullptr;
+    for (const BatchSizeRow& r : rows)
+        if (r.label == "aot bare") bare = &r;
+    std::vector<BatchSizeRow> out;
+    if (!bare) return out;
+    for (const BatchSizeRow& r : rows) {
+        if (&r == bare) continue;
+        BatchSizeRow q{r.label, {}};
+        for (size_t i = 0; i < r.nsPerEval.size(); ++i) q.nsPerEval.push_back(r.nsPerEval[i] / bare->nsPerEval[i]);
+        out.push_back(std::move(q));
+    }
+    return out;
 }
 
 std::string header(const BenchReport& report, const MaterialBench& m) {
@@ -221,7 +242,9 @@ void printTable(const BenchReport& report, std::FILE* out) {
         std::fprintf(out, "summary: %s\n", summaryLine(m).c_str());
         if (m.lobesAlone) std::fprintf(out, "%s\n", lobesAloneLine(m).c_str());
         if (!m.batchSizes.empty())
-            std::fprintf(out, "%s", textTable(batchSizeColumns(), m.batchSizes, batchSizeCells).c_str());
+            std::fprintf(out, "%s", textTable(batchSizeColumns(kBatchNsTitle), m.batchSizes, batchSizeCells).c_str());
+        if (std::vector<BatchSizeRow> ratios = batchRatioRows(m.batchSizes); !ratios.empty())
+            std::fprintf(out, "%s", textTable(batchSizeColumns(kBatchRatioTitle), ratios, batchSizeCells).c_str());
         if (!m.samplerRows.empty()) {
             std::fprintf(out, "sampling (sample and pdf batches):\n%s",
                          textTable(samplerColumns(), m.samplerRows, samplerCells).c_str());
@@ -262,7 +285,11 @@ std::string markdown(const BenchReport& report) {
             md += "\nBatch sizes: the regular sample evaluated in consecutive batches of n lanes, one call each "
                   "(`Kernel::evalBatch` for the SIMD rows, the AOT functions through a function pointer); the "
                   "scalar entry once per lane. ns/eval, median of the runs.\n\n";
-            md += markdownTable(batchSizeColumns(), m.batchSizes, batchSizeCells);
+            md += markdownTable(batchSizeColumns(kBatchNsTitle), m.batchSizes, batchSizeCells);
+            if (std::vector<BatchSizeRow> ratios = batchRatioRows(m.batchSizes); !ratios.empty()) {
+                md += "\nThe same rows over the bare loop's ns/eval at the same batch size:\n\n";
+                md += markdownTable(batchSizeColumns(kBatchRatioTitle), ratios, batchSizeCells);
+            }
         }
         if (!m.samplerRows.empty()) {
             md += "\nSampling: `Kernel::sampleBatch` and `Kernel::pdfBatch` (the AOT row: the hand-written sampler) on "
@@ -381,17 +408,21 @@ void writeError(Json& j, const ErrorStats& e) {
 
 // [{"evaluator": label, "ns_per_eval": {"1": ns or null, ...}}, ...]
 void writeBatchSizes(Json& j, const std::vector<BatchSizeRow>& rows) {
+    std::vector<BatchSizeRow> ratios = batchRatioRows(rows);
+    auto perSize = [&](const char* key, const std::vector<double>& values) {
+        j.key(key);
+        j.open('{');
+        for (size_t i = 0; i < values.size(); ++i)
+            j.field(std::to_string(kBatchSizes[i]), std::isnan(values[i]) ? std::nullopt : std::optional<double>(values[i]));
+        j.close('}');
+    };
     j.open('[');
     for (const BatchSizeRow& r : rows) {
         j.open('{');
         j.field("evaluator", r.label);
-        j.key("ns_per_eval");
-        j.open('{');
-        for (size_t i = 0; i < r.nsPerEval.size(); ++i) {
-            double ns = r.nsPerEval[i];
-            j.field(std::to_string(kBatchSizes[i]), std::isnan(ns) ? std::nullopt : std::optional<double>(ns));
-        }
-        j.close('}');
+        perSize("ns_per_eval", r.nsPerEval);
+        for (const BatchSizeRow& q : ratios)
+            if (q.label == r.label) perSize("ratio_to_bare", q.nsPerEval);
         j.close('}');
     }
     j.close(']');

@@ -359,6 +359,29 @@ TEST_CASE("bench --json output parses and has every field") {
     CHECK(evaluators == std::set<std::string>{"simd exact", "simd fast", "simd exact, assume=unit",
                                               "simd fast, assume=unit", "aot hand-written", "aot bare",
                                               "scalar exact, one call per lane"});
+    // Each row but the bare one also as its ratio to the bare loop at the same n.
+    const JsonObject* bareNs = nullptr;
+    for (const JsonValue& rv : m.at("batch_sizes").arr())
+        if (rv.obj().at("evaluator").str() == "aot bare") bareNs = &rv.obj().at("ns_per_eval").obj();
+    REQUIRE(bareNs);
+    for (const JsonValue& rv : m.at("batch_sizes").arr()) {
+        const JsonObject& r = rv.obj();
+        std::string evaluator = r.at("evaluator").str();
+        CAPTURE(evaluator);
+        if (evaluator == "aot bare") {
+            CHECK(r.count("ratio_to_bare") == 0);
+            continue;
+        }
+        checkField(r, "ratio_to_bare", Kind::Object);
+        for (size_t n : bench::kBatchSizes) {
+            std::string key = std::to_string(n);
+            const JsonValue& ns = r.at("ns_per_eval").obj().at(key);
+            const JsonValue& ratio = r.at("ratio_to_bare").obj().at(key);
+            if (ns.isNull()) CHECK(ratio.isNull());
+            else CHECK(ratio.num() == doctest::Approx(ns.num() / bareNs->at(key).num()).epsilon(1e-7));  // 9 digits each
+        }
+    }
+    CHECK(bench::markdown(report).find("| ratio to aot bare, same n ") != std::string::npos);
 
     // The sampler rows: interp, scalar and simd (exact, fast), and the
     // hand-written GGX visible-normal sampler of the AOT twin.
