@@ -192,9 +192,8 @@ double LambdaTable::fAt(double u, double v) const {
         zGrazing += wy[r] * z[g.grazingNode(j + r)];
     }
     if (!(u < 0)) return std::exp(zz);
-    // Below the grid: the chord in a from f(0) to f(a0), a / a0 = exp(u step).
-    double f0 = std::exp(zGrazing);
-    return f0 + (std::exp(zz) - f0) * std::exp(u * g.step);
+    // Below the grid: the chord in a from z(0) to z(a0), a / a0 = exp(u step).
+    return std::exp(zGrazing + (zz - zGrazing) * std::exp(u * g.step));
 }
 
 double LambdaTable::cosLambda(double proj, double vz, double alpha) const {

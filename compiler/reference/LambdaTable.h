@@ -35,11 +35,12 @@
 // pi/2, by the same quadrature).
 // Lookup: u = (x - x0) / h; 4-point Lagrange inside; beyond the grid's end
 // linear in x from the last two nodes (the power-law tail); below the grid
-// (a < a0 = exp(x0), down to a = 0 at n.v = 0) the chord in a between f(0)
-// and f(a0): f(0) + (f(a0) - f(0)) a / a0. With P the density of one slope
-// component, f(a) = Int_a^inf (q - a) P(q) dq = f(0) - a/2 + P(0) a^2/2 +
-// ..., so the chord is off by at most P(0) a0^2 / 8 (an earlier table held
-// f(a0) there, off by a0 / 2: 1e-5 relative at n.v = 1e-6 on the (a,
+// (a < a0 = exp(x0), down to a = 0 at n.v = 0) z on the chord in a between
+// z(0) and z(a0): z(0) + (z(a0) - z(0)) a / a0. With P the density of one
+// slope component, f(a) = Int_a^inf (q - a) P(q) dq = f(0) - a/2 + P(0)
+// a^2/2 + ..., so log f is smooth in a there and the chord is off by at
+// most |P(0)/f(0) - 1/(4 f(0)^2)| a0^2 / 8 relative (an earlier table held
+// f(a0), off by a0 / 2 / f(0): 1e-5 relative at n.v = 1e-6 on the (a,
 // alpha) grid below, whose a0 is 1e-5).
 // Then (n.v) Lambda(v) = sqrt(proj) f(a), proj = (vx ax)^2 + (vy ay)^2,
 // a = vz / sqrt(proj) (the anisotropic stretch), 0 where proj = 0.

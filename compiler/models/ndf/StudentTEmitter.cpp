@@ -132,12 +132,12 @@ private:
 
 namespace {
 
-// Below the grid (a < a0): the chord in a from the grazing value g = root
-// f(0) to e = root f(a0) (LambdaTable.h), e + (1 - a / a0)(g - e), with a /
-// a0 = vz / (root a0) (1 at and above the grid, where the sum is e exactly).
-Value* belowGrid(MathEmitter& dm, Value* vz, Value* root, double a0, Value* e, Value* g) {
+// Below the grid (a < a0): z on the chord in a from the grazing node zg =
+// ln f(0) to z = ln f(a0) (LambdaTable.h), z + (1 - a / a0)(zg - z), with a /
+// a0 = vz / (root a0) (1 at and above the grid, where the sum is z exactly).
+Value* belowGrid(MathEmitter& dm, Value* vz, Value* root, double a0, Value* z, Value* zg) {
     Value* ratio = dm.minnum(dm.div(vz, dm.mul(root, dm.c(a0))), dm.c(1.0));
-    return dm.fma(dm.sub(dm.c(1.0), ratio), dm.sub(g, e), e);
+    return dm.fma(dm.sub(dm.c(1.0), ratio), dm.sub(zg, z), z);
 }
 
 }  // namespace
@@ -167,9 +167,9 @@ Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfPar
         Value* uc = dm.minnum(u, dm.c(LambdaTable::kSize - 1.0));
         Value* z = lane.lagrangeFetch(gv, LambdaTable::kSize, uc);
         if (table.endSlope() != 0) z = dm.fma(dm.sub(u, uc), dm.c(table.endSlope()), z);
-        Value* root = dm.sqrt(projD);
-        Value* grazing = dm.mul(root, dm.c(std::exp(table.z[table.grid.grazingNode(0)])));
-        Value* cl = belowGrid(dm, vz, root, std::exp(LambdaTable::kX0), dm.exp(dm.add(z, logRoot)), grazing);
+        z = belowGrid(dm, vz, dm.sqrt(projD), std::exp(LambdaTable::kX0), z,
+                      dm.c(table.z[table.grid.grazingNode(0)]));
+        Value* cl = dm.exp(dm.add(z, logRoot));
         return fm.select(fm.gt(proj, fm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
     }
     // Isotropic: at the clamped alpha c the projection is c^2 (vx^2 + vy^2),
@@ -216,9 +216,8 @@ Value* tabulatedCosLambda(LaneEmitter& lane, const NdfEmitter& ndf, const NdfPar
     z = dm.fma(dm.sub(u, uc), slope, z);
     // The rows' grazing nodes, across the rows with the same weights.
     Value* zGrazing = lane.stencilFetch(gv, sy, dm.c(double(g.grazingNode(0))));
-    Value* root = dm.mul(dm.sqrt(side2), clamped);
-    Value* cl = belowGrid(dm, vz, root, std::exp(g.x0), dm.exp(dm.add(z, logRoot)),
-                          dm.exp(dm.add(zGrazing, logRoot)));
+    z = belowGrid(dm, vz, dm.mul(dm.sqrt(side2), clamped), std::exp(g.x0), z, zGrazing);
+    Value* cl = dm.exp(dm.add(z, logRoot));
     return fm.select(dm.gt(side2, dm.c(0.0)), fm.convert(cl, fm.type()), fm.c(0.0));
 }
 
