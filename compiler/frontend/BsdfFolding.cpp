@@ -101,12 +101,13 @@ bool foldBsdfWeights(CheckedMaterial& material) {
     Folder folder(material.bsdf);
     if (folder.fold(int(material.bsdf.size()) - 1) == kNothing || !folder.changed) return false;
     // The lobes still referred to, in source order.
-    std::vector<int> lobeRemap(material.lobes.size(), -1);
+    std::vector<bool> used(material.lobes.size(), false);
     for (const BsdfNode& n : folder.out)
-        if (n.kind == BsdfKind::Lobe) lobeRemap[size_t(n.lobe)] = 0;
+        if (n.kind == BsdfKind::Lobe) used[size_t(n.lobe)] = true;
+    std::vector<int> lobeRemap(material.lobes.size(), -1);
     std::vector<CheckedLobe> lobes;
     for (size_t l = 0; l < material.lobes.size(); ++l)
-        if (lobeRemap[l] == 0) lobeRemap[l] = int(lobes.size()), lobes.push_back(std::move(material.lobes[l]));
+        if (used[l]) lobeRemap[l] = int(lobes.size()), lobes.push_back(std::move(material.lobes[l]));
     for (BsdfNode& n : folder.out)
         if (n.kind == BsdfKind::Lobe) n.lobe = lobeRemap[size_t(n.lobe)];
     material.lobes = std::move(lobes);
