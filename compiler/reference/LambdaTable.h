@@ -16,7 +16,7 @@
 //   (n.v) Lambda(v) = 2 Int_0^theta D(w) cos(w) (S - B atan(S/B)) dw,
 //   S = sqrt(A^2 - B^2) = sqrt(sin(theta - w) sin(theta + w)),
 // a sum of positive terms (no cancellation against n.v, so Lambda keeps its
-// relative accuracy where it is tiny). It is integrated with 12-point
+// relative accuracy where it is tiny). It is integrated with 8-point
 // Gauss-Legendre panels graded toward both ends (toward w = 0, where a
 // heavy-tailed D may be singular like w^p, p > -1, the last piece below
 // 1e-9 theta is added from the power law fitted there).
@@ -105,7 +105,7 @@ struct CheckedMaterial;
 struct CheckedLobe;
 
 // Bumped whenever the table contents would change.
-constexpr int kLambdaTableVersion = 4;
+constexpr int kLambdaTableVersion = 5;
 
 // What a table's nodes span. Slope: the Lambda of a shape-invariant NDF, a
 // function of a alone (one row, alpha = 1). SlopeAlpha: the Lambda of an
