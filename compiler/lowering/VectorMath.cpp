@@ -330,6 +330,47 @@ Value* MathEmitter::erfcxWide(Value* x) {
     return mul(t, add(fma(u, b1, neg(b2)), c(kCheb[0])));
 }
 
+Value* MathEmitter::gaussianQuantile(Value* u, double limit) {
+    // By symmetry from the lower tail q = 2 min(u, 1 - u) (1 - u is exact),
+    // where C(y) = erfc(-y)/2 = q/2, y <= 0. The start: Giles's
+    // single-precision erfinv(q - 1) (GPU Computing Gems, 2010: a fit in w =
+    // -ln(q (2 - q)), one polynomial below w = 5 and one in sqrt(w) above) up
+    // to w = 12, and beyond it, where that fit was not made, y^2 = L -
+    // ln(L)/2 with L = -ln(q sqrt(pi)) = w + ln 2 - ln(pi)/2 (from erfc(z) ~
+    // exp(-z^2) / (z sqrt(pi))); both within 2e-3 of the root. Then two Halley
+    // steps on C(y) = q/2 with t = (C - q/2) / C' = sqrt(pi) (erfcx(-y)/2 -
+    // (q/2) exp(y^2)): cubic convergence, 9e-16 from the worst start
+    // (MathTests). One or two logarithms and two CDFs, where a bracketed
+    // Newton iteration takes a CDF and a logarithm per step, and accurate
+    // near u = 1 too, where C(y) - u would cancel.
+    internal_assert(isDouble_ && limit > 0 && limit <= 8) << "gaussianQuantile in float or beyond erfcxWide's [0, 8]";
+    Value* upper = gt(u, c(0.5));
+    Value* q = mul(select(upper, sub(c(1.0), u), u), c(2.0));
+    q = maxnum(q, c(0x1p-1000));  // u = 0: a finite start, clamped below
+    Value* w = neg(log(mul(q, sub(c(2.0), q))));
+    Value* qm1 = sub(q, c(1.0));
+    Value* central = mul(poly(sub(w, c(2.5)), {1.50140941, 0.246640727, -0.00417768164, -0.00125372503,
+                                               0.00021858087, -4.39150654e-06, -3.5233877e-06, 3.43273939e-07,
+                                               2.81022636e-08}),
+                         qm1);
+    Value* outer = mul(poly(sub(sqrt(w), c(3.0)), {2.83297682, 1.00167406, 0.00943887047, -0.0076224613,
+                                                   0.00573950773, -0.00367342844, 0.00134934322, 0.000100950558,
+                                                   -0.000200214257}),
+                       qm1);
+    Value* L = add(w, c(std::log(2.0) - 0.5 * std::log(M_PI)));
+    Value* tail = neg(sqrt(fma(log(L), c(-0.5), L)));
+    Value* y = select(lt(w, c(5.0)), central, select(le(w, c(12.0)), outer, tail));
+    auto clamp = [&](Value* v) { return minnum(maxnum(v, c(-limit)), c(0.0)); };
+    Value* halfQ = mul(q, c(0.5));
+    for (int step = 0; step < 2; ++step) {
+        y = clamp(y);
+        Value* t = mul(c(std::sqrt(M_PI)), sub(mul(erfcxWide(neg(y)), c(0.5)), mul(halfQ, expNormal(mul(y, y)))));
+        y = sub(y, div(t, fma(y, t, c(1.0))));
+    }
+    y = clamp(y);
+    return select(upper, neg(y), y);
+}
+
 Value* MathEmitter::atan2(Value* y, Value* x) {
     // Reduce to a = min/max in [0, 1], then to |t| <= tan(pi/8) with
     // atan(a) = pi/4 + atan((a-1)/(a+1)); odd Taylor series to t^21.

@@ -99,6 +99,10 @@ public:
     // The same for 0 <= x <= 8 to double precision (for double callers that
     // invert a CDF built from it, where erfcx()'s 1e-9 moves the root).
     llvm::Value* erfcxWide(llvm::Value* x);
+    // y with erfc(-y)/2 = u (the quantile of the density exp(-y^2)/sqrt(pi)),
+    // clamped to [-limit, limit], limit <= 8: within 1e-15 of long double
+    // for u in [1e-30, 1 - 2^-24]. Double only.
+    llvm::Value* gaussianQuantile(llvm::Value* u, double limit);
     // atan2(y, x) for y >= 0, in [0, pi].
     llvm::Value* atan2(llvm::Value* y, llvm::Value* x);
     // sin(2 pi t) and cos(2 pi t) for t in [-1, 1] (turns: an azimuth from a

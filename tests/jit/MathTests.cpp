@@ -6,6 +6,7 @@
 #include "VectorMath.h"
 
 #include <doctest/doctest.h>
+#include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <cstring>
@@ -172,6 +173,47 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
         }
         MESSAGE("erfcxWide (double) max relative error " << worst);
         CHECK(worst <= 4e-15);
+    }
+    // gaussianQuantile in double: y with erfc(-y)/2 = u against a long double
+    // bisection on erfcl (from the lower tail by symmetry, where 1 - u is
+    // exact), u uniform on (0, 1), log-spaced down to 1e-30 and as close to 1
+    // as a float u gets; beyond the limit 8 (u below erfc(8)/2 = 5.6e-30,
+    // and u = 0 or 1) the clamped value.
+    {
+        auto reference = [](long double u) {
+            bool upper = u > 0.5L;
+            long double q = upper ? 1 - u : u, lo = -9, hi = 0;
+            for (int i = 0; i < 200; ++i) {
+                long double mid = (lo + hi) / 2;
+                (std::erfc(-mid) / 2 < q ? lo : hi) = mid;
+            }
+            long double y = std::clamp((lo + hi) / 2, -8.0L, 0.0L);
+            return upper ? -y : y;
+        };
+        std::vector<double> x, y, out;
+        std::mt19937_64 rng(9);
+        std::uniform_real_distribution<double> uniform(0, 1);
+        for (int i = 0; i < 4096; ++i) {
+            double tail = std::pow(10.0, -7 - 23.0 * i / 4095);
+            for (double v : {uniform(rng), tail, 1 - std::max(tail, 0x1p-24)}) x.push_back(v), y.push_back(0);
+        }
+        for (double v : {0.0, 1.0, 1e-35, 0.5, 0x1p-24, 1 - 0x1p-24}) x.push_back(v), y.push_back(0);
+        while (x.size() % 16) x.push_back(0.25), y.push_back(0);
+        double worst = 0;
+        for (bool vector : {false, true}) {
+            auto f = reinterpret_cast<DoubleArrayFn>(build(
+                *jit, [](MathEmitter& m, Value* v, Value*) { return m.gaussianQuantile(v, 8.0); }, vector, keep, false,
+                true));
+            out.assign(x.size(), NAN);
+            f(x.data(), y.data(), out.data(), int64_t(x.size()));
+            for (size_t i = 0; i < x.size(); ++i) {
+                double err = double(std::fabs(out[i] - reference(x[i])));
+                INFO("u = " << x[i] << ": " << out[i] << ", want " << double(reference(x[i])));
+                CHECK(err <= 1e-14);
+                worst = std::max(worst, err);
+            }
+        }
+        MESSAGE("gaussianQuantile (double) max absolute error " << worst);
     }
     u = maxUlp(*jit, [](MathEmitter& m, Value* x, Value* y) { return m.atan2(m.abs(y), x); }, sweep(-10, 10, -10, 10),
                [](long double x, long double y) { return std::atan2(std::fabs(y), x); }, keep);

@@ -201,7 +201,8 @@ public:
         MathEmitter& dm = lane.doubleMath();
         Value* x = pm.convert(visibleSlope(lane, dm.convert(pm.div(sxy, wo[2]), dm.type()), dm.convert(u1, dm.type())),
                               pm.type());
-        Value* y = pm.convert(visibleSlope(lane, dm.c(0.0), dm.convert(u2, dm.type())), pm.type());
+        // y: visibleSlope's tanT = 0, in closed form.
+        Value* y = pm.convert(dm.gaussianQuantile(dm.convert(u2, dm.type()), kSlopeTail), pm.type());
         return lane.normalFromSlopes(pm.mul(n.axD, pm.fma(cosPhi, x, pm.neg(pm.mul(sinPhi, y)))),
                                      pm.mul(n.ayD, pm.fma(sinPhi, x, pm.mul(cosPhi, y))));
     }
