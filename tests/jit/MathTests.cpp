@@ -199,6 +199,8 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
         }
         for (double v : {0.0, 1.0, 1e-35, 0.5, 0x1p-24, 1 - 0x1p-24}) x.push_back(v), y.push_back(0);
         while (x.size() % 16) x.push_back(0.25), y.push_back(0);
+        std::vector<long double> want;
+        for (double v : x) want.push_back(reference(v));
         double worst = 0;
         for (bool vector : {false, true}) {
             auto f = reinterpret_cast<DoubleArrayFn>(build(
@@ -207,8 +209,8 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
             out.assign(x.size(), NAN);
             f(x.data(), y.data(), out.data(), int64_t(x.size()));
             for (size_t i = 0; i < x.size(); ++i) {
-                double err = double(std::fabs(out[i] - reference(x[i])));
-                INFO("u = " << x[i] << ": " << out[i] << ", want " << double(reference(x[i])));
+                double err = double(std::fabs(out[i] - want[i]));
+                INFO("u = " << x[i] << ": " << out[i] << ", want " << double(want[i]));
                 CHECK(err <= 1e-14);
                 worst = std::max(worst, err);
             }
