@@ -264,6 +264,10 @@ MaterialResult runMaterial(const HardCaseMaterial& hm, size_t index, Compiler& c
     static TableCache referenceTables;
     std::shared_ptr<const EnergyTable> table;
     if (m.singleLobe().compensatesEnergy()) table = referenceTables.getFor(m);
+    // A tabulated Lambda through the same cache, before the interpreters ask
+    // the process's memory layer for it: a file an earlier run wrote is
+    // loaded (and spot-checked) instead of the table being built again.
+    if (usesTabulatedLambda(m)) referenceTables.lambdaFor(m);
     QuadReference quad(m, table);
     std::map<size_t, double> kappas, kappasRaw;
     auto condition = [&](size_t i) {
