@@ -8,8 +8,8 @@
 # that are not new paths or regular files stay as they were; and the x86_64
 # objects this host can run (its CPU less some features, or tuning flags)
 # link with aot_run.c, pass its convention checks and match the double
-# interpreter (five of them). Prints one summary line. Run by
-# aot_errors_test.sh (ctest aot_errors), under two minutes on two cores.
+# interpreter (five of them). Prints one summary line. The long tier's
+# ctest aot_fuzz, with the suite's table cache: about two minutes on two cores.
 set -euo pipefail
 build=$1 source=$2
 facet=$build/bin/facet reference=$build/tests/aot/facet_aot_reference
