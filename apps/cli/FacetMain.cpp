@@ -5,13 +5,16 @@
 //   facet eval | lut | bench | verify | render | build | sample ...  (in their own files, Commands.h)
 //
 // main() dispatches to the command and turns what it throws into an exit
-// code: a UsageError prints the usage text.
+// code: a UsageError prints the usage text. Built twice: `facet` hands
+// `render` and `bench` to `facet-imaging`, built with FACET_WITH_IMAGING and
+// OpenImageIO (ImagingHelper.h).
 //
 // Exit codes: 0 ok, 1 a check failed (e.g. invalid rows), 2 usage,
 // 65 a material file error.
 #include "Checker.h"
 #include "Commands.h"
 #include "CompileFlags.h"
+#include "ImagingHelper.h"
 #include "Kernel.h"
 #include "MaterialFile.h"
 #include "OutputFile.h"
@@ -124,6 +127,10 @@ int main(int argc, char** argv) {
     }
     std::string command = args[0];
     args.erase(args.begin());
+#ifndef FACET_WITH_IMAGING
+    // The picture commands live in facet-imaging (ImagingHelper.h).
+    if (command == "render" || command == "bench") return runImagingHelper(argv);
+#endif
     try {
         int status = 0;
         if (command == "check") status = cmdCheck(args);
@@ -131,8 +138,10 @@ int main(int argc, char** argv) {
         else if (command == "ir") status = cmdIr(args);
         else if (command == "verify") status = cmdVerify(args);
         else if (command == "lut") status = cmdLut(args);
+#ifdef FACET_WITH_IMAGING
         else if (command == "bench") status = cmdBench(args);
         else if (command == "render") status = cmdRender(args);
+#endif
         else if (command == "build") status = cmdBuild(args);
         else if (command == "sample") status = cmdSample(args);
         else throw UsageError{fmt::format("unknown command '{}'", command)};

@@ -10,11 +10,11 @@
 // compensation lobe (its cosine-weighted integral over wi is exactly
 // 1 - E(mu_o)), the second their coloured term, which is 1 when F = 1.
 //
-// This header is the pure, dependency-free part (no OpenImageIO): the table
+// This header is the pure, dependency-free part (no image I/O): the table
 // key of a material, the quadrature that builds an EnergyTable, lookups with
 // bilinear interpolation; the Fresnel averages come from the neutral
 // numeric/FresnelAverage.h. Disk caching (EXR through
-// OpenImageIO) lives in compiler/tables/TableCache.h (library facet_tables).
+// OpenEXR) lives in compiler/tables/TableCache.h (library facet_tables).
 //
 // ---- the E table ----------------------------------------------------------
 //

@@ -1,13 +1,12 @@
-// TableCache: EXR I/O of the Kulla-Conty tables and the cache object (both
-// kinds of table; the Lambda file format is in LambdaTableFile.cpp).
+// TableCache: EXR I/O of the Kulla-Conty tables (through ExrCodec) and the
+// cache object (both kinds of table; the Lambda file format is in
+// LambdaTableFile.cpp).
 #include "TableCache.h"
 
 #include "CacheFiles.h"
+#include "ExrCodec.h"
 #include "TableFileRead.h"
 #include "Material.h"
-
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <chrono>
@@ -103,27 +102,29 @@ std::string writeEnergyTableExr(const EnergyTable& table, const std::string& pat
 std::string encodeEnergyTableExr(const EnergyTable& t, std::string& bytes) {
     std::string bad = t.validate();
     if (!bad.empty()) return "refusing to write an invalid table: " + bad;
-    OIIO::ImageSpec spec(t.muCount, t.alphaCount, 4, OIIO::TypeDesc::FLOAT);
-    spec.channelnames = {"E", "Ec", "Eavg", "EcAvg"};
-    spec.attribute("compression", "zip");
-    spec.attribute("facet:table", kTableKind);
-    spec.attribute("facet:version", kEnergyTableVersion);
-    spec.attribute("facet:key", t.key.name());
-    spec.attribute("facet:ndf", t.key.ndf->name);
-    spec.attribute("facet:masking", t.key.masking->name);
+    ExrImage image;
+    image.width = t.muCount;
+    image.height = t.alphaCount;
+    image.channels = {"E", "Ec", "Eavg", "EcAvg"};
+    image.strings["facet:table"] = kTableKind;
+    image.ints["facet:version"] = kEnergyTableVersion;
+    image.strings["facet:key"] = t.key.name();
+    image.strings["facet:ndf"] = t.key.ndf->name;
+    image.strings["facet:masking"] = t.key.masking->name;
     std::string shape;
     for (double v : t.key.shape) shape += (shape.empty() ? "" : ",") + exact(v);
-    spec.attribute("facet:shape", shape);
-    spec.attribute("facet:mu_count", t.muCount);
-    spec.attribute("facet:alpha_count", t.alphaCount);
-    spec.attribute("facet:alpha_min", exact(t.alphaMin));
-    spec.attribute("facet:alpha_max", exact(t.alphaMax));
-    spec.attribute("facet:mu_axis", kMuAxis);
-    spec.attribute("facet:alpha_axis", kAlphaAxis);
-    spec.attribute("facet:interpolation", kInterpolation);
-    spec.attribute("facet:quadrature", t.quadrature.describe());
-    spec.attribute("facet:build_ms", exact(t.buildMillis));
-    std::vector<float> pixels(size_t(t.muCount) * t.alphaCount * 4);
+    image.strings["facet:shape"] = shape;
+    image.ints["facet:mu_count"] = t.muCount;
+    image.ints["facet:alpha_count"] = t.alphaCount;
+    image.strings["facet:alpha_min"] = exact(t.alphaMin);
+    image.strings["facet:alpha_max"] = exact(t.alphaMax);
+    image.strings["facet:mu_axis"] = kMuAxis;
+    image.strings["facet:alpha_axis"] = kAlphaAxis;
+    image.strings["facet:interpolation"] = kInterpolation;
+    image.strings["facet:quadrature"] = t.quadrature.describe();
+    image.strings["facet:build_ms"] = exact(t.buildMillis);
+    std::vector<float>& pixels = image.pixels;
+    pixels.resize(size_t(t.muCount) * t.alphaCount * 4);
     for (int i = 0; i < t.alphaCount; ++i)
         for (int j = 0; j < t.muCount; ++j) {
             float* p = &pixels[(size_t(i) * t.muCount + j) * 4];
@@ -135,20 +136,7 @@ std::string encodeEnergyTableExr(const EnergyTable& t, std::string& bytes) {
         }
     // Encoded in memory: the file itself is written by the caller, with
     // every write checked (and, for the cache, atomically).
-    std::vector<unsigned char> buffer;
-    OIIO::Filesystem::IOVecOutput proxy(buffer);
-    auto out = OIIO::ImageOutput::create("table.exr", &proxy);
-    if (!out) return OIIO::geterror();
-    if (!out->open("table.exr", spec)) return out->geterror();
-    bool ok = out->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
-    std::string err = ok ? "" : out->geterror();
-    if (!out->close() && ok) {
-        ok = false;
-        err = out->geterror();
-    }
-    if (!ok) return err;
-    bytes.assign(buffer.begin(), buffer.end());
-    return "";
+    return encodeExr(image, bytes);
 }
 
 TableFileResult readEnergyTableExr(const std::string& path, const EnergyTableKey* expected,
@@ -167,38 +155,36 @@ TableFileResult decodeEnergyTableExr(const std::string& bytes, const std::string
         r.table.reset();
         return r;
     };
-    OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
-    auto in = OIIO::ImageInput::open("table.exr", nullptr, &proxy);
-    if (!in) return fail(TableFileStatus::Unreadable, fmt::format("cannot open {}: {}", path, OIIO::geterror()));
-    const OIIO::ImageSpec& spec = in->spec();
-    if (std::string(in->format_name()) != "openexr")
-        return fail(TableFileStatus::Unreadable, fmt::format("{} is a {} file, not EXR", path, in->format_name()));
-    if (spec.get_string_attribute("facet:table") != kTableKind)
+    ExrReader in(bytes);
+    // 4096 a side: the largest grid the checks below accept.
+    std::string why = in.open(4096);
+    if (!why.empty()) return fail(TableFileStatus::Unreadable, fmt::format("cannot open {}: {}", path, why));
+    if (in.stringAttribute("facet:table") != kTableKind)
         return fail(TableFileStatus::Stale, fmt::format("{} is not a Kulla-Conty table", path));
-    int version = spec.get_int_attribute("facet:version", -1);
+    int version = in.intAttribute("facet:version", -1);
     if (version != kEnergyTableVersion)
         return fail(TableFileStatus::Stale, fmt::format("{} has table version {}, expected {}", path, version,
                                                         kEnergyTableVersion));
     auto t = std::make_shared<EnergyTable>();
-    t->muCount = spec.get_int_attribute("facet:mu_count", -1);
-    t->alphaCount = spec.get_int_attribute("facet:alpha_count", -1);
-    t->alphaMin = std::strtod(std::string(spec.get_string_attribute("facet:alpha_min")).c_str(), nullptr);
-    t->alphaMax = std::strtod(std::string(spec.get_string_attribute("facet:alpha_max")).c_str(), nullptr);
-    std::string ndf(spec.get_string_attribute("facet:ndf")), masking(spec.get_string_attribute("facet:masking"));
+    t->muCount = in.intAttribute("facet:mu_count", -1);
+    t->alphaCount = in.intAttribute("facet:alpha_count", -1);
+    t->alphaMin = std::strtod(in.stringAttribute("facet:alpha_min").c_str(), nullptr);
+    t->alphaMax = std::strtod(in.stringAttribute("facet:alpha_max").c_str(), nullptr);
+    std::string ndf(in.stringAttribute("facet:ndf")), masking(in.stringAttribute("facet:masking"));
     const ModelInfo* ndfInfo = findModel(ModelSlot::Ndf, ndf);
     const ModelInfo* maskInfo = findModel(ModelSlot::Masking, masking);
     if (!ndfInfo || !maskInfo)
         return fail(TableFileStatus::Stale, fmt::format("{}: unknown ndf '{}' or masking '{}'", path, ndf, masking));
     t->key.ndf = &ndfEntry(*ndfInfo);
     t->key.masking = &maskingEntry(*maskInfo);
-    std::string shape(spec.get_string_attribute("facet:shape"));
+    std::string shape(in.stringAttribute("facet:shape"));
     for (size_t pos = 0; pos < shape.size();) {
         size_t end = std::min(shape.find(',', pos), shape.size());
         t->key.shape.push_back(std::strtod(shape.substr(pos, end - pos).c_str(), nullptr));
         pos = end + 1;
     }
     t->quadrature = quadrature;
-    std::string quad(spec.get_string_attribute("facet:quadrature"));
+    std::string quad(in.stringAttribute("facet:quadrature"));
     if (expected) {
         if (!(t->key == *expected))
             return fail(TableFileStatus::Stale, fmt::format("{} holds table {}, expected {}", path, t->key.name(),
@@ -212,33 +198,22 @@ TableFileResult decodeEnergyTableExr(const std::string& bytes, const std::string
         if (quad != quadrature.describe())
             return fail(TableFileStatus::Stale, fmt::format("{} was integrated with other quadrature settings ({})",
                                                             path, quad));
-        if (spec.get_string_attribute("facet:mu_axis") != kMuAxis ||
-            spec.get_string_attribute("facet:alpha_axis") != kAlphaAxis)
+        if (in.stringAttribute("facet:mu_axis") != kMuAxis ||
+            in.stringAttribute("facet:alpha_axis") != kAlphaAxis)
             return fail(TableFileStatus::Stale, fmt::format("{} uses another axis mapping", path));
     }
-    if (spec.width != t->muCount || spec.height != t->alphaCount || spec.nchannels != 4 || spec.depth != 1 ||
-        spec.x != 0 || spec.y != 0)
+    if (in.width() != t->muCount || in.height() != t->alphaCount || in.channels().size() != 4 || in.originX() != 0 ||
+        in.originY() != 0)
         return fail(TableFileStatus::Corrupt,
                     fmt::format("{}: image is {} x {} with {} channels, metadata says {} x {} with 4", path,
-                                spec.width, spec.height, spec.nchannels, t->muCount, t->alphaCount));
+                                in.width(), in.height(), in.channels().size(), t->muCount, t->alphaCount));
     if (t->muCount < 2 || t->alphaCount < 2 || t->muCount > 4096 || t->alphaCount > 4096)
         return fail(TableFileStatus::Corrupt, fmt::format("{}: bad grid {} x {}", path, t->muCount, t->alphaCount));
-    // EXR stores channels sorted by name; find ours by name.
-    static const char* const kChannels[4] = {"E", "Ec", "Eavg", "EcAvg"};
-    int chIndex[4];
-    for (int c = 0; c < 4; ++c) {
-        auto it = std::find(spec.channelnames.begin(), spec.channelnames.end(), kChannels[c]);
-        if (it == spec.channelnames.end())
-            return fail(TableFileStatus::Corrupt, fmt::format("{}: no channel '{}'", path, kChannels[c]));
-        chIndex[c] = int(it - spec.channelnames.begin());
-    }
-    std::vector<float> raw(size_t(t->muCount) * t->alphaCount * 4);
-    if (!in->read_image(0, 0, 0, 4, OIIO::TypeDesc::FLOAT, raw.data()))
-        return fail(TableFileStatus::Unreadable, fmt::format("{}: cannot read pixels: {}", path, in->geterror()));
-    in->close();
-    std::vector<float> pixels(raw.size());
-    for (size_t p = 0; p < raw.size() / 4; ++p)
-        for (int c = 0; c < 4; ++c) pixels[p * 4 + c] = raw[p * 4 + chIndex[c]];
+    // Read by name: EXR stores channels sorted by name.
+    std::vector<float> pixels;
+    why = in.readPixels({"E", "Ec", "Eavg", "EcAvg"}, pixels);
+    if (why.rfind("no channel", 0) == 0) return fail(TableFileStatus::Corrupt, fmt::format("{}: {}", path, why));
+    if (!why.empty()) return fail(TableFileStatus::Unreadable, fmt::format("{}: cannot read pixels: {}", path, why));
     t->ec.resize(size_t(t->muCount) * t->alphaCount);
     std::vector<float> stored(t->alphaCount);
     for (int i = 0; i < t->alphaCount; ++i)

@@ -1,8 +1,8 @@
 // TableCache: Kulla-Conty E tables (KullaConty.h) on disk as EXR files
-// through OpenImageIO, tabulated Smith Lambdas (LambdaTable.h) on disk as
+// (through OpenEXR, ExrCodec.h), tabulated Smith Lambdas (LambdaTable.h) on disk as
 // small binary files, and an in-memory cache of both owned by the caller.
 //
-// Library facet_tables (links OpenImageIO); the front end stays free of it.
+// Library facet_tables (links OpenEXR); the front end stays free of it.
 //
 // File format (one table per file, kc_<key>.exr, e.g. kc_ggx_smith_height_correlated.exr):
 //   width = mu_count, height = alpha_count (row i = alpha node i, column j = mu node j),
