@@ -235,7 +235,7 @@ template <bool HasRough>
         float so = ggxLambdaTerm(o.x, o.y, o.z, a2);
         float pdf = ggxVisiblePdf(mx, my, mz, a2, o.z, so);
         bool counted = (o.z > 0.0f) & (om > 0.0f) & (hl2 > 0.0f);
-        bool valid = ok & (!counted | (std::isfinite(pdf) & (pdf >= 0.0f)));
+        bool valid = ok & ((!counted) | (std::isfinite(pdf) & (pdf >= 0.0f)));
         outPdf[i] = valid & counted ? pdf : 0.0f;
         invalid += valid ? 0 : 1;
     }

@@ -51,7 +51,7 @@ public:
                                            printExpr(e)));
         }
         switch (e.kind) {
-            case ExprKind::Name: return add({BsdfKind::Lobe, e.loc, cx_.findLobe(static_cast<NameExpr&>(e).name)});
+            case ExprKind::Name: return add({BsdfKind::Lobe, e.loc, cx_.findLobe(static_cast<NameExpr&>(e).name), -1, -1, nullptr});
             case ExprKind::Binary: return binary(static_cast<BinaryExpr&>(e));
             case ExprKind::Call: return call(static_cast<CallExpr&>(e));
             default:
@@ -66,7 +66,7 @@ private:
             int x = combination(*b.lhs);
             int y = x < 0 ? -1 : combination(*b.rhs);
             if (y < 0) return -1;
-            return add({BsdfKind::Sum, b.loc, -1, x, y});
+            return add({BsdfKind::Sum, b.loc, -1, x, y, nullptr});
         }
         if (b.op == BinaryOp::Mul) {
             if (left && right)

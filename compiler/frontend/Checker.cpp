@@ -130,7 +130,7 @@ public:
                                                     decl_.name));
             finishLobe(implicit, seen, errorsBefore);
             out_.lobes.push_back(std::move(implicit));
-            out_.bsdf = {BsdfNode{BsdfKind::Lobe, decl_.loc, 0}};
+            out_.bsdf = {BsdfNode{BsdfKind::Lobe, decl_.loc, 0, -1, -1, nullptr}};
         } else if (!bsdf) {
             diags_.error(decl_.loc, fmt::format("material '{}' has lobes but no 'bsdf = ...;' statement to "
                                                 "combine them (e.g. 'bsdf = {};')",

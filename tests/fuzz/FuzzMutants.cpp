@@ -831,6 +831,7 @@ std::string gDumpDir = ".";
 const std::string* gCurrentText = nullptr;
 std::string gCurrentWhere;
 
+#ifdef FACET_HAVE_SANITIZER_CALLBACK
 void onSanitizerDeath() {
     if (!gCurrentText) return;
     std::string path = gDumpDir + "/fuzz_crash_mutant.mat";
@@ -840,6 +841,7 @@ void onSanitizerDeath() {
     }
     std::fprintf(stderr, "\n*** crash while processing %s; input saved to %s\n", gCurrentWhere.c_str(), path.c_str());
 }
+#endif
 
 void dumpFailure(const std::string& text, const std::string& name) {
     std::string path = gDumpDir + "/" + name;
