@@ -2,6 +2,8 @@
 // (ImagingHelper.h).
 #include "ImagingHelper.h"
 
+#include "CacheFiles.h"
+
 #include <cerrno>
 #include <climits>
 #include <cstdio>
@@ -18,15 +20,6 @@ namespace facet {
 namespace {
 
 constexpr const char* kHelperName = "facet-imaging";
-
-// Why a file or directory with this status may not be trusted to hold code
-// Facet runs, or "".
-std::string untrusted(const struct stat& st, const std::string& path) {
-    if (st.st_uid != 0 && st.st_uid != ::geteuid())
-        return path + " is owned by uid " + std::to_string(st.st_uid) + ", not by root or the current user";
-    if (st.st_mode & (S_IWGRP | S_IWOTH)) return path + " is writable by group or others";
-    return "";
-}
 
 // The directory of this executable, "" (with `why`) when unknown.
 std::string ownDirectory(std::string& why) {
@@ -58,14 +51,14 @@ int runImagingHelper(char** argv) {
     std::string path = dir + "/" + kHelperName;
     struct stat st {};
     if (::stat(dir.c_str(), &st) != 0) return fail(dir + ": " + std::strerror(errno));
-    if (!(why = untrusted(st, dir)).empty()) return fail(why);
+    if (!(why = untrustedBecause(st, dir, true)).empty()) return fail(why);
     // O_NOFOLLOW: the helper itself, not whatever a symlink in its place names.
     int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
     if (fd < 0) return fail(path + ": " + std::strerror(errno));
     if (::fstat(fd, &st) != 0) why = path + ": " + std::strerror(errno);
     else if (!S_ISREG(st.st_mode)) why = path + " is not a regular file";
     else if (!(st.st_mode & S_IXUSR)) why = path + " is not executable";
-    else why = untrusted(st, path);
+    else why = untrustedBecause(st, path, true);
     if (!why.empty()) {
         ::close(fd);
         return fail(why);

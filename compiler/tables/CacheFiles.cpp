@@ -44,15 +44,6 @@ const char* fileKind(mode_t mode) {
     return "of an unknown kind";
 }
 
-// Why a file or directory with this status cannot be trusted, or "".
-std::string untrustedBecause(const struct stat& st, const std::string& path) {
-    if (st.st_uid != ::geteuid())
-        return fmt::format("{} is owned by uid {}, not by the current user (uid {})", path, st.st_uid, ::geteuid());
-    if (st.st_mode & (S_IWGRP | S_IWOTH))
-        return fmt::format("{} is writable by group or others (mode {:04o})", path, st.st_mode & 07777);
-    return "";
-}
-
 enum class ReadOutcome { Ok, Missing, Refused, Failed };
 
 // Reads dirFd/name: not through a symlink, not blocking on a FIFO, regular
@@ -170,6 +161,15 @@ bool makeDirs(const std::string& path, std::string& why) {
 }
 
 }  // namespace
+
+std::string untrustedBecause(const struct stat& st, const std::string& path, bool rootMayOwn) {
+    if (st.st_uid != ::geteuid() && !(rootMayOwn && st.st_uid == 0))
+        return fmt::format("{} is owned by uid {}, not by {}the current user (uid {})", path, st.st_uid,
+                           rootMayOwn ? "root or " : "", ::geteuid());
+    if (st.st_mode & (S_IWGRP | S_IWOTH))
+        return fmt::format("{} is writable by group or others (mode {:04o})", path, st.st_mode & 07777);
+    return "";
+}
 
 std::string defaultCacheRoot() {
     if (const char* dir = std::getenv("FACET_CACHE_DIR")) return dir;  // "" disables

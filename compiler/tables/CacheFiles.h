@@ -25,6 +25,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <sys/stat.h>
 
 namespace facet {
 
@@ -33,6 +34,12 @@ namespace facet {
 // the XDG base directory specification says), else $HOME/.cache/facet; ""
 // when there is none.
 std::string defaultCacheRoot();
+
+// Why a file or directory with status `st` cannot be trusted to hold what
+// Facet runs, or "": it must be owned by the current user (or, with
+// `rootMayOwn`, by root, as installed programs are) and not writable by
+// group or others.
+std::string untrustedBecause(const struct stat& st, const std::string& path, bool rootMayOwn = false);
 
 // Reads a whole regular file without following a final symlink and without
 // blocking on a FIFO; refuses one larger than maxBytes. Returns the bytes, or

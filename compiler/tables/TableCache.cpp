@@ -21,6 +21,9 @@ namespace facet {
 namespace {
 
 constexpr const char* kTableKind = "kulla_conty_E";
+// The largest grid side a table file may have; ExrReader refuses a larger
+// data window before OpenEXR sizes anything by it.
+constexpr int kMaxGridSide = 4096;
 constexpr const char* kMuAxis = "u = sqrt(mu) * (mu_count - 1)";
 constexpr const char* kAlphaAxis =
     "v = (sqrt(alpha) - sqrt(alpha_min)) / (sqrt(alpha_max) - sqrt(alpha_min)) * (alpha_count - 1)";
@@ -156,8 +159,7 @@ TableFileResult decodeEnergyTableExr(const std::string& bytes, const std::string
         return r;
     };
     ExrReader in(bytes);
-    // 4096 a side: the largest grid the checks below accept.
-    std::string why = in.open(4096);
+    std::string why = in.open(kMaxGridSide);
     if (!why.empty()) return fail(TableFileStatus::Unreadable, fmt::format("cannot open {}: {}", path, why));
     if (in.stringAttribute("facet:table") != kTableKind)
         return fail(TableFileStatus::Stale, fmt::format("{} is not a Kulla-Conty table", path));
@@ -207,7 +209,7 @@ TableFileResult decodeEnergyTableExr(const std::string& bytes, const std::string
         return fail(TableFileStatus::Corrupt,
                     fmt::format("{}: image is {} x {} with {} channels, metadata says {} x {} with 4", path,
                                 in.width(), in.height(), in.channels().size(), t->muCount, t->alphaCount));
-    if (t->muCount < 2 || t->alphaCount < 2 || t->muCount > 4096 || t->alphaCount > 4096)
+    if (t->muCount < 2 || t->alphaCount < 2 || t->muCount > kMaxGridSide || t->alphaCount > kMaxGridSide)
         return fail(TableFileStatus::Corrupt, fmt::format("{}: bad grid {} x {}", path, t->muCount, t->alphaCount));
     // Read by name: EXR stores channels sorted by name.
     std::vector<float> pixels;
