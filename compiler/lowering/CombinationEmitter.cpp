@@ -7,6 +7,7 @@
 #include "LayerAlbedo.h"
 
 #include <cmath>
+#include <cstring>
 #include <optional>
 
 namespace facet {
@@ -106,8 +107,9 @@ private:
         LVal w = n.weight ? weights_->clampedExpression(*n.weight, 0, 1) : LVal::scalar(dm.c(1.0));
         const MuTable* g = plan_.layerG.at(size_t(index)).get();
         internal_assert(g) << "layer node " << index << " without its table";
-        std::array<llvm::Value*, 3> gi = lookUpMuTable(*weights_, *g, tablePrefix_ + ".layer" + std::to_string(index), wiZ_),
-                                    go = lookUpMuTable(*weights_, *g, tablePrefix_ + ".layer" + std::to_string(index), woZ_);
+        const std::string name = tablePrefix_ + ".layer" + std::to_string(index);
+        std::array<llvm::Value*, 3> gi = lookUpMuTable(*weights_, *g, name, wiZ_),
+                                    go = lookUpMuTable(*weights_, *g, name, woZ_);
         return channels([&](int ch) {
             llvm::Value* scale = dm.fma(w.c[ch], dm.sub(dm.mul(gi[ch], go[ch]), dm.c(1.0)), dm.c(1.0));
             llvm::Value* coat = dm.select(dm.eq(w.c[ch], dm.c(0.0)), dm.c(0.0), dm.mul(w.c[ch], top[ch]));
@@ -159,36 +161,59 @@ std::array<llvm::Value*, 3> lookUpMuTable(LaneEmitter& lanes, const MuTable& tab
                                           llvm::Value* mu) {
     MathEmitter& dm = lanes.doubleMath();
     llvm::IRBuilder<>& b = lanes.builder;
-    const int nodes = MuTable::kNodes;
+    llvm::Module& module = lanes.module();
+    const int intervals = MuTable::kNodes - 1;
     // Gray: one channel of lookups.
     bool gray = true;
     for (const auto& node : table.v) gray = gray && node[0] == node[1] && node[1] == node[2];
-    std::vector<double> data;
-    for (int ch = 0; ch < (gray ? 1 : 3); ++ch)
-        for (const auto& node : table.v) data.push_back(node[ch]);
-    llvm::GlobalVariable* gv = lanes.doubleTable(data, name);
-    llvm::Value* m = dm.minnum(dm.maxnum(mu, dm.c(MuTable::kMuMin)), dm.c(1.0));
-    llvm::Value* x = dm.mul(dm.log1p(dm.mul(m, dm.c(std::expm1(6.0)))), dm.c(1.0 / 6));
-    llvm::Value* t = dm.mul(x, dm.c(nodes - 1.0));
-    llvm::Value* j = dm.minnum(lanes.intrinsic(llvm::Intrinsic::floor, t), dm.c(nodes - 2.0));
-    llvm::Value* s = dm.sub(t, j);
-    llvm::Type* i32 = b.getInt32Ty();
-    llvm::Type* idxTy = dm.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, dm.width()) : i32;
-    llvm::Value* idx = b.CreateFPToSI(j, idxTy);
-    auto at = [&](int offset) -> llvm::Value* {
-        llvm::Value* ptr = b.CreateGEP(b.getDoubleTy(), gv, b.CreateAdd(idx, llvm::ConstantInt::get(idxTy, offset)));
-        if (dm.width() == 1) return b.CreateLoad(b.getDoubleTy(), ptr);
-        return b.CreateMaskedGather(dm.type(), ptr, llvm::Align(8));
-    };
-    std::array<llvm::Value*, 3> out{};
-    for (int ch = 0; ch < 3; ++ch) {
-        if (gray && ch > 0) {
-            out[ch] = out[0];
-            continue;
-        }
-        llvm::Value *a = at(ch * nodes), *c = at(ch * nodes + 1);
-        out[ch] = dm.fma(s, dm.sub(c, a), a);
+    const int channels = gray ? 1 : 3;
+    // Interval j's two nodes packed into one 64-bit element (node j's value
+    // in the low half, as floats), so that a channel takes one gather of
+    // 64-bit elements instead of two of doubles: a gather costs per element
+    // loaded, about 3 cycles each on Zen 5 (docs/perf-log.md). Float nodes
+    // move g by at most 6e-8 relative.
+    llvm::GlobalVariable* gv = module.getNamedGlobal(name);
+    if (!gv) {
+        std::vector<uint64_t> pairs;
+        for (int ch = 0; ch < channels; ++ch)
+            for (int j = 0; j < intervals; ++j) {
+                const float lo = float(table.v[size_t(j)][size_t(ch)]), hi = float(table.v[size_t(j) + 1][size_t(ch)]);
+                uint32_t l, h;
+                std::memcpy(&l, &lo, 4), std::memcpy(&h, &hi, 4);
+                pairs.push_back(uint64_t(h) << 32 | l);
+            }
+        auto* arr = llvm::ConstantDataArray::get(module.getContext(), pairs);
+        gv = new llvm::GlobalVariable(module, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
+        gv->setAlignment(llvm::Align(8));
     }
+    // The interval and the position in it in double, as the reference finds
+    // them: t runs to 64, and in float its rounding alone moves g by up to
+    // ~1e-5 where the table is steep (tried: 1.5e-5 in the lobes' differential
+    // test, beyond exact mode's bound). log(1 + mu (e^6 - 1)) rather than
+    // log1p: the argument is at least 1.04, so rounding it costs nothing, and
+    // log1p's correction would cost a division.
+    llvm::Value* m = dm.minnum(dm.maxnum(dm.convert(mu, dm.type()), dm.c(MuTable::kMuMin)), dm.c(1.0));
+    llvm::Value* x = dm.mul(dm.log(dm.fma(m, dm.c(std::expm1(6.0)), dm.c(1.0))), dm.c(1.0 / 6));
+    llvm::Value* t = dm.mul(x, dm.c(double(intervals)));
+    llvm::Value* j = dm.minnum(lanes.intrinsic(llvm::Intrinsic::floor, t), dm.c(intervals - 1.0));
+    llvm::Value* s = dm.sub(t, j);
+    const unsigned width = unsigned(dm.width());
+    auto vec = [&](llvm::Type* t) -> llvm::Type* { return width > 1 ? llvm::FixedVectorType::get(t, width) : t; };
+    llvm::Type* i64 = b.getInt64Ty();
+    llvm::Type* i32s = vec(b.getInt32Ty());
+    llvm::Type* floats = vec(b.getFloatTy());
+    llvm::Value* idx = b.CreateFPToSI(j, i32s);
+    std::array<llvm::Value*, 3> out{};
+    for (int ch = 0; ch < channels; ++ch) {
+        llvm::Value* ptr = b.CreateGEP(i64, gv, b.CreateAdd(idx, llvm::ConstantInt::get(i32s, ch * intervals)));
+        llvm::Value* pair =
+            width > 1 ? (llvm::Value*)b.CreateMaskedGather(vec(i64), ptr, llvm::Align(8)) : b.CreateLoad(i64, ptr);
+        llvm::Value* lo = dm.convert(b.CreateBitCast(b.CreateTrunc(pair, i32s), floats), dm.type());
+        llvm::Value* hi = b.CreateLShr(pair, llvm::ConstantInt::get(pair->getType(), 32));
+        hi = dm.convert(b.CreateBitCast(b.CreateTrunc(hi, i32s), floats), dm.type());
+        out[size_t(ch)] = dm.fma(s, dm.sub(hi, lo), lo);
+    }
+    if (gray) out[1] = out[2] = out[0];
     return out;
 }
 

@@ -65,9 +65,10 @@ const EnergyTable* lobeEnergyTable(const LoweringOptions& options, size_t lobe);
 
 // n.w of the unit w (float lanes), in double.
 llvm::Value* unitCosine(LaneEmitter& lanes, const std::array<llvm::Value*, 3>& w);
-// A MuTable (LayerAlbedo.h) embedded as the double table `name` (one channel
-// when gray), read at the cosine mu (double lanes) as the reference reads
-// it: linear in x = log(1 + mu (e^6 - 1)) / 6, mu clamped to [1e-4, 1].
+// A MuTable (LayerAlbedo.h) embedded as the table `name` (one channel when
+// gray; its nodes rounded to float, in pairs), read at the cosine mu (double
+// lanes) as the reference reads it: linear in x = log(1 + mu (e^6 - 1)) / 6,
+// mu clamped to [1e-4, 1].
 std::array<llvm::Value*, 3> lookUpMuTable(LaneEmitter& lanes, const MuTable& table, const std::string& name,
                                           llvm::Value* mu);
 
