@@ -6,8 +6,8 @@
 #include "LaneEmitter.h"
 #include "LayerAlbedo.h"
 
+#include <bit>
 #include <cmath>
-#include <cstring>
 #include <optional>
 
 namespace facet {
@@ -161,7 +161,6 @@ std::array<llvm::Value*, 3> lookUpMuTable(LaneEmitter& lanes, const MuTable& tab
                                           llvm::Value* mu) {
     MathEmitter& dm = lanes.doubleMath();
     llvm::IRBuilder<>& b = lanes.builder;
-    llvm::Module& module = lanes.module();
     const int intervals = MuTable::kNodes - 1;
     // Gray: one channel of lookups.
     bool gray = true;
@@ -172,20 +171,13 @@ std::array<llvm::Value*, 3> lookUpMuTable(LaneEmitter& lanes, const MuTable& tab
     // 64-bit elements instead of two of doubles: a gather costs per element
     // loaded, about 3 cycles each on Zen 5 (docs/perf-log.md). Float nodes
     // move g by at most 6e-8 relative.
-    llvm::GlobalVariable* gv = module.getNamedGlobal(name);
-    if (!gv) {
-        std::vector<uint64_t> pairs;
-        for (int ch = 0; ch < channels; ++ch)
-            for (int j = 0; j < intervals; ++j) {
-                const float lo = float(table.v[size_t(j)][size_t(ch)]), hi = float(table.v[size_t(j) + 1][size_t(ch)]);
-                uint32_t l, h;
-                std::memcpy(&l, &lo, 4), std::memcpy(&h, &hi, 4);
-                pairs.push_back(uint64_t(h) << 32 | l);
-            }
-        auto* arr = llvm::ConstantDataArray::get(module.getContext(), pairs);
-        gv = new llvm::GlobalVariable(module, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
-        gv->setAlignment(llvm::Align(8));
-    }
+    std::vector<uint64_t> pairs;
+    for (int ch = 0; ch < channels; ++ch)
+        for (int j = 0; j < intervals; ++j) {
+            const float lo = float(table.v[size_t(j)][size_t(ch)]), hi = float(table.v[size_t(j) + 1][size_t(ch)]);
+            pairs.push_back(uint64_t(std::bit_cast<uint32_t>(hi)) << 32 | std::bit_cast<uint32_t>(lo));
+        }
+    llvm::GlobalVariable* gv = lanes.uint64Table(pairs, name);
     // The interval and the position in it in double, as the reference finds
     // them: t runs to 64, and in float its rounding alone moves g by up to
     // ~1e-5 where the table is steep (tried: 1.5e-5 in the lobes' differential

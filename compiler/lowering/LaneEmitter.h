@@ -233,9 +233,10 @@ public:
     // Upper clamp of eta and k for the exact Fresnel terms (float: |N|^4 must stay finite).
     double maxFresnelIndex() const { return body.precise == Precision::Double ? INFINITY : 1e9; }
 
-    // ---- constant tables (LaneTables.cpp) ----
+    // ---- constant tables (LaneTerms.cpp): made once per module and name ----
     llvm::GlobalVariable* floatTable(const std::vector<float>& data, const std::string& name);
     llvm::GlobalVariable* doubleTable(const std::vector<double>& data, const std::string& name);
+    llvm::GlobalVariable* uint64Table(const std::vector<uint64_t>& data, const std::string& name);
     // table[index] for an integer-valued index in the precise type (a gather across lanes).
     llvm::Value* fetch(llvm::GlobalVariable* table, llvm::Value* index);
     // 4-point Lagrange interpolation in a double table of `size` nodes at the

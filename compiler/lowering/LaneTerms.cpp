@@ -108,16 +108,28 @@ Value* LaneEmitter::fresnelCos(MathEmitter& math, const LaneGeometry& geo) {
 
 // ---- constant tables ----
 
+namespace {
+
+// The module's constant array `name`, made from `data` the first time.
+template <typename T>
+llvm::GlobalVariable* constantTable(llvm::Module& module, const std::vector<T>& data, const std::string& name) {
+    if (llvm::GlobalVariable* gv = module.getNamedGlobal(name)) return gv;
+    auto* arr = llvm::ConstantDataArray::get(module.getContext(), data);
+    return new llvm::GlobalVariable(module, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
+}
+
+}  // namespace
+
 llvm::GlobalVariable* LaneEmitter::floatTable(const std::vector<float>& data, const std::string& name) {
-    if (llvm::GlobalVariable* gv = module_.getNamedGlobal(name)) return gv;
-    auto* arr = llvm::ConstantDataArray::get(module_.getContext(), data);
-    return new llvm::GlobalVariable(module_, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
+    return constantTable(module_, data, name);
 }
 
 llvm::GlobalVariable* LaneEmitter::doubleTable(const std::vector<double>& data, const std::string& name) {
-    if (llvm::GlobalVariable* gv = module_.getNamedGlobal(name)) return gv;
-    auto* arr = llvm::ConstantDataArray::get(module_.getContext(), data);
-    return new llvm::GlobalVariable(module_, arr->getType(), true, llvm::GlobalValue::PrivateLinkage, arr, name);
+    return constantTable(module_, data, name);
+}
+
+llvm::GlobalVariable* LaneEmitter::uint64Table(const std::vector<uint64_t>& data, const std::string& name) {
+    return constantTable(module_, data, name);
 }
 
 Value* LaneEmitter::fetch(llvm::GlobalVariable* table, Value* index) {
