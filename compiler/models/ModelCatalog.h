@@ -169,10 +169,12 @@ struct NdfFormulas {
     // The density of sampleNormal, D(m) (n.m) unless an entry samples
     // something else (ward: the Beckmann NDF of its exponent).
     virtual Real normalPdf(const ModelArgs<Real>& a, const Vec3<Real>& m) const { return D(a, m) * m.z; }
-    // Visible-normal sampling for n.wo > 0, NdfEntry::visibleNormals only:
-    // m with density G1(wo) (wo.m)+ D(m) / (n.wo), G1 = 1 / (1 + Lambda(wo))
-    // from visibleCosLambda, which must be Lambda exactly for this D (or the
-    // density does not integrate to 1).
+    // Visible-normal sampling, NdfEntry::visibleNormals only: m with density
+    // (wo.m)+ D(m) / A(wo), A(wo) the projected area (n.wo)(1 + Lambda(wo)),
+    // Lambda from visibleCosLambda, which must be Lambda exactly for this D
+    // (or the density does not integrate to 1). For n.wo > 0, and also below
+    // the horizon, where A(wo) = (n.-wo) Lambda(-wo) > 0 (the random walk on
+    // the microsurface meets the surface going up, MicrosurfaceWalk.h).
     virtual Vec3<Real> sampleVisibleNormal(const ModelArgs<Real>& a, const Vec3<Real>& wo, Real u1, Real u2) const;
     // (n.v) Lambda(v) with the Lambda that normalizes the visible normals:
     // the exact Smith Lambda of D. cosLambda, unless the masking's Lambda is

@@ -40,12 +40,24 @@ struct BeckmannFormulas final : NdfFormulas<Real> {
         Real ax = a[kAlphaX], ay = a[kAlphaY];
         Real sx = ax * wo.x, sy = ay * wo.y, sxy = sqrt(sx * sx + sy * sy);
         Real cosPhi = sxy > 0 ? sx / sxy : Real(1), sinPhi = sxy > 0 ? sy / sxy : Real(0);
-        Real tanT = sxy / wo.z;
         const Real tail = 8, rootPi = sqrt(kPi<Real>);  // C(-8) < 1e-28 C(cot t)
         auto gauss = [&](Real x) { return exp(-x * x) / rootPi; };
-        auto cdfX = [&](Real x) { return erfc(-x) / 2 + tanT * exp(-x * x) / (2 * rootPi); };
-        Real hi = sxy > 0 && wo.z / sxy < tail ? wo.z / sxy : tail;
-        Real x = invertIncreasing(cdfX, [&](Real t) { return (1 - t * tanT) * gauss(t); }, u1 * cdfX(hi), -tail, hi);
+        Real x;
+        if (wo.z > 0) {
+            Real tanT = sxy / wo.z;
+            auto cdfX = [&](Real x) { return erfc(-x) / 2 + tanT * exp(-x * x) / (2 * rootPi); };
+            Real hi = sxy > 0 && wo.z / sxy < tail ? wo.z / sxy : tail;
+            x = invertIncreasing(cdfX, [&](Real t) { return (1 - t * tanT) * gauss(t); }, u1 * cdfX(hi), -tail, hi);
+        } else {
+            // Below the horizon (the random walk's rays going up,
+            // MicrosurfaceWalk.h): the density is (cos t - x sin t)+ exp(-x^2),
+            // on x < cot t < 0, and cos t C(x) above, undivided (cos t < 0),
+            // is its CDF. Where cot t underflows the mass (stretched wo within
+            // 2 degrees of -n) no ray can meet the surface: Lambda(-wo) = 0.
+            auto cdfX = [&](Real x) { return wo.z * erfc(-x) / 2 + sxy * exp(-x * x) / (2 * rootPi); };
+            Real hi = sxy > 0 ? wo.z / sxy : -tail;
+            x = invertIncreasing(cdfX, [&](Real t) { return (wo.z - t * sxy) * gauss(t); }, u1 * cdfX(hi), hi - tail, hi);
+        }
         Real y = invertIncreasing([&](Real t) { return erfc(-t) / 2; }, gauss, u2, -tail, tail);
         return normalFromSlopes(ax * (cosPhi * x - sinPhi * y), ay * (sinPhi * x + cosPhi * y));
     }

@@ -1,0 +1,139 @@
+// Tests of the layered random walk (compiler/reference/LayeredWalk.h, SPEC
+// 13): the limits it must reach (an index-matched top is no top; a smooth
+// dielectric over white Lambert keeps all the energy and equals the classic
+// closed-form coating), and its two estimators (next events and forward
+// walks) against each other and against reciprocity.
+#include "../physics/PhysicsUtil.h"
+#include "LayeredWalk.h"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+
+namespace {
+
+using facet::LayeredWalk;
+using facet::WalkEstimate;
+using facet::WalkRandom;
+using physics::deg;
+using physics::dir;
+using physics::kPi;
+using physics::makeMaterial;
+using physics::Material;
+using physics::Vec3;
+
+// Fresnel reflectance of a dielectric boundary, eta = far / near (1 past the
+// critical angle): the catalog's `dielectric` (its own g-form, not the walk's
+// s and p amplitudes).
+double fresnel(double c, double eta) {
+    static std::map<double, Material> boundaries;
+    auto it = boundaries.find(eta);
+    if (it == boundaries.end()) {
+        char text[64];
+        std::snprintf(text, sizeof text, "%.17g", eta);
+        it = boundaries.emplace(eta, makeMaterial(std::string("ndf = ggx(0.1); fresnel = dielectric(") + text + ");")).first;
+    }
+    return it->second.F(c, 0);
+}
+
+// The smooth coating of index eta over a Lambertian base of albedo rho
+// (the diffuse part; wi and wo away from the mirror direction):
+// (1 - F_i)(1 - F_o) rho / (pi eta^2 (1 - rho F_dr)), F_dr = 2 Int F(mu, 1/eta) mu dmu
+// the diffuse reflectance of the boundary from inside (midpoint rule).
+double smoothCoating(double muI, double muO, double eta, double rho, double extraEta2 = 1) {
+    double fdr = 0;
+    const int n = 200000;
+    for (int k = 0; k < n; ++k) {
+        double mu = (k + 0.5) / n;
+        fdr += 2 * fresnel(mu, 1 / eta) * mu / n;
+    }
+    return (1 - fresnel(muI, eta)) * (1 - fresnel(muO, eta)) * rho / (kPi * eta * eta * extraEta2 * (1 - rho * fdr));
+}
+
+}  // namespace
+
+TEST_CASE("the layered walk names what it cannot walk") {
+    Material base = makeMaterial("lobe d { diffuse = lambert(0.5); } bsdf = d;");
+    CHECK(LayeredWalk::unsupported(makeMaterial("ndf = ggx(0.1); fresnel = dielectric(1.5);"), base) == "");
+    CHECK(LayeredWalk::unsupported(makeMaterial("ndf = ggx(0.1); fresnel = schlick(0.04);"), base).find("dielectric(eta)") !=
+          std::string::npos);
+    CHECK(LayeredWalk::unsupported(makeMaterial("ndf = gaussian(0.1); fresnel = dielectric(1.5);"), base)
+              .find("the top: ") == 0);
+}
+
+TEST_CASE("an index-matched top is no top: the layered walk is its base exactly") {
+    Material top = makeMaterial("ndf = ggx(0.4); fresnel = dielectric(1);");
+    Material base = makeMaterial("ndf = beckmann(0.3); fresnel = conductor(eta = rgb(0.2, 1.0, 1.2), k = rgb(3.7, 2.6, 2.4));");
+    LayeredWalk walk(top, base);
+    for (auto [ti, to] : {std::pair{20.0, 30.0}, {60.0, 5.0}, {80.0, 70.0}}) {
+        Vec3<double> wi = dir(deg(ti), 2.0), wo = dir(deg(to), 0.1);
+        WalkEstimate e = walk.brdf(wi, wo, 200, 3);
+        std::array<double, 3> f = base.brdf(wi, wo);
+        for (int ch = 0; ch < 3; ++ch) CHECK(e.mean[ch] == doctest::Approx(f[ch]).epsilon(1e-12));
+    }
+}
+
+TEST_CASE("a smooth dielectric over white Lambert keeps the energy and is the closed-form coating") {
+    Material top = makeMaterial("ndf = ggx(0.001); fresnel = dielectric(1.5);");
+    Material white = makeMaterial("lobe d { diffuse = lambert(1); } bsdf = d;");
+    LayeredWalk walk(top, white);
+    for (double theta : {0.0, 45.0, 75.0}) {
+        WalkEstimate a = walk.albedo(dir(deg(theta), 0.2), 40000, 17);
+        INFO("theta_o ", theta, " albedo ", a.mean[0], " +- ", a.stdError[0]);
+        CHECK(std::abs(a.mean[0] - 1) <= 4 * a.stdError[0] + 1e-3);
+        CHECK(a.abandoned == 0);
+    }
+    Material grey = makeMaterial("lobe d { diffuse = lambert(0.8); } bsdf = d;");
+    LayeredWalk coated(top, grey);
+    for (auto [ti, to] : {std::pair{10.0, 40.0}, {50.0, 20.0}, {70.0, 65.0}}) {
+        Vec3<double> wi = dir(deg(ti), 1.0), wo = dir(deg(to), 0.0);
+        WalkEstimate e = coated.brdf(wi, wo, 40000, 29);
+        double exact = smoothCoating(wi.z, wo.z, 1.5, 0.8);
+        double wrong = smoothCoating(wi.z, wo.z, 1.5, 0.8, 1 / (1.5 * 1.5));  // without the 1/eta^2 of radiance
+        INFO("theta_i ", ti, " theta_o ", to, " walk ", e.mean[0], " +- ", e.stdError[0], " closed form ", exact);
+        CHECK(std::abs(e.mean[0] - exact) <= 4 * e.stdError[0] + 1e-3 * exact);
+        CHECK(std::abs(e.mean[0] - wrong) > 4 * e.stdError[0] + 1e-3 * exact);
+    }
+}
+
+TEST_CASE("the layered walk's next events and forward walks agree, and it is reciprocal") {
+    // A rough coat with absorption over a rough coloured conductor.
+    Material top = makeMaterial("ndf = ggx(0.3); fresnel = dielectric(1.5);");
+    Material base = makeMaterial("ndf = ggx(0.4); fresnel = conductor(eta = rgb(0.2, 1.0, 1.2), k = rgb(3.7, 2.6, 2.4));");
+    facet::LayerAbsorption absorption;
+    absorption.sigma = {0.1, 0.5, 1.0};
+    LayeredWalk walk(top, base, absorption);
+    for (double theta : {15.0, 65.0}) {
+        Vec3<double> wo = dir(deg(theta), 0.5);
+        WalkEstimate forward = walk.albedo(wo, 40000, 41);
+        // Next events over wi drawn from the cosine lobe.
+        facet::WalkAccumulator nee;
+        for (int64_t k = 0; k < 40000; ++k) {
+            WalkRandom random(43, uint64_t(k));
+            double r = std::sqrt(random.next()), phi = 2 * kPi * random.next();
+            Vec3<double> wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1 - r * r))};
+            std::array<double, 3> f = walk.pathBrdf(wi, wo, random);
+            for (double& v : f) v *= kPi;  // f cos / pdf, pdf = cos / pi
+            nee.add(f);
+        }
+        WalkEstimate e = nee.estimate();
+        for (int ch = 0; ch < 3; ++ch) {
+            INFO("theta_o ", theta, " channel ", ch, " forward ", forward.mean[ch], " +- ", forward.stdError[ch],
+                 " next events ", e.mean[ch], " +- ", e.stdError[ch]);
+            CHECK(std::abs(forward.mean[ch] - e.mean[ch]) <= 4 * std::hypot(forward.stdError[ch], e.stdError[ch]));
+        }
+        CHECK(forward.mean[0] > forward.mean[2]);  // less absorbed, and the conductor's red
+    }
+    for (auto [ti, to] : {std::pair{20.0, 50.0}, {70.0, 10.0}}) {
+        Vec3<double> a = dir(deg(ti), 0.4), b = dir(deg(to), 2.5);
+        WalkEstimate ab = walk.brdf(a, b, 40000, 51), ba = walk.brdf(b, a, 40000, 53);
+        for (int ch = 0; ch < 3; ++ch) {
+            INFO("theta ", ti, " / ", to, " channel ", ch, ": f(a, b) ", ab.mean[ch], " +- ", ab.stdError[ch],
+                 ", f(b, a) ", ba.mean[ch], " +- ", ba.stdError[ch]);
+            CHECK(std::abs(ab.mean[ch] - ba.mean[ch]) <= 4 * std::hypot(ab.stdError[ch], ba.stdError[ch]));
+        }
+    }
+}
