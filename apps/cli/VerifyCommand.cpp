@@ -9,7 +9,13 @@
 //   2. the double interpreter against the __float128 one on the same
 //      sample: within 1e-12 relative, or within 16 kappa u where the input is
 //      ill-conditioned (kappa: condition number estimated in __float128);
-//   3. the physics checks by quadrature (apps/verify/PhysicsChecks.h).
+//   3. the physics checks by quadrature (apps/verify/PhysicsChecks.h);
+//   4. each lobe the random walk supports against its stochastic reference
+//      (compiler/reference/WalkComparison.h), at the default inputs:
+//      directional albedo and BRDF-shaped error of the single-scattering
+//      lobe and of the lobe with its energy compensation; and a layer of two
+//      lobes against the layered walk. A report, not a check: only a walk
+//      that is abandoned fails it.
 // Prints one table per material and the worst cases with their inputs.
 // Exit: 0 all passed, 1 a check failed, 2 usage, 65 a material file error.
 #include "Commands.h"
@@ -21,6 +27,7 @@
 #include "MaterialFile.h"
 #include "PhysicsChecks.h"
 #include "Verify.h"
+#include "WalkComparison.h"
 
 #include <chrono>
 #include <cmath>
@@ -41,11 +48,11 @@ struct VerifyOptions {
     std::vector<std::string> files;
     std::string material;
     bool verbose = false;
-    bool physics = true, jit = true, quad = true;
+    bool physics = true, jit = true, quad = true, walk = true;
 };
 
 const char* kVerifyUsage =
-    "usage: facet verify FILE... [--material NAME] [--verbose] [--no-physics] [--no-jit] [--no-quad]\n";
+    "usage: facet verify FILE... [--material NAME] [--verbose] [--no-physics] [--no-jit] [--no-quad] [--no-walk]\n";
 
 std::string shortCase(const CheckedMaterial& m, const HardCase& c) { return describeCase(m, c); }
 
@@ -74,6 +81,63 @@ void printSample(const SampleStats& s, const CheckedMaterial& m, const std::vect
 }
 
 // Returns true if everything passed.
+double channelMean(const std::array<double, 3>& v) { return (v[0] + v[1] + v[2]) / 3; }
+
+// Section 4: one table per lobe the walk supports, at the default inputs.
+// The albedos are the channels' mean.
+bool printWalkComparison(const CheckedMaterial& m, const Interpreter<double>& interp) {
+    ResolvedBsdf<double> r = interp.resolveAll(nullptr);
+    if (!r.valid) return true;
+    bool ok = true;
+    for (size_t i = 0; i < r.lobes.size(); ++i) {
+        const ResolvedMaterial<double>& lobe = r.lobes[i];
+        std::string why = MicrosurfaceWalk::unsupported(lobe);
+        std::string name = m.combinesLobes() ? fmt::format(" '{}'", m.lobes[i].name) : "";
+        if (!why.empty()) {
+            if (lobe.ndf) std::printf("  multiple scattering of lobe%s: no random walk (%s)\n", name.c_str(), why.c_str());
+            continue;
+        }
+        bool compensated = lobe.energy->compensates;
+        std::printf("  multiple scattering of lobe%s against the random walk on its microsurface (default inputs; "
+                    "albedo: rgb mean; shape: relative RMS of f over n.wi-weighted cells):\n",
+                    name.c_str());
+        std::printf("    %7s %9s %9s %17s %10s %10s %8s\n", "theta_o", "single", compensated ? "+ms model" : "-",
+                    "walk +- se", "shape 1x", compensated ? "shape +ms" : "-", "noise");
+        for (const WalkComparisonRow& row : compareWithWalk(lobe)) {
+            std::string model = compensated ? fmt::format("{:.4f}", channelMean(row.modelAlbedo)) : "-";
+            std::string modelShape = compensated ? fmt::format("{:.4f}", row.modelShapeError) : "-";
+            std::printf("    %7.0f %9.4f %9s %9.4f +- %.4f %10.4f %10s %8.4f\n", row.thetaO, channelMean(row.singleAlbedo),
+                        model.c_str(), channelMean(row.walkAlbedo), channelMean(row.walkAlbedoError),
+                        row.singleShapeError, modelShape.c_str(), row.shapeNoise);
+            if (row.abandoned > 0) {
+                std::printf("    FAIL: %lld walks abandoned at theta_o = %g\n", (long long)row.abandoned, row.thetaO);
+                ok = false;
+            }
+        }
+    }
+    if (m.combinesLobes() && m.bsdfRoot().kind == BsdfKind::Layer) {
+        std::string why = layerWalkUnsupported(m, r);
+        if (!why.empty()) {
+            std::printf("  layer: no layered walk (%s)\n", why.c_str());
+            return ok;
+        }
+        std::printf("  %s against the layered random walk (its top a rough dielectric interface over its base; "
+                    "default inputs):\n",
+                    printBsdf(m, m.bsdfRoot()).c_str());
+        std::printf("    %7s %9s %17s %10s %8s\n", "theta_o", "layer", "walk +- se", "shape", "noise");
+        for (const WalkComparisonRow& row : compareLayerWithWalk(interp, r)) {
+            std::printf("    %7.0f %9.4f %9.4f +- %.4f %10.4f %8.4f\n", row.thetaO, channelMean(row.modelAlbedo),
+                        channelMean(row.walkAlbedo), channelMean(row.walkAlbedoError), row.modelShapeError,
+                        row.shapeNoise);
+            if (row.abandoned > 0) {
+                std::printf("    FAIL: %lld walks abandoned at theta_o = %g\n", (long long)row.abandoned, row.thetaO);
+                ok = false;
+            }
+        }
+    }
+    return ok;
+}
+
 bool verifyMaterial(const CheckedMaterial& m, const std::string& path, Compiler& compiler, const VerifyOptions& opt) {
     auto start = std::chrono::steady_clock::now();
     bool ok = true;
@@ -218,6 +282,7 @@ bool verifyMaterial(const CheckedMaterial& m, const std::string& path, Compiler&
             if (c.failed() && worst[{c.name, c.enforced}] != &c) row(c);
         for (const PhysicsCheck& c : checks) ok &= !c.failed();
     }
+    if (opt.walk) ok &= printWalkComparison(m, interp);
     double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf("  %s: %s (%.1f s)\n\n", m.name.c_str(), ok ? "PASS" : "FAIL", seconds);
     return ok;
@@ -237,6 +302,7 @@ int cmdVerify(const std::vector<std::string>& args) {
             opt.material = args[++i];
         } else if (a == "--verbose") opt.verbose = true;
         else if (a == "--no-physics") opt.physics = false;
+        else if (a == "--no-walk") opt.walk = false;
         else if (a == "--no-jit") opt.jit = false;
         else if (a == "--no-quad") opt.quad = false;
         else if (!a.empty() && a[0] == '-') {

@@ -4,6 +4,12 @@
 // the random walk on the same microsurface (MicrosurfaceWalk.h), with the
 // lobe's own Fresnel term at every reflection.
 //
+// The same for a material whose combination is layer(TOP, BASE) of two
+// lobes: the albedo-scaled layer (SPEC 10, LayerAlbedo.h) against the
+// layered walk of TOP read as a dielectric interface over BASE
+// (LayeredWalk.h); a layer weight W < 1 mixes in the base alone, W walk +
+// (1 - W) base, on both sides.
+//
 // Two measures per view angle theta_o:
 //   - the directional albedo Int f (n.wi) dwi of each: the model's by its
 //     reference sampler (Sampling.h) with stratified numbers, the walk's as
@@ -22,10 +28,12 @@
 // height-correlated microsurface; its diffuse base is left out of both.
 #pragma once
 
+#include "LayeredWalk.h"
 #include "MicrosurfaceWalk.h"
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace facet {
@@ -50,5 +58,14 @@ struct WalkComparisonRow {
 // energy compensation. One row per theta of the options.
 std::vector<WalkComparisonRow> compareWithWalk(const ResolvedMaterial<double>& lobe,
                                                const WalkComparisonOptions& options = {});
+
+// Why the material's combination has no layered walk ("" when it has one).
+std::string layerWalkUnsupported(const CheckedMaterial& material, const ResolvedBsdf<double>& r);
+
+// One row per theta of the options (the single-scattering fields unused:
+// modelAlbedo and modelShapeError are the layer's). `interp` resolved `r`
+// at the default inputs; layerWalkUnsupported must be "".
+std::vector<WalkComparisonRow> compareLayerWithWalk(const Interpreter<double>& interp, const ResolvedBsdf<double>& r,
+                                                    const WalkComparisonOptions& options = {});
 
 }  // namespace facet

@@ -5,6 +5,7 @@
 // walks) against each other and against reciprocity.
 #include "../physics/PhysicsUtil.h"
 #include "LayeredWalk.h"
+#include "WalkComparison.h"
 
 #include <doctest/doctest.h>
 
@@ -136,4 +137,37 @@ TEST_CASE("the layered walk's next events and forward walks agree, and it is rec
             CHECK(std::abs(ab.mean[ch] - ba.mean[ch]) <= 4 * std::hypot(ab.stdError[ch], ba.stdError[ch]));
         }
     }
+}
+
+TEST_CASE("verify's layer report: an index-matched coat is its base on both sides; albedo scaling over a smooth coat "
+          "keeps the light that internal reflection returns to the base") {
+    auto report = [](const std::string& coat, double theta) {
+        facet::DiagnosticEngine diags;
+        facet::CheckedProgram program = facet::loadProgramText(
+            "material t { lobe coat { ndf = ggx(0.05); masking = smith_height_correlated; fresnel = dielectric(" + coat +
+                "); } lobe base { diffuse = lambert(0.8); } bsdf = layer(coat, base); }",
+            "layer.mat", diags);
+        REQUIRE_FALSE(diags.hasErrors());
+        const facet::CheckedMaterial& m = *program.find("t");
+        facet::Interpreter<double> interp(m);
+        facet::ResolvedBsdf<double> r = interp.resolveAll(nullptr);
+        REQUIRE(facet::layerWalkUnsupported(m, r) == "");
+        facet::WalkComparisonOptions options;
+        options.thetas = {theta};
+        options.gridTheta = 6, options.gridPhi = 12;
+        return facet::compareLayerWithWalk(interp, r, options).at(0);
+    };
+    facet::WalkComparisonRow matched = report("1", 30);
+    INFO("matched: layer ", matched.modelAlbedo[0], " walk ", matched.walkAlbedo[0], " shape ", matched.modelShapeError);
+    CHECK(matched.modelAlbedo[0] == doctest::Approx(0.8).epsilon(1e-3));
+    CHECK(matched.walkAlbedo[0] == doctest::Approx(0.8).epsilon(1e-12));
+    CHECK(matched.modelShapeError < 1e-3);
+    // Eta 1.5 at normal incidence: the walk's albedo is F_o + (1 - F_o) rho
+    // (1 - F_dr) / (1 - rho F_dr), F_dr ~ 0.6 the boundary's diffuse
+    // reflectance from inside (0.63), the layer's E_top + (1 - E_top) rho
+    // (0.81): brighter by far more than the walk's noise.
+    facet::WalkComparisonRow coated = report("1.5", 0);
+    INFO("coated: layer ", coated.modelAlbedo[0], " walk ", coated.walkAlbedo[0], " +- ", coated.walkAlbedoError[0]);
+    CHECK(coated.modelAlbedo[0] > coated.walkAlbedo[0] + 0.1);
+    CHECK(coated.walkAlbedo[0] == doctest::Approx(0.04 + 0.96 * 0.8 * 0.4 / (1 - 0.8 * 0.6)).epsilon(0.05));
 }
