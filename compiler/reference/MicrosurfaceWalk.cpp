@@ -5,6 +5,7 @@
 #include "Diagnostics.h"
 
 #include <cmath>
+#include <cstring>
 
 namespace facet {
 namespace {
@@ -36,6 +37,8 @@ std::string MicrosurfaceWalk::unsupported(const ResolvedMaterial<double>& lobe) 
 
 MicrosurfaceWalk::MicrosurfaceWalk(const ResolvedMaterial<double>& lobe) : lobe_(lobe) {
     internal_assert(unsupported(lobe).empty()) << "microsurface walk on an unsupported lobe: " << unsupported(lobe);
+    dielectric_ = std::strcmp(lobe.fresnel->name, "dielectric") == 0;
+    for (int ch = 0; ch < 3; ++ch) eta_[ch] = dielectric_ ? lobe.fresnelArgs.channel(0, ch) : 1.0;
 }
 
 double MicrosurfaceWalk::lambdaAbove(const V& v) const {
@@ -75,6 +78,7 @@ V MicrosurfaceWalk::visibleNormal(const V& v, WalkRandom& random) const {
 }
 
 WalkSample MicrosurfaceWalk::sample(const V& wo, WalkRandom& random, WalkOrders orders) const {
+    if (dielectric_) return sampleDielectric(wo, random, orders);
     WalkSample s;
     if (!(wo.z > 0)) return s;
     std::array<double, 3> weight{1, 1, 1};
@@ -103,6 +107,7 @@ WalkSample MicrosurfaceWalk::sample(const V& wo, WalkRandom& random, WalkOrders 
 
 std::array<double, 3> MicrosurfaceWalk::pathBrdfCos(const V& wi, const V& wo, WalkRandom& random, WalkOrders orders,
                                                     bool* abandoned) const {
+    if (dielectric_) return pathBrdfCosDielectric(wi, wo, random, orders, abandoned);
     std::array<double, 3> sum{};
     if (abandoned) *abandoned = false;
     if (!(wi.z > 0) || !(wo.z > 0)) return sum;

@@ -19,6 +19,14 @@
 // takes directions below the horizon (a ray going up meets facets facing
 // down its path), i.e. the NDFs with NdfEntry::visibleNormals.
 //
+// A lobe with a `dielectric` Fresnel is walked as Heitz et al.'s dielectric
+// microsurface (their section 5; MicrosurfaceDielectric.cpp): at each facet
+// the ray reflects with probability F and otherwise refracts into the other
+// medium, where it walks the same surface from below (heights and
+// directions negated, eta inverted) until it comes back or leaves downward.
+// The lobe's reflection is the walks that leave upward; what leaves
+// downward is the transmission (cross(), the layered walk's interface).
+//
 // Two estimators, both unbiased, seeded and with a standard error:
 //   - sample(): the walk from wo; it leaves in direction wi with weight
 //     f (n.wi) / pdf = the product of the Fresnel terms met (1 with F = 1:
@@ -122,9 +130,29 @@ struct WalkAccumulator {
 struct WalkSample {
     Vec3<double> wi{};
     std::array<double, 3> weight{};
-    int order = 0;  // reflections before it left
+    int order = 0;  // reflections (and refractions) before it left
     bool abandoned = false;
+    bool transmitted = false;  // a dielectric walk that left downward (wi = 0, weight 0)
 };
+
+// How a walk through a dielectric boundary left it (MicrosurfaceWalk::cross).
+struct InterfaceExit {
+    Vec3<double> w{};          // the direction it left in (away from the surface)
+    bool transmitted = false;  // on the far side from where it came
+    bool valid = false;        // false: abandoned
+};
+
+// Unpolarized Fresnel reflectance of a dielectric boundary for light at cos
+// c (> 0) on the near side, eta = far index / near index; 1 past the
+// critical angle. Written from the s and p amplitudes, independently of the
+// catalog's g-form (models/fresnel), for the walks that refract.
+inline double dielectricReflectance(double c, double eta) {
+    double sin2t = (1 - c * c) / (eta * eta);
+    if (sin2t >= 1) return 1;
+    double ct = std::sqrt(1 - sin2t);
+    double rs = (c - eta * ct) / (c + eta * ct), rp = (eta * c - ct) / (eta * c + ct);
+    return (rs * rs + rp * rp) / 2;
+}
 
 // A walk longer than this (reflections) is abandoned: with F = 1 and
 // alpha = 1 fewer than one walk in 1e6 reaches order 30, so the limit only
@@ -158,6 +186,15 @@ public:
     // `paths` samples (those of the orders kept).
     WalkEstimate albedo(const Vec3<double>& wo, int64_t paths, uint64_t seed, WalkOrders orders = {}) const;
 
+    // The lobe's Fresnel is `dielectric`: the walk refracts as well.
+    bool dielectric() const { return dielectric_; }
+    // One walk through the microsurface read as a dielectric boundary, for a
+    // ray arriving along -from (`from` points away from the surface on its
+    // own side, above or below it); eta: the index of the far side over
+    // from's side (the top lobe's eta seen from above, 1 / eta from below).
+    // Needs no dielectric Fresnel of the lobe: eta is given.
+    InterfaceExit cross(const Vec3<double>& from, double eta, WalkRandom& random) const;
+
     // The projected area A(v) = Int <v, m>+ D(m) dm of the microsurface seen
     // from v, any unit v: (n.v)(1 + Lambda(v)) above the horizon and
     // (n.-v) Lambda(-v) below it.
@@ -173,7 +210,25 @@ private:
     // Lambda(v) for n.v > 0 (+Inf at the horizon when anything is masked).
     double lambdaAbove(const Vec3<double>& v) const;
 
+    // The dielectric walk from above (n.wo > 0), eta of the medium below:
+    // how it leaves, its order, and with `wi` (above) the next-event
+    // estimate of f(wi, wo) (n.wi) for the orders kept added to *sum.
+    struct DielectricPath {
+        InterfaceExit exit;
+        int order = 0;
+    };
+    DielectricPath dielectricWalk(const Vec3<double>& wo, double eta, WalkRandom& random, WalkOrders orders,
+                                  const Vec3<double>* wi, double* sum) const;
+    // The density of leaving a facet toward wi (above the surface) for a
+    // ray seen from v at a vertex on the upper (outside) or lower side.
+    double dielectricPhase(const Vec3<double>& v, bool outside, const Vec3<double>& wi, double eta) const;
+    WalkSample sampleDielectric(const Vec3<double>& wo, WalkRandom& random, WalkOrders orders) const;
+    std::array<double, 3> pathBrdfCosDielectric(const Vec3<double>& wi, const Vec3<double>& wo, WalkRandom& random,
+                                                WalkOrders orders, bool* abandoned) const;
+
     const ResolvedMaterial<double>& lobe_;
+    bool dielectric_ = false;
+    std::array<double, 3> eta_{};  // a dielectric's eta per channel
 };
 
 }  // namespace facet

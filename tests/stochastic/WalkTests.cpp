@@ -328,3 +328,47 @@ TEST_CASE("the walk's scattering orders against the independent Python walk (scr
     std::fclose(file);
     CHECK(cells == 18);
 }
+
+TEST_CASE("a dielectric microsurface: order 1 is the single-scattering lobe, next events from both sides agree with "
+          "the exits, and a smooth one is Fresnel's") {
+    // eta 1 / 1.5 (seen from inside glass): light refracted below bends
+    // toward the horizon and often meets the surface again from below,
+    // which is where the lower side's next events matter.
+    for (const WalkNdf& ndf : walkNdfs()) {
+        for (auto [alpha, eta] : {std::pair{0.3, "1.5"}, {1.0, "1.5"}, {0.6, "0.6666667"}}) {
+            Material r = makeMaterial(ndf.source(alpha) + " fresnel = dielectric(" + eta + ");");
+            MicrosurfaceWalk walk(r);
+            REQUIRE(walk.dielectric());
+            // Order 1 at given directions: D F G2 / (4 ci co).
+            physics::Vec3<double> wi = dir(deg(35), 2.5), wo = dir(deg(60), 0.3);
+            physics::Vec3<double> h = physics::normalize({wi.x + wo.x, wi.y + wo.y, wi.z + wo.z});
+            WalkEstimate first = walk.brdf(wi, wo, 40000, 61, WalkOrders{.onlyOrder = 1});
+            double exact = smithSingle(r, wi, wo, false) * r.F(physics::dot(wi, h), 0);
+            INFO(std::string(ndf.name), " alpha ", alpha, " eta ", std::string(eta), " order 1: walk ", first.mean[0], " +- ", first.stdError[0],
+                 " exact ", exact);
+            CHECK(std::abs(first.mean[0] - exact) <= 4 * first.stdError[0] + 1e-12 * exact);
+            // All orders: the walks that leave upward against next events
+            // (those from the lower side refract up through a facet).
+            for (double theta : {20.0, 75.0}) {
+                physics::Vec3<double> v = dir(deg(theta), 0.9);
+                WalkEstimate exits = walk.albedo(v, 40000, 67);
+                WalkEstimate nee = neeAlbedo(walk, v, 40000, 71);
+                WalkEstimate neeFirst = neeAlbedo(walk, v, 40000, 71, WalkOrders{.onlyOrder = 1});
+                INFO("theta_o ", theta, " exits ", exits.mean[0], " +- ", exits.stdError[0], " next events ", nee.mean[0],
+                     " +- ", nee.stdError[0], " order 1 ", neeFirst.mean[0]);
+                CHECK(std::abs(exits.mean[0] - nee.mean[0]) <= 4 * std::hypot(exits.stdError[0], nee.stdError[0]));
+                CHECK(exits.abandoned == 0);
+                if (alpha == 1.0) CHECK(nee.mean[0] > neeFirst.mean[0] + 4 * nee.stdError[0]);  // light comes back out
+            }
+        }
+    }
+    // Smooth: the reflected fraction is the Fresnel reflectance at n.wo.
+    Material smooth = makeMaterial("ndf = ggx(0.001); fresnel = dielectric(1.5);");
+    MicrosurfaceWalk walk(smooth);
+    for (double theta : {0.0, 60.0, 85.0}) {
+        WalkEstimate exits = walk.albedo(dir(deg(theta), 0), 40000, 73);
+        double fresnel = smooth.F(std::cos(deg(theta)), 0);
+        INFO("theta_o ", theta, " reflected ", exits.mean[0], " +- ", exits.stdError[0], " Fresnel ", fresnel);
+        CHECK(std::abs(exits.mean[0] - fresnel) <= 4 * exits.stdError[0] + 2e-3);
+    }
+}
