@@ -16,6 +16,10 @@
 //   facet render FILE --plot pdf --wo X,Y,Z -o pdf.png [-n N] [--seed S] [--size W]
 //       the histogram of N importance samples of wi beside the pdf integrated
 //       over the same cells (PdfPlot.h), and their chi-square test
+//   facet render FILE --plot walk -o walk.png [--theta-i A] [-n WALKS] [--seed S] [--size W]
+//       the first lobe the random walk supports in the plane of incidence:
+//       single scattering, with its energy compensation, and the random walk
+//       on its microsurface (WalkPlot.h); WALKS per outgoing angle
 //
 // Angles are in degrees. Exit codes as everywhere: 0 ok, 1 a check failed
 // (invalid lanes, or the image could not be written), 2 usage, 65 a
@@ -30,9 +34,11 @@
 #include "OutputFile.h"
 #include "PdfPlot.h"
 #include "Plots.h"
+#include "MicrosurfaceWalk.h"
 #include "Sampling.h"
 #include "SamplingSetup.h"
 #include "SphereRender.h"
+#include "WalkPlot.h"
 
 #include <cmath>
 #include <cstdio>
@@ -53,6 +59,7 @@ constexpr const char* kRenderUsage =
     "       facet render FILE --plot ndf -o ndf.png [--alpha A,B,...] [--size WIDTH]\n"
     "       facet render --plot ndf --compare NDF[:PARAM=VALUE],... [--alpha A,...] -o ndf.png\n"
     "       facet render FILE --plot pdf --wo X,Y,Z -o pdf.png [-n N] [--seed S] [--size WIDTH]\n"
+    "       facet render FILE --plot walk -o walk.png [--theta-i A] [-n WALKS] [--seed S] [--size WIDTH]\n"
     "angles in degrees: THETA from the view axis +Z, PHI from +X towards +Y (world up)\n";
 
 struct RenderUsageError {
@@ -97,7 +104,8 @@ struct RenderArgs {
     std::vector<double> thetaI, alphas;
     std::optional<int> size;
     std::string wo;                // --plot pdf: the view direction
-    long samples = 1000000;        // --plot pdf: -n
+    long samples = 1000000;        // --plot pdf: -n (--plot walk: walks per angle, when given)
+    bool samplesGiven = false;
     uint64_t seed = 1;             // --plot pdf: --seed
     preview::SphereScene scene;
 };
@@ -114,8 +122,8 @@ RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
         else if (a == "--material") r.material = value();
         else if (a == "--plot") {
             r.plot = value();
-            if (r.plot != "lobe" && r.plot != "ndf" && r.plot != "pdf")
-                throw RenderUsageError{fmt::format("--plot expects lobe, ndf or pdf, got '{}'", r.plot)};
+            if (r.plot != "lobe" && r.plot != "ndf" && r.plot != "pdf" && r.plot != "walk")
+                throw RenderUsageError{fmt::format("--plot expects lobe, ndf, pdf or walk, got '{}'", r.plot)};
         } else if (a == "--compare") r.compare = value();
         else if (a == "--size") r.size = parseInteger(a, value(), 8, 16384);
         else if (a == "--light") std::tie(r.scene.lightThetaDeg, r.scene.lightPhiDeg) = parseAngles(a, value());
@@ -137,7 +145,7 @@ RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
         else if (a == "--theta-i") r.thetaI = parseNumberList(a, value());
         else if (a == "--alpha") r.alphas = parseNumberList(a, value());
         else if (a == "--wo") r.wo = value();
-        else if (a == "-n") r.samples = parseInteger(a, value(), 1, 100000000);
+        else if (a == "-n") r.samples = parseInteger(a, value(), 1, 100000000), r.samplesGiven = true;
         else if (a == "--seed") {
             if (std::string why = parseSeed(a, value(), r.seed); !why.empty()) throw RenderUsageError{why};
         }
@@ -152,7 +160,11 @@ RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
         throw RenderUsageError{why};
     if (!r.compare.empty() && r.plot != "ndf") throw RenderUsageError{"--compare goes with --plot ndf"};
     if (r.file.empty() && r.compare.empty()) throw RenderUsageError{"no material file given"};
-    if (!r.thetaI.empty() && r.plot != "lobe") throw RenderUsageError{"--theta-i goes with --plot lobe"};
+    if (!r.thetaI.empty() && r.plot != "lobe" && r.plot != "walk")
+        throw RenderUsageError{"--theta-i goes with --plot lobe or walk"};
+    if (r.plot == "walk" && r.thetaI.size() > 1) throw RenderUsageError{"--plot walk takes one --theta-i"};
+    if (r.plot == "walk" && !r.options.empty())
+        throw RenderUsageError{"--set does not apply to --plot walk (it plots the material at its default inputs)"};
     if (!r.alphas.empty() && r.plot != "ndf") throw RenderUsageError{"--alpha goes with --plot ndf"};
     if (!r.wo.empty() && r.plot != "pdf") throw RenderUsageError{"--wo goes with --plot pdf"};
     if (r.plot == "pdf" && r.wo.empty()) throw RenderUsageError{"--plot pdf needs --wo X,Y,Z"};
@@ -420,6 +432,47 @@ int pdfPlotCommand(const RenderArgs& r) {
     return kExitOk;
 }
 
+// The first lobe of the material (default inputs) that the random walk
+// supports, drawn by WalkPlot.
+int walkPlotCommand(const RenderArgs& r) {
+    NamedMaterial named = loadRenderMaterial(r);
+    const CheckedMaterial* m = named.material;
+    if (!m) return kExitMaterialError;
+    std::unique_ptr<Interpreter<double>> interp = referenceInterpreter(*m);
+    ResolvedBsdf<double> all = interp->resolveAll(nullptr);
+    if (!all.valid) {
+        std::fprintf(stderr, "facet: render: %s's default inputs are not finite\n", m->name.c_str());
+        return kExitFailed;
+    }
+    std::string reasons;
+    for (size_t i = 0; i < all.lobes.size(); ++i) {
+        std::string why = MicrosurfaceWalk::unsupported(all.lobes[i]);
+        if (!why.empty()) {
+            reasons += fmt::format("{}lobe '{}': {}", reasons.empty() ? "" : "; ", m->lobes[i].name, why);
+            continue;
+        }
+        preview::WalkPlotOptions opt;
+        if (!r.thetaI.empty()) opt.incidentDegrees = r.thetaI[0];
+        if (r.samplesGiven) opt.paths = r.samples;
+        opt.seed = r.seed;
+        if (r.size) opt.plot.width = *r.size, opt.plot.height = *r.size * 5 / 8;
+        opt.plot.title = fmt::format("{}{}: theta_i = {:g}, {} walks per angle", m->name,
+                                     m->combinesLobes() ? " lobe " + m->lobes[i].name : "", opt.incidentDegrees, opt.paths);
+        preview::WalkPlotResult result = preview::writeWalkPlot(all.lobes[i], opt, r.out);
+        if (!result.error.empty()) {
+            std::fprintf(stderr, "facet: render: %s\n", result.error.c_str());
+            return kExitFailed;
+        }
+        if (!result.warning.empty()) std::fprintf(stderr, "facet: render: warning: %s\n", result.warning.c_str());
+        std::printf("peak of luminance(f) cos(theta_o): model %.6g, random walk %.6g\n", result.modelPeak,
+                    result.walkPeak);
+        std::printf("wrote %s\n", r.out.c_str());
+        return kExitOk;
+    }
+    std::fprintf(stderr, "facet: render: no lobe of %s has a random walk (%s)\n", m->name.c_str(), reasons.c_str());
+    return kExitFailed;
+}
+
 }  // namespace
 
 int cmdRender(const std::vector<std::string>& args) {
@@ -428,6 +481,7 @@ int cmdRender(const std::vector<std::string>& args) {
         if (r.plot == "lobe") return lobePlotCommand(r);
         if (r.plot == "ndf") return ndfPlotCommand(r);
         if (r.plot == "pdf") return pdfPlotCommand(r);
+        if (r.plot == "walk") return walkPlotCommand(r);
         return renderSphereCommand(r);
     } catch (const RenderUsageError& e) {
         std::fprintf(stderr, "facet: render: %s\n%s", e.message.c_str(), kRenderUsage);

@@ -302,9 +302,12 @@ YAxis chooseYAxis(double maxValue, bool log) {
     return y;
 }
 
-// Returns whether the labels fitted (false: drawn without text).
-bool drawNdfPlot(PlotCanvas& canvas, const std::vector<NdfCurve>& curves,
-                 const std::vector<std::vector<double>>& values, const YAxis& y, const std::string& title) {
+// Curves over theta in [-90, 90] degrees with a legend; the captions say
+// what the axes are. Returns whether the labels fitted (false: drawn
+// without text).
+bool drawCurvePlot(PlotCanvas& canvas, const std::vector<std::string>& labels,
+                   const std::vector<std::vector<double>>& values, const YAxis& y, const std::string& title,
+                   const std::string& yCaption, const std::string& xCaption) {
     const double W = canvas.width(), H = canvas.height();
     double fs = plotFontSize(canvas.width(), canvas.height());
     bool text = canvas.hasFont();
@@ -326,13 +329,13 @@ bool drawNdfPlot(PlotCanvas& canvas, const std::vector<NdfCurve>& curves,
             for (const auto& t : yTicks) yLabelW = std::max(yLabelW, canvas.textWidth(t.second, 0.9 * fs));
         legendW = 0;
         if (text)
-            for (const NdfCurve& c : curves)
-                legendW = std::max(legendW, swatchW + 0.6 * fs + canvas.textWidth(c.label, fs));
+            for (const std::string& label : labels)
+                legendW = std::max(legendW, swatchW + 0.6 * fs + canvas.textWidth(label, fs));
         x0 = margin + (text ? yLabelW + 0.8 * fs : 0);
         x1 = W - margin - (text ? legendW + 1.5 * fs : 0);
         y0 = margin + (text ? (title.empty() ? 0 : 2.0 * fs) + 1.6 * fs : 0);  // title, y caption
         y1 = H - margin - (text ? 3.6 * fs : 0);                               // x labels, x caption
-        bool legendFits = legendW <= 0.4 * W && curves.size() * legendRowH <= H - margin - y0;
+        bool legendFits = legendW <= 0.4 * W && labels.size() * legendRowH <= H - margin - y0;
         if (!text || (x1 - x0 >= 8 * fs && y1 - y0 >= 5 * fs && legendFits)) break;
         shrinkOrDropText(fs, text);
     }
@@ -354,7 +357,7 @@ bool drawNdfPlot(PlotCanvas& canvas, const std::vector<NdfCurve>& curves,
 
     // Curves, clipped at the bottom of the axis: a run of samples above it
     // is drawn down to the bottom edge where it leaves the axis.
-    for (size_t i = 0; i < curves.size(); ++i) {
+    for (size_t i = 0; i < labels.size(); ++i) {
         const std::vector<double>& v = values[i];
         std::vector<Point> run;
         auto flush = [&] {
@@ -378,20 +381,20 @@ bool drawNdfPlot(PlotCanvas& canvas, const std::vector<NdfCurve>& curves,
 
     if (!text) return false;
     if (!title.empty()) canvas.text({W / 2, fs}, title, 1.25 * fs, kInk, HAlign::Center, VAlign::Top);
-    canvas.text({x0, y0 - 0.5 * fs}, y.log ? "D(theta_m) in 1/sr, log scale" : "D(theta_m) in 1/sr", 0.9 * fs, kMuted,
-                HAlign::Left, VAlign::Bottom);
+    canvas.text({x0, y0 - 0.5 * fs}, y.log ? yCaption + ", log scale" : yCaption, 0.9 * fs, kMuted, HAlign::Left,
+                VAlign::Bottom);
     for (const auto& [v, label] : yTicks)
         canvas.text({x0 - 0.6 * fs, Y(v)}, label, 0.9 * fs, kInk, HAlign::Right, VAlign::Center);
     for (int a = -90; a <= 90; a += 30)
         canvas.text({X(a), y1 + 0.6 * fs}, fmt::format("{}", a), 0.9 * fs, kInk, HAlign::Center, VAlign::Top);
-    canvas.text({(x0 + x1) / 2, y1 + 2.2 * fs}, "theta_m (" + std::string(canvas.rendersDegreeSign() ? "\xC2\xB0" : "degrees") +
-                                             ") in the x-z plane",
+    canvas.text({(x0 + x1) / 2, y1 + 2.2 * fs},
+                xCaption + " (" + std::string(canvas.rendersDegreeSign() ? "\xC2\xB0" : "degrees") + ") in the x-z plane",
                 0.9 * fs, kMuted, HAlign::Center, VAlign::Top);
     double lx = x1 + 1.5 * fs;
-    for (size_t i = 0; i < curves.size(); ++i) {
+    for (size_t i = 0; i < labels.size(); ++i) {
         double ly = y0 + (i + 0.5) * legendRowH;
         canvas.line({lx, ly}, {lx + swatchW, ly}, curveStroke(i, fs));
-        canvas.text({lx + swatchW + 0.6 * fs, ly}, curves[i].label, fs, kInk, HAlign::Left, VAlign::Center);
+        canvas.text({lx + swatchW + 0.6 * fs, ly}, labels[i], fs, kInk, HAlign::Left, VAlign::Center);
     }
     return true;
 }
@@ -440,31 +443,51 @@ ResolvedMaterial<double> ndfAtAlpha(const NdfEntry& ndf, double alpha, std::vect
 std::string writeNdfPlot(const std::vector<NdfCurve>& curves, const NdfPlotOptions& options, const std::string& path,
                          std::string* warning) {
     if (std::string e = checkNdfInputs(curves, options, path); !e.empty()) return e;
-    try {
-        std::vector<std::vector<double>> values(curves.size(), std::vector<double>(kSamples));
-        double maxValue = 0;
-        for (size_t i = 0; i < curves.size(); ++i)
-            for (int k = 0; k < kSamples; ++k) {
-                double t = thetaAt(k) * kDeg;
-                double d = curves[i].ndf.D({std::sin(t), 0.0, std::cos(t)});
-                values[i][size_t(k)] = d;
-                if (std::isfinite(d)) maxValue = std::max(maxValue, d);
-            }
-        if (!(maxValue > 0)) return "every NDF curve is zero (or not finite): nothing to plot";
-        YAxis y = chooseYAxis(maxValue, options.logScale);
+    CurvePlot plot;
+    plot.yCaption = "D(theta_m) in 1/sr", plot.xCaption = "theta_m";
+    for (const NdfCurve& c : curves) {
+        plot.labels.push_back(c.label);
+        plot.values.emplace_back(kSamples);
+        for (int k = 0; k < kSamples; ++k) {
+            double t = thetaAt(k) * kDeg;
+            plot.values.back()[size_t(k)] = c.ndf.D({std::sin(t), 0.0, std::cos(t)});
+        }
+    }
+    std::string e = writeCurvePlot(plot, options, path, warning);
+    return e == kNothingToPlot ? "every NDF curve is zero (or not finite): nothing to plot" : e;
+}
 
-        std::string note;
+int curvePlotSamples() { return kSamples; }
+double curvePlotTheta(int k) { return thetaAt(k); }
+
+std::string writeCurvePlot(const CurvePlot& plot, const NdfPlotOptions& options, const std::string& path,
+                           std::string* warning) {
+    if (path.empty()) return "no output path for the plot";
+    if (std::string e = checkPlotSize(options.width, options.height); !e.empty()) return e;
+    if (plot.labels.empty() || plot.labels.size() != plot.values.size()) return "the plot needs one label per curve";
+    if (plot.labels.size() > kMaxNdfCurves) return fmt::format("a plot draws at most {} curves", kMaxNdfCurves);
+    try {
+        double maxValue = 0;
+        for (const std::vector<double>& v : plot.values) {
+            if (v.size() != size_t(kSamples)) return "a curve has the wrong number of samples";
+            for (double d : v)
+                if (std::isfinite(d)) maxValue = std::max(maxValue, d);
+        }
+        if (!(maxValue > 0)) return kNothingToPlot;
+        YAxis y = chooseYAxis(maxValue, options.logScale);
         std::string font = plotFontOrDefault(options.fontPath);
         PlotCanvas canvas(options.width, options.height, font);
-        note = noTextWarning(canvas, font);
-        noteNoRoomForText(canvas, drawNdfPlot(canvas, curves, values, y, options.title), note);
+        std::string note = noTextWarning(canvas, font);
+        noteNoRoomForText(canvas,
+                          drawCurvePlot(canvas, plot.labels, plot.values, y, options.title, plot.yCaption, plot.xCaption),
+                          note);
         if (!note.empty()) {
             if (warning) *warning = note;
             else std::fprintf(stderr, "warning: %s\n", note.c_str());
         }
         return canvas.write(path);
     } catch (const std::exception& e) {
-        return std::string("cannot draw the NDF plot: ") + e.what();
+        return std::string("cannot draw the plot: ") + e.what();
     }
 }
 

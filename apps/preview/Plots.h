@@ -1,4 +1,5 @@
-// Plots: the two diagnostic plots of `facet render --plot lobe|ndf`.
+// Plots: the diagnostic plots of `facet render --plot lobe|ndf`, and the
+// curve plot they share with `--plot walk` (WalkPlot.h).
 //
 // The lobe plot is the BRDF slice in the plane of incidence, evaluated by a
 // compiled kernel (any backend), drawn as a polar plot: one curve per
@@ -68,5 +69,20 @@ struct NdfPlotOptions {
 // stderr when warning is null.
 std::string writeNdfPlot(const std::vector<NdfCurve>& curves, const NdfPlotOptions& options, const std::string& path,
                          std::string* warning = nullptr);
+
+// Curves over theta in [-90, 90] degrees, curvePlotSamples() values each at
+// curvePlotTheta(k), drawn like the NDF plot (the options' scale, title and
+// font; "log scale" appended to the y caption). Returns "" or an error;
+// kNothingToPlot when every value is zero or not finite.
+struct CurvePlot {
+    std::vector<std::string> labels;
+    std::vector<std::vector<double>> values;
+    std::string yCaption, xCaption;  // e.g. "D(theta_m) in 1/sr", "theta_m"
+};
+inline constexpr const char* kNothingToPlot = "every curve is zero (or not finite): nothing to plot";
+int curvePlotSamples();
+double curvePlotTheta(int k);
+std::string writeCurvePlot(const CurvePlot& plot, const NdfPlotOptions& options, const std::string& path,
+                           std::string* warning = nullptr);
 
 }  // namespace facet::preview

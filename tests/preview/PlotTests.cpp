@@ -1,4 +1,4 @@
-// Tests of the `facet render --plot lobe|ndf` plots (apps/preview/Plots.*)
+// Tests of the `facet render --plot lobe|ndf|walk` plots (apps/preview/Plots.*, WalkPlot.*)
 // and their drawing surface (PlotCanvas): the numbers the plots report
 // against independent computations, the images they write read back through
 // OpenImageIO, and errors that come back as messages.
@@ -7,6 +7,7 @@
 #include "PdfPlot.h"
 #include "PlotCanvas.h"
 #include "Plots.h"
+#include "WalkPlot.h"
 
 #include <OpenImageIO/imagebuf.h>
 #include <doctest/doctest.h>
@@ -423,3 +424,26 @@ TEST_CASE("PlotCanvas strokes: width, dashes, text") {
 }
 
 }  // TEST_SUITE
+
+TEST_CASE("walk plot: the random walk above single scattering on a rough white lobe; errors as messages") {
+    TempDir dir;
+    WalkPlotOptions options;
+    options.paths = 200;
+    options.plot.width = 480, options.plot.height = 300;
+    ResolvedMaterial<double> rough = ndfAtAlpha(ndf("ggx"), 0.8);  // F = 1, no compensation
+    WalkPlotResult result = writeWalkPlot(rough, options, dir.file("walk.png"));
+    REQUIRE_MESSAGE(result.error.empty(), result.error);
+    // Multiple scattering adds to the lobe (the white walk keeps what
+    // masking loses): its peak is above the single-scattering one.
+    CHECK(result.walkPeak > 1.05 * result.modelPeak);
+    ImageSummary img = readBack(dir.file("walk.png"));
+    REQUIRE_MESSAGE(img.ok, img.error);
+    CHECK(img.width == 480);
+    CHECK(img.coloured > 300);
+    CHECK(writeWalkPlot(ndfAtAlpha(ndf("gaussian"), 0.3), options, dir.file("g.png")).error.find("no random walk") !=
+          std::string::npos);
+    WalkPlotOptions grazing = options;
+    grazing.incidentDegrees = 95;
+    CHECK_FALSE(writeWalkPlot(rough, grazing, dir.file("t.png")).error.empty());
+    CHECK_FALSE(writeWalkPlot(rough, options, dir.file("no/such/dir/walk.png")).error.empty());
+}
