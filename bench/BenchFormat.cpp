@@ -175,6 +175,16 @@ std::string energyTableLine(const MaterialBench& m) {
     return s + cacheLoadText(e);
 }
 
+std::string walkLine(const MaterialBench& m) {
+    if (!m.walk) return "";
+    const WalkBench& w = *m.walk;
+    return fmt::format("Kulla-Conty against the random walk (theta_o {:g}, default inputs, docs/models.md): albedo "
+                       "single scattering {:.4f}, with Kulla-Conty {:.4f}, walk {:.4f} +- {:.4f}; shape error "
+                       "single {:.3f}, with Kulla-Conty {:.3f} (walk noise {:.3f})",
+                       w.thetaO, w.single, w.compensated, w.walk, w.walkError, w.singleShape, w.compensatedShape,
+                       w.noise);
+}
+
 std::string lambdaTableLine(const MaterialBench& m) {
     if (!m.lambdaTable) return "";
     const LambdaTableBench& e = *m.lambdaTable;
@@ -233,6 +243,7 @@ void printTable(const BenchReport& report, std::FILE* out) {
         std::fprintf(out, "\n%s\n", header(report, m).c_str());
         if (m.energyTable) std::fprintf(out, "  %s\n", energyTableLine(m).c_str());
         if (m.lambdaTable) std::fprintf(out, "  %s\n", lambdaTableLine(m).c_str());
+        if (m.walk) std::fprintf(out, "  %s\n", walkLine(m).c_str());
         std::fprintf(out, "%s", textTable(columns(), m.rows, cells).c_str());
         std::fprintf(out, "worst inputs (regular | hard):\n");
         for (const BenchRow& r : m.rows) {
@@ -275,6 +286,7 @@ std::string markdown(const BenchReport& report) {
         md += fmt::format(". Regular sample {} lanes, hard-case sample {} lanes.\n\n", m.regularLanes, m.hardLanes);
         if (m.energyTable) md += energyTableLine(m) + ".\n\n";
         if (m.lambdaTable) md += lambdaTableLine(m) + ".\n\n";
+        if (m.walk) md += walkLine(m) + ".\n\n";
         md += markdownTable(columns(), m.rows, cells);
         md += fmt::format("\n**Summary:** {}\n", summaryLine(m));
         if (m.lobesAlone) md += fmt::format("\n**Lobes:** {}\n", lobesAloneLine(m));
@@ -510,6 +522,21 @@ std::string json(const BenchReport& report) {
         writeEnergyTable(j, m.energyTable);
         j.key("lambda_table");
         writeLambdaTable(j, m.lambdaTable);
+        j.key("walk_comparison");
+        if (!m.walk) {
+            j.raw("null");
+        } else {
+            j.open('{');
+            j.field("theta_o", m.walk->thetaO);
+            j.field("albedo_single", m.walk->single);
+            j.field("albedo_kulla_conty", m.walk->compensated);
+            j.field("albedo_walk", m.walk->walk);
+            j.field("albedo_walk_std_error", m.walk->walkError);
+            j.field("shape_error_single", m.walk->singleShape);
+            j.field("shape_error_kulla_conty", m.walk->compensatedShape);
+            j.field("shape_noise", m.walk->noise);
+            j.close('}');
+        }
         j.field("regular_lanes", int64_t(m.regularLanes));
         j.field("hard_lanes", int64_t(m.hardLanes));
         j.field("summary", summaryLine(m));

@@ -30,5 +30,7 @@ std::string energyTableLine(const MaterialBench& m);
 // thread) / loaded from cache in Y ms" for a material whose Smith masking
 // uses its NDF's Lambda table, "" for the others.
 std::string lambdaTableLine(const MaterialBench& m);
+// "Kulla-Conty against the random walk ...", or "" without one.
+std::string walkLine(const MaterialBench& m);
 
 }  // namespace facet::bench

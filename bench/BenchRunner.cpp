@@ -11,6 +11,7 @@
 #include "KullaConty.h"
 #include "LambdaTable.h"
 #include "TableCache.h"
+#include "WalkComparison.h"
 
 #include <algorithm>
 #include <array>
@@ -684,6 +685,23 @@ std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& m, int l
     return e;
 }
 
+std::optional<WalkBench> benchWalk(const CheckedMaterial& m) {
+    if (m.combinesLobes() || !m.singleLobe().compensatesEnergy() || kullaContyUnsupported(m, m.singleLobe()))
+        return std::nullopt;
+    Interpreter<double> interp(m);
+    ResolvedMaterial<double> lobe = interp.resolve(nullptr);
+    if (!lobe.valid || !MicrosurfaceWalk::unsupported(lobe).empty()) return std::nullopt;
+    WalkBench w;
+    WalkComparisonOptions options;
+    options.thetas = {w.thetaO};
+    WalkComparisonRow row = compareWithWalk(lobe, options).at(0);
+    auto mean = [](const std::array<double, 3>& v) { return (v[0] + v[1] + v[2]) / 3; };
+    w.single = mean(row.singleAlbedo), w.compensated = mean(row.modelAlbedo);
+    w.walk = mean(row.walkAlbedo), w.walkError = mean(row.walkAlbedoError);
+    w.singleShape = row.singleShapeError, w.compensatedShape = row.modelShapeError, w.noise = row.shapeNoise;
+    return w;
+}
+
 std::optional<LambdaTableBench> benchLambdaTable(const CheckedMaterial& m, int loadRuns,
                                                  const std::optional<std::string>& cacheDir) {
     if (m.combinesLobes() || !usesTabulatedLambda(m)) return std::nullopt;
@@ -797,6 +815,7 @@ bool benchFile(const std::string& path, const BenchSettings& settings, BenchRepo
         }
         mb.energyTable = benchEnergyTable(m, std::max(3, settings.diskRuns));
         mb.lambdaTable = benchLambdaTable(m, std::max(3, settings.diskRuns));
+        mb.walk = benchWalk(m);
         if (progress) std::fprintf(progress, "bench %s (%s)\n", m.name.c_str(), path.c_str());
         MaterialRunner(m, settings, compiler, kernelDir.path, progress).run(mb);
         if (m.combinesLobes()) mb.lobesAlone = benchLobesAlone(m, settings, compiler);

@@ -174,6 +174,15 @@ struct LobesAlone {
     }
 };
 
+// energy = kulla_conty against its stochastic reference, the random walk on
+// the lobe's microsurface (WalkComparison.h), at the default inputs and one
+// view angle: albedos (rgb mean) and BRDF-shaped errors.
+struct WalkBench {
+    double thetaO = 60;
+    double single = 0, compensated = 0, walk = 0, walkError = 0;
+    double singleShape = 0, compensatedShape = 0, noise = 0;
+};
+
 struct MaterialBench {
     std::string file, material;
     std::string aotModel;  // "" when the file has no AOT twin
@@ -181,6 +190,7 @@ struct MaterialBench {
     double parseCheckMs = 0;
     std::optional<EnergyTableBench> energyTable;  // energy = kulla_conty only
     std::optional<LambdaTableBench> lambdaTable;  // a tabulated Smith Lambda only
+    std::optional<WalkBench> walk;                // energy = kulla_conty with a walkable lobe only
     std::optional<LobesAlone> lobesAlone;         // a combination of lobes only
     size_t regularLanes = 0, hardLanes = 0;
     std::vector<BenchRow> rows;
@@ -215,6 +225,10 @@ std::optional<EnergyTableBench> benchEnergyTable(const CheckedMaterial& material
 // defaultTableCacheDir()) unless a valid file is there, read back `loadRuns` times.
 std::optional<LambdaTableBench> benchLambdaTable(const CheckedMaterial& material, int loadRuns,
                                                  const std::optional<std::string>& cacheDir = std::nullopt);
+
+// Kulla-Conty against the random walk for a one-lobe material with energy =
+// kulla_conty whose NDF the walk supports (else nullopt); about a second.
+std::optional<WalkBench> benchWalk(const CheckedMaterial& material);
 
 // Fills the host fields of a report (CPU, features, vector width).
 void describeHost(BenchReport& report);

@@ -17,6 +17,8 @@
 #include <OpenImageIO/imageio.h>
 #include <doctest/doctest.h>
 
+#include <cmath>
+
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
@@ -292,6 +294,8 @@ TEST_CASE("bench --json output parses and has every field") {
     CHECK(m.at("energy_table").isNull());  // energy = none
     CHECK(m.at("kulla_conty_ms").isNull());
     CHECK(m.at("lambda_table").isNull());  // ggx: a closed-form Lambda
+    checkField(m, "walk_comparison", Kind::ObjectOrNull);
+    CHECK(m.at("walk_comparison").isNull());  // energy = none
 
     // Every backend x mode, and the AOT row.
     std::set<std::pair<std::string, std::string>> seen;
@@ -444,6 +448,20 @@ TEST_CASE("a kulla_conty material reports its table: cold build and cached load"
     // The older fields agree.
     CHECK(m.at("kulla_conty_ms").num() == e.at("build_ms").num());
     CHECK(m.at("kulla_conty_pair").str() == "ggx_smith_height_correlated");
+
+    // Kulla-Conty against the random walk: the compensated albedo nearer the
+    // walk's than single scattering's (gold at roughness 0.35 loses a few
+    // percent to masking at 60 degrees), and its shape no further off.
+    checkField(m, "walk_comparison", Kind::Object);
+    const JsonObject& w = m.at("walk_comparison").obj();
+    for (const char* k : {"theta_o", "albedo_single", "albedo_kulla_conty", "albedo_walk", "albedo_walk_std_error",
+                          "shape_error_single", "shape_error_kulla_conty", "shape_noise"})
+        checkField(w, k, Kind::Number);
+    CHECK(w.at("albedo_single").num() < w.at("albedo_kulla_conty").num());
+    CHECK(std::abs(w.at("albedo_kulla_conty").num() - w.at("albedo_walk").num()) <
+          0.5 * (w.at("albedo_walk").num() - w.at("albedo_single").num()));
+    CHECK(w.at("shape_error_kulla_conty").num() <= w.at("shape_error_single").num());
+    CHECK(bench::walkLine(report.materials[0]).find("Kulla-Conty against the random walk (theta_o 60") == 0);
 
     // Terminal and Markdown show it in the material's section, before the rows.
     std::string line = bench::energyTableLine(report.materials[0]);
