@@ -149,15 +149,11 @@ std::array<double, 3> LayeredWalk::pathBrdf(const V& wi, const V& wo, WalkRandom
         f = boundary_.pathBrdfCos(wi, wo, random);
         for (int ch = 0; ch < 3; ++ch) f[ch] = eta_[ch] == 1 ? 0.0 : f[ch] / wi.z;
     }
-    std::array<bool, 3> done{};
-    for (int ch = 0; ch < 3; ++ch) {
-        if (done[ch]) continue;
-        std::array<bool, 3> same{};
-        for (int k = ch; k < 3; ++k) same[k] = done[k] = !done[k] && eta_[k] == eta_[ch];
-        std::array<double, 3> part = walkChannels(wi, wo, eta_[ch], same, random);
+    forEachEta(eta_, [&](double eta, const std::array<bool, 3>& same) {
+        std::array<double, 3> part = walkChannels(wi, wo, eta, same, random);
         for (int k = 0; k < 3; ++k)
             if (same[k]) f[k] += part[k];
-    }
+    });
     return f;
 }
 
@@ -167,17 +163,13 @@ WalkSample LayeredWalk::sample(const V& wo, WalkRandom& random) const {
     // One walk per distinct eta; a dispersive top leaves in one direction
     // per eta, so its sample keeps the first group's direction and reports
     // the others' weights only through albedo().
-    std::array<bool, 3> done{};
-    for (int ch = 0; ch < 3; ++ch) {
-        if (done[ch]) continue;
-        std::array<bool, 3> same{};
-        for (int k = ch; k < 3; ++k) same[k] = done[k] = !done[k] && eta_[k] == eta_[ch];
-        WalkSample part = sampleChannels(wo, eta_[ch], same, random);
-        if (ch == 0) out.wi = part.wi, out.order = part.order;
+    forEachEta(eta_, [&](double eta, const std::array<bool, 3>& same) {
+        WalkSample part = sampleChannels(wo, eta, same, random);
+        if (same[0]) out.wi = part.wi, out.order = part.order;
         out.abandoned |= part.abandoned;
         for (int k = 0; k < 3; ++k)
             if (same[k]) out.weight[k] = part.weight[k];
-    }
+    });
     return out;
 }
 

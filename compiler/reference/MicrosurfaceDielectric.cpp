@@ -116,19 +116,17 @@ WalkSample MicrosurfaceWalk::sampleDielectric(const V& wo, WalkRandom& random, W
     // way); the sample keeps the first group's direction.
     WalkSample s;
     if (!(wo.z > 0)) return s;
-    std::array<bool, 3> done{};
-    for (int ch = 0; ch < 3; ++ch) {
-        if (done[ch]) continue;
-        DielectricPath p = dielectricWalk(wo, eta_[ch], random, orders, nullptr, nullptr);
+    forEachEta(eta_, [&](double eta, const std::array<bool, 3>& same) {
+        DielectricPath p = dielectricWalk(wo, eta, random, orders, nullptr, nullptr);
         bool reflected = p.exit.valid && !p.exit.transmitted && orders.counts(p.order);
-        for (int k = ch; k < 3; ++k)
-            if (!done[k] && eta_[k] == eta_[ch]) done[k] = true, s.weight[k] = reflected ? 1.0 : 0.0;
-        if (ch == 0) {
+        for (int k = 0; k < 3; ++k)
+            if (same[k]) s.weight[k] = reflected ? 1.0 : 0.0;
+        if (same[0]) {
             s.order = p.order, s.transmitted = p.exit.valid && p.exit.transmitted;
             if (reflected) s.wi = p.exit.w;
         }
         s.abandoned |= !p.exit.valid && p.order >= kMaxWalkSteps;
-    }
+    });
     return s;
 }
 
@@ -137,18 +135,16 @@ std::array<double, 3> MicrosurfaceWalk::pathBrdfCosDielectric(const V& wi, const
     std::array<double, 3> out{};
     if (abandoned) *abandoned = false;
     if (!(wi.z > 0) || !(wo.z > 0)) return out;
-    std::array<bool, 3> done{};
-    for (int ch = 0; ch < 3; ++ch) {
-        if (done[ch]) continue;
+    forEachEta(eta_, [&](double eta, const std::array<bool, 3>& same) {
         double sum = 0;
-        DielectricPath p = dielectricWalk(wo, eta_[ch], random, orders, &wi, &sum);
+        DielectricPath p = dielectricWalk(wo, eta, random, orders, &wi, &sum);
         if (!p.exit.valid && p.order >= kMaxWalkSteps) {
             if (abandoned) *abandoned = true;
             sum = 0;
         }
-        for (int k = ch; k < 3; ++k)
-            if (!done[k] && eta_[k] == eta_[ch]) done[k] = true, out[k] = sum;
-    }
+        for (int k = 0; k < 3; ++k)
+            if (same[k]) out[k] = sum;
+    });
     return out;
 }
 

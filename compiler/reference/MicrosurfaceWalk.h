@@ -1,7 +1,8 @@
 // MicrosurfaceWalk: the multiple-scattering microfacet BSDF of Heitz, Hanika,
 // d'Eon & Dachsbacher 2016 as a stochastic reference (SPEC 13): a random
-// walk of a ray on the Smith microsurface of a lobe's NDF, reflected at each
-// microfacet it meets, until it leaves the surface.
+// walk of a ray on the Smith microsurface of a lobe's NDF, scattered by each
+// microfacet it meets (reflected; on a dielectric, reflected or refracted),
+// until it leaves the surface.
 //
 // The microsurface is the one Smith's height-correlated masking assumes: an
 // uncorrelated random surface with the lobe's distribution of normals and a
@@ -30,8 +31,9 @@
 // Two estimators, both unbiased, seeded and with a standard error:
 //   - sample(): the walk from wo; it leaves in direction wi with weight
 //     f (n.wi) / pdf = the product of the Fresnel terms met (1 with F = 1:
-//     the walk conserves energy by construction), and the number of
-//     reflections on the way (its scattering order);
+//     the walk conserves energy by construction; 1 for a dielectric's walks
+//     that leave upward, F being the choice there), and the number of facets
+//     met on the way (its scattering order);
 //   - brdf(): f(wi, wo) by next-event estimation at every reflection of the
 //     walk from wo: the phase function D_v(h) F(v.h) / (4 <v, h>) toward wi
 //     (v = -w, h the half vector of v and wi) times the probability c^Lambda(wi)
@@ -63,7 +65,7 @@ class WalkRandom {
 public:
     WalkRandom(uint64_t seed, uint64_t path) {
         uint64_t x = seed;
-        x = splitmix64(x) ^ path;  // the seed hashed first: (seed, path) pairs do not alias
+        x = splitmix64(x) ^ path;  // the seed hashed first, so that nearby seeds do not share streams
         for (uint64_t& word : state_) word = splitmix64(x);
     }
     double next() { return double(nextBits() >> 11) * 0x1p-53; }
@@ -152,6 +154,21 @@ inline double dielectricReflectance(double c, double eta) {
     double ct = std::sqrt(1 - sin2t);
     double rs = (c - eta * ct) / (c + eta * ct), rp = (eta * c - ct) / (eta * c + ct);
     return (rs * rs + rp * rp) / 2;
+}
+
+// Calls fn(eta, channels) once per distinct value of eta over the three
+// channels, `channels` marking those that have it: a dispersive boundary
+// refracts each value its own way, so each is walked on its own.
+template <typename Fn>
+void forEachEta(const std::array<double, 3>& eta, Fn&& fn) {
+    std::array<bool, 3> done{};
+    for (int ch = 0; ch < 3; ++ch) {
+        if (done[ch]) continue;
+        std::array<bool, 3> same{};
+        for (int k = ch; k < 3; ++k)
+            if (!done[k] && eta[k] == eta[ch]) same[k] = done[k] = true;
+        fn(eta[ch], same);
+    }
 }
 
 // A walk longer than this (reflections) is abandoned: with F = 1 and

@@ -196,3 +196,18 @@ TEST_CASE("verify's layer report: an index-matched coat is its base on both side
     CHECK(coated.modelAlbedo[0] > coated.walkAlbedo[0] + 0.1);
     CHECK(coated.walkAlbedo[0] == doctest::Approx(0.04 + 0.96 * 0.8 * 0.4 / (1 - 0.8 * 0.6)).epsilon(0.05));
 }
+
+TEST_CASE("a dispersive coat walks each eta once: channels that share an eta get the same walk") {
+    // eta (1.5, 1.4, 1.5): red and blue are one walk, green its own; with a
+    // grey base, red and blue must come out identical, green not.
+    Material top = makeMaterial("ndf = ggx(0.3); fresnel = dielectric(rgb(1.5, 1.4, 1.5));");
+    Material grey = makeMaterial("lobe d { diffuse = lambert(0.6); } bsdf = d;");
+    LayeredWalk walk(top, grey);
+    Vec3<double> wi = dir(deg(30), 1.0), wo = dir(deg(50), 0.0);
+    WalkEstimate f = walk.brdf(wi, wo, 2000, 83);
+    CHECK(f.mean[0] == f.mean[2]);
+    CHECK(f.mean[1] != f.mean[0]);
+    WalkEstimate a = walk.albedo(wo, 2000, 89);
+    CHECK(a.mean[0] == a.mean[2]);
+    CHECK(a.mean[1] != a.mean[0]);
+}
