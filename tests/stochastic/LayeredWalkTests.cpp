@@ -5,6 +5,7 @@
 // estimators (next events and forward walks) against each other and against
 // reciprocity.
 #include "../physics/PhysicsUtil.h"
+#include "CosineAlbedo.h"
 #include "LayeredWalk.h"
 #include "WalkComparison.h"
 
@@ -97,17 +98,12 @@ TEST_CASE("a dielectric coat over white Lambert keeps the energy, smooth or roug
         // cosine-drawn wi must find the same total (not for the smooth coat,
         // whose mirror peak cosine-drawn wi all but never meet).
         if (std::string(coat) == "ggx(0.001)") continue;
-        facet::WalkAccumulator nee;
         Vec3<double> wo = dir(deg(50), 0.2);
-        for (int64_t k = 0; k < 40000; ++k) {
-            WalkRandom random(19, uint64_t(k));
-            double r = std::sqrt(random.next()), phi = 2 * kPi * random.next();
-            Vec3<double> wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1 - r * r))};
+        WalkEstimate e = stochastic::cosineAlbedo(40000, 19, [&](const Vec3<double>& wi, WalkRandom& random) {
             std::array<double, 3> f = walk.pathBrdf(wi, wo, random);
-            for (double& v : f) v *= kPi;
-            nee.add(f);
-        }
-        WalkEstimate e = nee.estimate();
+            for (double& v : f) v *= wi.z;
+            return f;
+        });
         INFO("coat ", std::string(coat), " next events: albedo ", e.mean[0], " +- ", e.stdError[0]);
         CHECK(std::abs(e.mean[0] - 1) <= 4 * e.stdError[0]);
     }
@@ -136,16 +132,11 @@ TEST_CASE("the layered walk's next events and forward walks agree, and it is rec
         Vec3<double> wo = dir(deg(theta), 0.5);
         WalkEstimate forward = walk.albedo(wo, 40000, 41);
         // Next events over wi drawn from the cosine lobe.
-        facet::WalkAccumulator nee;
-        for (int64_t k = 0; k < 40000; ++k) {
-            WalkRandom random(43, uint64_t(k));
-            double r = std::sqrt(random.next()), phi = 2 * kPi * random.next();
-            Vec3<double> wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1 - r * r))};
+        WalkEstimate e = stochastic::cosineAlbedo(40000, 43, [&](const Vec3<double>& wi, WalkRandom& random) {
             std::array<double, 3> f = walk.pathBrdf(wi, wo, random);
-            for (double& v : f) v *= kPi;  // f cos / pdf, pdf = cos / pi
-            nee.add(f);
-        }
-        WalkEstimate e = nee.estimate();
+            for (double& v : f) v *= wi.z;
+            return f;
+        });
         for (int ch = 0; ch < 3; ++ch) {
             INFO("theta_o ", theta, " channel ", ch, " forward ", forward.mean[ch], " +- ", forward.stdError[ch],
                  " next events ", e.mean[ch], " +- ", e.stdError[ch]);

@@ -10,6 +10,7 @@
 // microsurface has) must be told apart by the same comparison, so that the
 // tolerance is shown to be tight enough to mean something.
 #include "../physics/PhysicsUtil.h"
+#include "CosineAlbedo.h"
 #include "MicrosurfaceWalk.h"
 #include "WalkComparison.h"
 
@@ -54,25 +55,9 @@ const std::vector<WalkNdf>& walkNdfs() {
 // (the walk loses no energy), which no single-scattering lobe reaches.
 WalkEstimate neeAlbedo(const MicrosurfaceWalk& walk, const physics::Vec3<double>& wo, int64_t paths, uint64_t seed,
                        WalkOrders orders = {}) {
-    std::array<double, 3> sum{}, sum2{};
-    for (int64_t k = 0; k < paths; ++k) {
-        WalkRandom random(seed, uint64_t(k));
-        double r = std::sqrt(random.next()), phi = 2 * kPi * random.next();
-        physics::Vec3<double> wi{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1 - r * r))};
-        std::array<double, 3> x = walk.pathBrdfCos(wi, wo, random, orders);
-        for (int ch = 0; ch < 3; ++ch) {
-            double v = wi.z > 0 ? x[ch] * kPi / wi.z : 0;  // f cos / pdf, pdf = cos / pi
-            sum[ch] += v, sum2[ch] += v * v;
-        }
-    }
-    WalkEstimate e;
-    e.paths = paths;
-    for (int ch = 0; ch < 3; ++ch) {
-        e.mean[ch] = sum[ch] / double(paths);
-        double var = (sum2[ch] - sum[ch] * e.mean[ch]) / double(paths - 1);
-        e.stdError[ch] = std::sqrt(std::max(0.0, var) / double(paths));
-    }
-    return e;
+    return stochastic::cosineAlbedo(paths, seed, [&](const physics::Vec3<double>& wi, WalkRandom& random) {
+        return walk.pathBrdfCos(wi, wo, random, orders);
+    });
 }
 
 // The single-scattering lobe with F = 1 that the walk's first order is,
@@ -94,17 +79,12 @@ double smithSingle(const Material& r, const physics::Vec3<double>& wi, const phy
 // walk's).
 double singleAlbedo(const Material& r, const physics::Vec3<double>& wo, int64_t n, uint64_t seed, bool separable,
                     double* stdError) {
-    double sum = 0, sum2 = 0;
-    for (int64_t k = 0; k < n; ++k) {
-        WalkRandom random(seed, uint64_t(k));
-        double s = std::sqrt(random.next()), phi = 2 * kPi * random.next();
-        physics::Vec3<double> wi{s * std::cos(phi), s * std::sin(phi), std::sqrt(std::max(0.0, 1 - s * s))};
-        double v = smithSingle(r, wi, wo, separable) * kPi;
-        sum += v, sum2 += v * v;
-    }
-    double mean = sum / double(n);
-    *stdError = std::sqrt(std::max(0.0, (sum2 - sum * mean) / double(n - 1)) / double(n));
-    return mean;
+    WalkEstimate e = stochastic::cosineAlbedo(n, seed, [&](const physics::Vec3<double>& wi, WalkRandom&) {
+        double fCos = smithSingle(r, wi, wo, separable) * wi.z;
+        return std::array<double, 3>{fCos, fCos, fCos};
+    });
+    *stdError = e.stdError[0];
+    return e.mean[0];
 }
 
 }  // namespace
