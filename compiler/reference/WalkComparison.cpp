@@ -13,20 +13,26 @@ namespace {
 
 using V = Vec3<double>;
 
-// The model's albedo at wo by its reference sampler: u1, u2 stratified on
-// an n x n grid with a jitter, u0 (the mixture's choice) random.
-std::array<double, 3> samplerAlbedo(const ResolvedMaterial<double>& model, const V& wo, int64_t samples, uint64_t seed) {
+// An albedo by a sampler's mean weight, `weight(u)` for u0 (the mixture's
+// choice) random and u1, u2 stratified on an n x n grid with a jitter.
+template <typename Weight>
+std::array<double, 3> stratifiedAlbedo(int64_t samples, uint64_t seed, const Weight& weight) {
     int n = std::max(1, int(std::sqrt(double(samples))));
     std::array<double, 3> sum{};
     for (int i = 0; i < n; ++i)
         for (int j = 0; j < n; ++j) {
             WalkRandom random(seed, uint64_t(i) * uint64_t(n) + uint64_t(j));
             std::array<double, 3> u{random.next(), (i + random.next()) / n, (j + random.next()) / n};
-            SampleResult<double> s = sampleBrdf(model, wo, u);
-            for (int ch = 0; ch < 3; ++ch) sum[ch] += s.weight[ch];
+            std::array<double, 3> w = weight(u);
+            for (int ch = 0; ch < 3; ++ch) sum[ch] += w[ch];
         }
     for (double& v : sum) v /= double(n) * double(n);
     return sum;
+}
+
+// A lobe's albedo at wo by its reference sampler.
+std::array<double, 3> samplerAlbedo(const ResolvedMaterial<double>& model, const V& wo, int64_t samples, uint64_t seed) {
+    return stratifiedAlbedo(samples, seed, [&](const std::array<double, 3>& u) { return sampleBrdf(model, wo, u).weight; });
 }
 
 // Two models' f and the walk's at one wi cell, per channel, with the walk's
@@ -118,16 +124,10 @@ std::vector<WalkComparisonRow> compareLayerWithWalk(const Interpreter<double>& i
         WalkComparisonRow row;
         row.thetaO = theta;
         // The model's albedo by the interpreter's sampler of the whole material.
-        WalkAccumulator model;
-        int n = std::max(1, int(std::sqrt(double(4 * options.albedoPaths))));
-        for (int i = 0; i < n; ++i)
-            for (int j = 0; j < n; ++j) {
-                WalkRandom random(options.seed + 1, uint64_t(i) * uint64_t(n) + uint64_t(j));
-                double u[3] = {random.next(), (i + random.next()) / n, (j + random.next()) / n};
-                double o[3] = {wo.x, wo.y, wo.z};
-                model.add(interp.sample(o, u, nullptr).weight);
-            }
-        row.modelAlbedo = model.estimate().mean;
+        row.modelAlbedo = stratifiedAlbedo(4 * options.albedoPaths, options.seed + 1, [&](const std::array<double, 3>& u) {
+            double o[3] = {wo.x, wo.y, wo.z};
+            return interp.sample(o, u.data(), nullptr).weight;
+        });
         WalkEstimate a = walk.albedo(wo, options.albedoPaths, options.seed);
         std::array<double, 3> baseAlbedo = base.ndf ? samplerAlbedo(base, wo, 4 * options.albedoPaths, options.seed + 1)
                                                     : std::array<double, 3>{};
