@@ -330,6 +330,11 @@ struct FresnelEntry : ModelInfo {
     // f(wo, wi) may differ by that step where a rounding of wi.h against
     // wo.h falls on either side of it.
     bool reciprocityStep = false;
+    // The parameter holding the relative index of refraction of a boundary
+    // light passes through (the walks refract there and take it as the
+    // layer's index); -1 for the Fresnel of an opaque surface, where the
+    // walks only reflect.
+    int refractiveIndexParam = -1;
     FormulaSet<FresnelFormulas> formulas;
 };
 

@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <numbers>
 
 namespace facet {
@@ -27,7 +26,7 @@ std::string LayeredWalk::unsupported(const ResolvedMaterial<double>& top, const 
     (void)base;  // any lobe: the base is evaluated and sampled as the interpreter does
     std::string why = MicrosurfaceWalk::unsupported(top);
     if (!why.empty()) return "the top: " + why;
-    if (std::strcmp(top.fresnel->name, "dielectric") != 0)
+    if (top.fresnel->refractiveIndexParam < 0)
         return std::string("the top's Fresnel is '") + top.fresnel->name +
                "': the layered walk reads the top as a dielectric boundary and needs fresnel = dielectric(eta)";
     return "";
@@ -37,7 +36,7 @@ LayeredWalk::LayeredWalk(const ResolvedMaterial<double>& top, const ResolvedMate
                          LayerAbsorption absorption)
     : top_(top), base_(base), absorption_(absorption), boundary_(top) {
     internal_assert(unsupported(top, base).empty()) << "layered walk: " << unsupported(top, base);
-    for (int ch = 0; ch < 3; ++ch) eta_[ch] = top.fresnelArgs.channel(0, ch);
+    for (int ch = 0; ch < 3; ++ch) eta_[ch] = top.fresnelArgs.channel(top.fresnel->refractiveIndexParam, ch);
 }
 
 double LayeredWalk::transmittance(const V& w, int ch) const {

@@ -5,7 +5,6 @@
 #include "Diagnostics.h"
 
 #include <cmath>
-#include <cstring>
 
 namespace facet {
 namespace {
@@ -37,8 +36,9 @@ std::string MicrosurfaceWalk::unsupported(const ResolvedMaterial<double>& lobe) 
 
 MicrosurfaceWalk::MicrosurfaceWalk(const ResolvedMaterial<double>& lobe) : lobe_(lobe) {
     internal_assert(unsupported(lobe).empty()) << "microsurface walk on an unsupported lobe: " << unsupported(lobe);
-    dielectric_ = std::strcmp(lobe.fresnel->name, "dielectric") == 0;
-    for (int ch = 0; ch < 3; ++ch) eta_[ch] = dielectric_ ? lobe.fresnelArgs.channel(0, ch) : 1.0;
+    int etaParam = lobe.fresnel->refractiveIndexParam;
+    dielectric_ = etaParam >= 0;
+    for (int ch = 0; ch < 3; ++ch) eta_[ch] = dielectric_ ? lobe.fresnelArgs.channel(etaParam, ch) : 1.0;
 }
 
 double MicrosurfaceWalk::lambdaAbove(const V& v) const {

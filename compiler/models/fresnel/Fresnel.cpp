@@ -113,6 +113,7 @@ std::vector<const ModelInfo*> facetModels_fresnel_Fresnel() {
     static const FresnelEntry& dielectric = immortal<FresnelEntry>([] {
         FresnelEntry e = makeEntry<FresnelEntry>(ModelSlot::Fresnel, 2, "dielectric", "exact dielectric Fresnel");
         e.reciprocityStep = true;
+        e.refractiveIndexParam = kEta;
         e.canonical = {{"eta", C, kMinEta}};
         e.forms = {ModelForm{{{"eta", C, {kEta}}}}};
         e.examples = {{"dielectric", "input eta = rgb(1.5, 1.0, 0.7);", "dielectric(eta)"}};
