@@ -152,10 +152,15 @@ void plan(PipelineRun& run, const PipelineControl& control, const PipelineTarget
                             run.lowering.emitSampling);
 }
 
-void lower(PipelineRun& run, const PipelineControl& control) {
+void lower(PipelineRun& run, const PipelineControl& control, const PipelineTarget& target) {
     run.context = std::make_unique<llvm::LLVMContext>();
     const std::string prefix = control.symbolPrefix.empty() ? "facet_" + run.specialized.name : control.symbolPrefix;
-    run.lowered = lowerMaterial(run.specialized, run.plan, run.lowering, *run.context, prefix);
+    // Optimized batch code has one-lane bodies for its one-lane calls
+    // (LoweringOptions::oneLaneBodies); quick code, which lives until its
+    // tier-up, does not pay for their compile.
+    LoweringOptions lowering = run.lowering;
+    lowering.oneLaneBodies = target.level == FacetJit::Level::Optimized;
+    run.lowered = lowerMaterial(run.specialized, run.plan, lowering, *run.context, prefix);
     if (control.aotEntryPoints) addAotEntryPoints(run.lowered, run.specialized, prefix);
 }
 
@@ -189,7 +194,7 @@ bool runKernelPipeline(PipelineRun& run, const PipelineControl& control, const P
             case PipelineStage::Planned: plan(run, control, target, tables); break;
             // LLVM's stages recurse as deep as the material is long: on a
             // stack of known size, whatever thread the host calls from.
-            case PipelineStage::Lowered: onCompileStack([&] { lower(run, control); }); break;
+            case PipelineStage::Lowered: onCompileStack([&] { lower(run, control, target); }); break;
             case PipelineStage::Optimized: onCompileStack([&] { optimize(run, target); }); break;
             case PipelineStage::Emitted: onCompileStack([&] { emit(run, target); }); break;
         }

@@ -321,13 +321,85 @@ void emitScalarEntry(const KernelContext& k, llvm::Module& module, const std::st
                                          : bodies(k, module, k.plan.scalarBody, nullptr, evalBody));
 }
 
+// A call of one lane (LoweringPlan::oneLaneBody): `oneLane`, the batch
+// entry's lane body at one lane (oneLaneFunction), on the lane's values
+// gathered into stack arrays, instead of a whole vector of `width` lanes
+// for one (a one-lane vector call cost 1.0-3.5x a scalar call on the bench
+// materials). Emitted at the insert point, which it leaves in the block
+// where the vector loop goes on when n != 1. The call stays a call:
+// inlined, the one-lane body would double the batch entry's compile time.
+void emitOneLaneCall(const KernelContext& k, llvm::IRBuilder<>& b, const EntryShape& shape, llvm::Function* oneLane,
+                     llvm::Value* n, const std::vector<llvm::Value*>& inP, const std::vector<llvm::Value*>& outP,
+                     const std::vector<int>& readSlots, const std::vector<llvm::Value*>& slotBase,
+                     llvm::Value* statusA) {
+    llvm::LLVMContext& ctx = b.getContext();
+    llvm::Function* fn = b.GetInsertBlock()->getParent();
+    llvm::Type* f32 = b.getFloatTy();
+    const int groupsIn = int(shape.inputs.size()), groupsOut = int(shape.outputs.size());
+    std::vector<llvm::Value*> inArrays, outArrays;  // static allocas: still the entry block
+    for (int g = 0; g < groupsIn; ++g) inArrays.push_back(b.CreateAlloca(f32, b.getInt32(3), "one.in"));
+    for (int g = 0; g < groupsOut; ++g)
+        outArrays.push_back(b.CreateAlloca(f32, b.getInt32(unsigned(shape.outputs[size_t(g)])), "one.out"));
+    const int slotCount = k.material.slotCount;
+    llvm::Value* slotArray = slotCount > 0 ? b.CreateAlloca(f32, b.getInt32(unsigned(slotCount)), "one.slots") : nullptr;
+    auto* single = llvm::BasicBlock::Create(ctx, "one.lane", fn);
+    auto* rest = llvm::BasicBlock::Create(ctx, "vectors.entry", fn);
+    b.CreateCondBr(b.CreateICmpEQ(n, b.getInt64(1)), single, rest);
+
+    b.SetInsertPoint(single);
+    for (int g = 0; g < groupsIn; ++g)
+        for (int c = 0; c < 3; ++c)
+            b.CreateStore(b.CreateLoad(f32, inP[size_t(3 * g + c)]), b.CreateConstGEP1_32(f32, inArrays[size_t(g)], c));
+    if (slotArray) {
+        // Every slot: the read ones from their stream (or its defaults,
+        // slotBase), the others their default, never read.
+        std::vector<double> defaults = k.material.defaultSlots();
+        for (int s = 0; s < slotCount; ++s)
+            b.CreateStore(llvm::ConstantFP::get(f32, defaults[size_t(s)]), b.CreateConstGEP1_32(f32, slotArray, s));
+        for (size_t r = 0; r < readSlots.size(); ++r)
+            b.CreateStore(b.CreateLoad(f32, slotBase[r]), b.CreateConstGEP1_32(f32, slotArray, readSlots[r]));
+    }
+    std::vector<llvm::Value*> args(inArrays.begin(), inArrays.end());
+    args.push_back(slotArray ? slotArray : llvm::ConstantPointerNull::get(b.getPtrTy()));
+    args.insert(args.end(), outArrays.begin(), outArrays.end());
+    llvm::CallInst* call = b.CreateCall(oneLane, args);
+    call->addFnAttr(llvm::Attribute::NoInline);
+    size_t stream = 0;
+    for (int g = 0; g < groupsOut; ++g)
+        for (int c = 0; c < shape.outputs[size_t(g)]; ++c)
+            b.CreateStore(b.CreateLoad(f32, b.CreateConstGEP1_32(f32, outArrays[size_t(g)], c)), outP[stream++]);
+    llvm::Value* status = b.CreateZExt(call, b.getInt64Ty());
+    if (statusA) {
+        auto* store = llvm::BasicBlock::Create(ctx, "one.status", fn);
+        auto* done = llvm::BasicBlock::Create(ctx, "one.done", fn);
+        b.CreateCondBr(b.CreateIsNull(statusA), done, store);
+        b.SetInsertPoint(store);
+        b.CreateStore(b.CreateTrunc(call, b.getInt8Ty()), statusA);
+        b.CreateBr(done);
+        b.SetInsertPoint(done);
+    }
+    b.CreateRet(status);
+    b.SetInsertPoint(rest);
+}
+
+// The lane body of a batch entry at one lane, as a function of the scalar
+// entries' form (emitScalarFunction) named `<batch>.one`, for its one-lane
+// calls: the batch's bodies (its guarded first body and the fallback), so
+// that a lane gets the same bits whether it is called alone or in a vector.
+llvm::Function* oneLaneFunction(const KernelContext& k, llvm::Module& module, const std::string& batchName,
+                                const EntryShape& shape, const BodyPlan& body, const LaneBody& lanes) {
+    llvm::Function* fn = emitScalarFunction(k, module, batchName + ".one", shape, body, lanes);
+    fn->setLinkage(llvm::GlobalValue::InternalLinkage);
+    return fn;
+}
+
 // A batch entry point: int64 name(int64 n, const float* const in0[3], ...,
 // const float* const* inputs, float* const out0[3] (or float* out0), ...
 // [, uint8_t* status]), returning the number of invalid lanes (0, and a
 // status of 0s, under the host's promise of valid inputs: the plan's
 // trustInputs). It loops over vectors of `width` lanes.
 void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::string& name, const EntryShape& shape,
-                       bool withStatus, const BodyPlan& body, const LaneBody& lanes) {
+                       bool withStatus, const BodyPlan& body, const LaneBody& lanes, llvm::Function* oneLane) {
     const CheckedMaterial& mat = k.material;
     llvm::LLVMContext& ctx = module.getContext();
     llvm::IRBuilder<> b(ctx);
@@ -387,6 +459,8 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
         slotBase.push_back(b.CreateSelect(useDefault, dflt, loaded));
         slotStep.push_back(b.CreateSelect(useDefault, llvm::ConstantInt::get(i64, 0), llvm::ConstantInt::get(i64, 1)));
     }
+
+    if (oneLane) emitOneLaneCall(k, b, shape, oneLane, n, inP, outP, readSlots, slotBase, statusA);
 
     auto popcount = [&](llvm::Value* mask) {
         llvm::Value* bits = b.CreateBitCast(mask, b.getIntNTy(W));
@@ -517,12 +591,13 @@ void emitBatchFunction(const KernelContext& k, llvm::Module& module, const std::
 
 // The eval batch entry; the sixth argument is the optional per-lane status
 // array (one byte per lane, 1 = invalid; null: not wanted).
-void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::string& name) {
+void emitBatchEntry(const KernelContext& k, llvm::Module& module, const std::string& name, bool oneLane) {
     EntryShape shape{{{0, 0, 1}, {0, 0, 1}}, {3}};
     const BodyPlan* fallback = k.plan.fallbackBody ? &*k.plan.fallbackBody : nullptr;
-    emitBatchFunction(k, module, name, shape, true, k.plan.batchBody,
-                      k.plan.combines() ? combinationBody(k, module, false)
-                                        : bodies(k, module, k.plan.batchBody, fallback, evalBody));
+    LaneBody lanes = k.plan.combines() ? combinationBody(k, module, false)
+                                       : bodies(k, module, k.plan.batchBody, fallback, evalBody);
+    emitBatchFunction(k, module, name, shape, true, k.plan.batchBody, lanes,
+                      oneLane ? oneLaneFunction(k, module, name, shape, k.plan.batchBody, lanes) : nullptr);
 }
 
 // The sampler's entry points (SPEC 8), in the plan's sampling bodies:
@@ -571,10 +646,11 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
                                        : bodies(k, *out.module, body, nullptr, pdfBody));
         }
     }
+    const bool oneLane = plan.oneLaneBody && options.oneLaneBodies;
     if (options.emitBatch) {
         if (options.emitEval) {
             out.batchSymbol = symbolPrefix + "_batch";
-            emitBatchEntry(k, *out.module, out.batchSymbol);
+            emitBatchEntry(k, *out.module, out.batchSymbol, oneLane);
         }
         if (sampling) {
             out.sampleBatchSymbol = symbolPrefix + "_sample_batch";
@@ -582,12 +658,18 @@ LoweredModule lowerMaterial(const CheckedMaterial& material, const LoweringPlan&
             const SamplingPlan& sp = out.plan.sampling;
             const bool floatFirst = sp.batchBodies == BatchBodies::FloatFirst;
             const bool mixture = plan.combines();
-            emitBatchFunction(k, *out.module, out.sampleBatchSymbol, kSampleShape, false, sp.batchBody,
-                              mixture ? combinationSampleBody(k, *out.module)
-                                      : bodies(k, *out.module, sp.batchBody, floatFirst ? &sp.body : nullptr, sampleBody));
-            emitBatchFunction(k, *out.module, out.pdfBatchSymbol, kPdfShape, false, sp.body,
-                              mixture ? combinationPdfBody(k, *out.module)
-                                      : bodies(k, *out.module, sp.body, nullptr, pdfBody));
+            LaneBody sampleLanes = mixture ? combinationSampleBody(k, *out.module)
+                                           : bodies(k, *out.module, sp.batchBody, floatFirst ? &sp.body : nullptr,
+                                                    sampleBody);
+            emitBatchFunction(k, *out.module, out.sampleBatchSymbol, kSampleShape, false, sp.batchBody, sampleLanes,
+                              oneLane ? oneLaneFunction(k, *out.module, out.sampleBatchSymbol, kSampleShape,
+                                                        sp.batchBody, sampleLanes)
+                                      : nullptr);
+            LaneBody pdfLanes = mixture ? combinationPdfBody(k, *out.module)
+                                        : bodies(k, *out.module, sp.body, nullptr, pdfBody);
+            emitBatchFunction(k, *out.module, out.pdfBatchSymbol, kPdfShape, false, sp.body, pdfLanes,
+                              oneLane ? oneLaneFunction(k, *out.module, out.pdfBatchSymbol, kPdfShape, sp.body, pdfLanes)
+                                      : nullptr);
         }
     }
     // Every constant table in the module is part of the cache key: the

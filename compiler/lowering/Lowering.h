@@ -58,6 +58,10 @@ struct LoweringOptions {
     bool emitSampling = false;
     // The host's promise of valid inputs (assume=unit; LoweringPlan::trustInputs).
     bool trustInputs = false;
+    // Each batch entry gets its lane body at one lane too, which its one-lane
+    // calls run (LoweringPlan::oneLaneBody): optimized code only, as it
+    // costs about a third more compile time.
+    bool oneLaneBodies = false;
 };
 
 struct LoweredModule {

@@ -373,6 +373,7 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
     os << "batch-bodies: " << batchBodiesName(plan.batchBodies) << "\n";
     printBody(os, "scalar-body", plan.scalarBody);
     printBody(os, "batch-body", plan.batchBody);
+    os << "one-lane-batch: " << (plan.oneLaneBody ? "one-lane-body" : "vector") << "\n";
     if (plan.fallbackBody) printBody(os, "fallback-body", *plan.fallbackBody);
     os << "ndf-isotropic: " << yesNo(plan.ndfIsotropic) << "\n";
     os << "smith-lambda: " << lambdaFormName(plan.lambda);

@@ -207,6 +207,12 @@ struct LoweringPlan {
     BodyPlan scalarBody;                 // the scalar kernel: always plain
     BodyPlan batchBody;                  // the batch kernel's (first) body
     std::optional<BodyPlan> fallbackBody;  // for the lanes a guarded batch body distrusts
+    // A batch call of one lane runs the batch's lane body at one lane
+    // (where LoweringOptions::oneLaneBodies has it emitted) instead of a
+    // vector of `width` lanes: on every bench material a one-lane vector
+    // call cost 1.0-3.5x a scalar call (docs/perf-log.md), while at two
+    // lanes the vector wins on about half of them.
+    bool oneLaneBody = true;
     bool ndfIsotropic = false;           // one alpha, or equal constant alphas
     LambdaForm lambda = LambdaForm::None;
     std::shared_ptr<const LambdaTable> lambdaTable;  // LambdaForm::Table: the material's table

@@ -47,7 +47,9 @@ TEST_CASE("a SIMD kernel's one-lane eval equals its batch lane, with few and wit
     many += "    fresnel = schlick(f0 = " + f0 + ");\n}\n";
     Compiler compiler;
     for (const std::string& text : {std::string(kGold), many}) {
-        auto k = compile(compiler, text, "backend=simd;cache=off");
+        // Optimized code: a one-lane call runs the one-lane body, which
+        // gathers the lane's slots (4, and 34).
+        auto k = compile(compiler, text, "backend=simd;cache=off;codegen=optimized");
         const int slots = k->inputCount();
         CHECK(slots == (text == many ? 34 : 4));
         // Lane 0 of every 7 is invalid (wi not unit): rgb 0 on both paths.
@@ -150,10 +152,16 @@ TEST_CASE("fast kernels read a float-subnormal cosine as 0, leave MXCSR alone, a
 }
 #endif
 
-TEST_CASE("short batches (n = 1 .. 17, partial chunks) give the long batch's bits, invalid lanes and statuses") {
+// Quick code runs a one-lane call as a partial vector; optimized code in the
+// batch entry's one-lane body (LoweringPlan::oneLaneBody), which must give
+// the lane the bits it gets in a vector.
+TEST_CASE("short batches (n = 1 .. 17, partial chunks, one-lane bodies) give the long batch's bits, invalid lanes and statuses") {
     Compiler compiler;
-    for (const char* spec : {"backend=simd;math=exact;cache=off", "backend=simd;math=fast;cache=off",
-                             "backend=simd;math=exact;width=4;cache=off", "backend=simd;math=fast;width=16;cache=off"}) {
+    for (const char* spec : {"backend=simd;math=exact;cache=off;codegen=quick", "backend=simd;math=fast;cache=off;codegen=quick",
+                             "backend=simd;math=exact;width=4;cache=off;codegen=optimized",
+                             "backend=simd;math=fast;width=16;cache=off;codegen=optimized",
+                             "backend=simd;math=exact;width=8;cache=off;codegen=optimized",
+                             "backend=simd;math=fast;width=8;cache=off;codegen=optimized"}) {
         CAPTURE(spec);
         auto k = compile(compiler, kGold, spec);
         Batch whole(17 * 18 / 2, 21), pieces(17 * 18 / 2, 21);
@@ -180,6 +188,38 @@ TEST_CASE("short batches (n = 1 .. 17, partial chunks) give the long batch's bit
         CHECK(pieceStatus == wholeStatus);
         for (int c = 0; c < 3; ++c) CHECK(pieces.out[c] == whole.out[c]);
         for (size_t i = 0; i < whole.size(); ++i) CHECK(wholeStatus[i] == (i % 5 == 0 ? 1 : 0));
+    }
+}
+
+// A combination of lobes (a layer plus a weighted lobe, the roughness of
+// the latter an input) in optimized code: its one-lane body is every lobe
+// at one lane, guarded as in the vector, so one-lane calls give the bits of
+// the long batch too.
+TEST_CASE("a combination's one-lane calls give its long batch's bits") {
+    const char* text = R"(material coated {
+        input roughness = 0.3 in 0 .. 1;
+        lobe coat { ndf = ggx(0.05); masking = smith_height_correlated; fresnel = dielectric(1.5); }
+        lobe base { ndf = beckmann(0.4); masking = smith_separable; fresnel = schlick(f0 = rgb(0.9, 0.6, 0.3));
+                    diffuse = lambert(rgb(0.2, 0.3, 0.1)); }
+        lobe sheen { ndf = ggx(roughness); masking = smith_height_correlated; fresnel = schlick(f0 = 0.04); }
+        bsdf = layer(coat, base) + 0.5 * sheen;
+    })";
+    Compiler compiler;
+    for (const char* spec : {"backend=simd;math=exact;cache=off;codegen=optimized",
+                             "backend=simd;math=fast;width=8;cache=off;codegen=optimized"}) {
+        CAPTURE(spec);
+        auto k = compile(compiler, text, spec);
+        REQUIRE(k->inputCount() == 1);
+        Batch whole(64, 33), alone(64, 33);
+        for (size_t i = 0; i < whole.size(); i += 9) whole.dir[0][i] = alone.dir[0][i] = 2.0f;  // invalid lanes
+        CHECK(whole.run(*k) == 8);
+        int64_t invalid = 0;
+        for (size_t i = 0; i < alone.size(); ++i) invalid += alone.run(*k, i, 1);
+        CHECK(invalid == 8);
+        for (int c = 0; c < 3; ++c) CHECK(alone.out[c] == whole.out[c]);
+        size_t lit = 0;
+        for (size_t i = 0; i < whole.size(); ++i) lit += whole.out[0][i] > 0;
+        CHECK(lit > 40);
     }
 }
 

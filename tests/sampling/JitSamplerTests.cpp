@@ -485,6 +485,70 @@ TEST_CASE("jit sampling: invalid lanes and the C API") {
     }
 }
 
+// A one-lane sample or pdf call of optimized code (the sampler always is)
+// runs the batch entry's one-lane body (LoweringPlan::oneLaneBody): every
+// lane must get the bits it gets in a long batch, valid or not, with a
+// float-first body (exact) and without (fast), at every width.
+TEST_CASE("jit sampling: short sample and pdf batches (n = 1 .. 9) give the long batch's bits") {
+    const char* text =
+        "material t { input roughness = 0.3; ndf = ggx(roughness); masking = smith_height_correlated; fresnel = "
+        "schlick(0.04); diffuse = lambert(0.5); }";
+    for (const char* options : {"backend=simd;math=exact;width=16", "backend=simd;math=fast;width=8",
+                                "backend=simd;math=exact;width=4"}) {
+        char err[256];
+        facet_kernel* k = facet_compile_text(text, "t.mat", nullptr, options, err, sizeof err);
+        INFO(options, " ", err);
+        REQUIRE(k);
+        constexpr int n = 45;  // 1 + 2 + ... + 9
+        std::mt19937 rng(17);
+        std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+        std::array<std::vector<float>, 3> wo, u;
+        for (int i = 0; i < n; ++i) {
+            V3 w = viewAt(89.5 * uniform(rng), 6.28 * uniform(rng));
+            // Every seventh lane invalid (wo not unit), every fifth below the horizon.
+            float scale = i % 7 == 3 ? 2.0f : 1.0f, side = i % 5 == 1 ? -1.0f : 1.0f;
+            wo[0].push_back(float(w.x) * scale), wo[1].push_back(float(w.y) * scale),
+                wo[2].push_back(float(w.z) * scale * side);
+            for (int c = 0; c < 3; ++c) u[c].push_back(uniform(rng));
+        }
+        struct Outputs {
+            std::array<std::vector<float>, 3> wi, weight;
+            std::vector<float> pdf, pdfAgain;
+            int64_t invalid = 0, pdfInvalid = 0;
+        };
+        auto run = [&](bool pieces) {
+            Outputs o;
+            for (int c = 0; c < 3; ++c) o.wi[c].assign(n, -1), o.weight[c].assign(n, -1);
+            o.pdf.assign(n, -1), o.pdfAgain.assign(n, -1);
+            for (int begin = 0, m = pieces ? 1 : n; begin < n; begin += m, m += pieces ? 1 : 0) {
+                const float* woP[3] = {&wo[0][begin], &wo[1][begin], &wo[2][begin]};
+                const float* uP[3] = {&u[0][begin], &u[1][begin], &u[2][begin]};
+                float* wiP[3] = {&o.wi[0][begin], &o.wi[1][begin], &o.wi[2][begin]};
+                float* weightP[3] = {&o.weight[0][begin], &o.weight[1][begin], &o.weight[2][begin]};
+                o.invalid += facet_sample_batch(k, m, woP, uP, nullptr, wiP, &o.pdf[begin], weightP);
+                const float* sampled[3] = {&o.wi[0][begin], &o.wi[1][begin], &o.wi[2][begin]};
+                o.pdfInvalid += facet_pdf_batch(k, m, sampled, woP, nullptr, &o.pdfAgain[begin]);
+            }
+            return o;
+        };
+        Outputs whole = run(false), pieces = run(true);
+        CHECK(std::string(facet_sampler(k)) == "jit");
+        CHECK(whole.invalid == 6);  // lanes 3, 10, 17, 24, 31, 38
+        CHECK(pieces.invalid == whole.invalid);
+        CHECK(pieces.pdfInvalid == whole.pdfInvalid);
+        CHECK(pieces.pdf == whole.pdf);
+        CHECK(pieces.pdfAgain == whole.pdfAgain);
+        for (int c = 0; c < 3; ++c) {
+            CHECK(pieces.wi[c] == whole.wi[c]);
+            CHECK(pieces.weight[c] == whole.weight[c]);
+        }
+        int sampled = 0;
+        for (int i = 0; i < n; ++i) sampled += whole.pdf[size_t(i)] > 0;
+        CHECK(sampled > 25);  // the valid lanes above the horizon
+        facet_release(k);
+    }
+}
+
 // A float-first SIMD sampler (exact GGX where eval is float-first) draws
 // each lane in float and recomputes in the double body the lanes it does
 // not trust: the plan says so only there; the float lanes stay within
