@@ -162,7 +162,8 @@ TEST_CASE("short batches (n = 1 .. 17, partial chunks, one-lane bodies) give the
                              "backend=simd;math=fast;width=16;cache=off;codegen=optimized",
                              "backend=simd;math=exact;width=8;cache=off;codegen=optimized",
                              "backend=simd;math=fast;width=8;cache=off;codegen=optimized"}) {
-        CAPTURE(spec);
+        std::string specText = spec;  // (CAPTURE prints a const char* as its address)
+        CAPTURE(specText);
         auto k = compile(compiler, kGold, spec);
         Batch whole(17 * 18 / 2, 21), pieces(17 * 18 / 2, 21);
         // Every fifth lane invalid: a wo that is not unit.
