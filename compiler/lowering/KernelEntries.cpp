@@ -350,15 +350,10 @@ void emitOneLaneCall(const KernelContext& k, llvm::IRBuilder<>& b, const EntrySh
     for (int g = 0; g < groupsIn; ++g)
         for (int c = 0; c < 3; ++c)
             b.CreateStore(b.CreateLoad(f32, inP[size_t(3 * g + c)]), b.CreateConstGEP1_32(f32, inArrays[size_t(g)], c));
-    if (slotArray) {
-        // Every slot: the read ones from their stream (or its defaults,
-        // slotBase), the others their default, never read.
-        std::vector<double> defaults = k.material.defaultSlots();
-        for (int s = 0; s < slotCount; ++s)
-            b.CreateStore(llvm::ConstantFP::get(f32, defaults[size_t(s)]), b.CreateConstGEP1_32(f32, slotArray, s));
-        for (size_t r = 0; r < readSlots.size(); ++r)
-            b.CreateStore(b.CreateLoad(f32, slotBase[r]), b.CreateConstGEP1_32(f32, slotArray, readSlots[r]));
-    }
+    // Only the slots the body reads (plan.slotRead), from their stream or
+    // its defaults (slotBase); the body never loads the others.
+    for (size_t r = 0; r < readSlots.size(); ++r)
+        b.CreateStore(b.CreateLoad(f32, slotBase[r]), b.CreateConstGEP1_32(f32, slotArray, readSlots[r]));
     std::vector<llvm::Value*> args(inArrays.begin(), inArrays.end());
     args.push_back(slotArray ? slotArray : llvm::ConstantPointerNull::get(b.getPtrTy()));
     args.insert(args.end(), outArrays.begin(), outArrays.end());
