@@ -21,6 +21,7 @@
 #include "Diagnostics.h"
 #include "Lowering.h"
 #include "TermEmitters.h"
+#include "NewtonLoop.h"
 #include "VectorMath.h"
 
 #include <llvm/IR/IRBuilder.h>
@@ -218,18 +219,12 @@ public:
     using CdfAndPdf = std::function<std::pair<llvm::Value*, llvm::Value*>(llvm::Value* x)>;
     llvm::Value* invertIncreasing(MathEmitter& math, const CdfAndPdf& cdfAndPdf, llvm::Value* target, llvm::Value* lo,
                                   llvm::Value* hi, int steps);
-    // For the samplers that invert a CDF: the root of phi, increasing in v,
-    // in [lo, hi], per lane in the type of `math`. At most `steps` Newton
-    // steps from v0, leaving the loop once every lane has settled (its last
-    // step within a small relative amount of v, or v not a number): each
-    // sign of phi narrows the bracket, and a step that would leave it (or is
-    // not a number: phi infinite or its slope 0) bisects it instead. `eval`
-    // emits phi(v) and phi'(v).
-    struct NewtonTerms {
-        llvm::Value *phi, *slope;
-    };
+    // For the samplers that invert a CDF: emitBracketedNewton (NewtonLoop.h)
+    // with this lane's builder.
+    using NewtonTerms = facet::NewtonTerms;
     llvm::Value* bracketedNewton(MathEmitter& math, const std::function<NewtonTerms(llvm::Value*)>& eval,
-                                 llvm::Value* v0, llvm::Value* lo, llvm::Value* hi, int steps);
+                                 llvm::Value* v0, llvm::Value* lo, llvm::Value* hi, int steps,
+                                 double settledStep = 0, double settledFloor = 0);
     // Upper clamp of eta and k for the exact Fresnel terms (float: |N|^4 must stay finite).
     double maxFresnelIndex() const { return body.precise == Precision::Double ? INFINITY : 1e9; }
 
@@ -237,8 +232,10 @@ public:
     llvm::GlobalVariable* floatTable(const std::vector<float>& data, const std::string& name);
     llvm::GlobalVariable* doubleTable(const std::vector<double>& data, const std::string& name);
     llvm::GlobalVariable* uint64Table(const std::vector<uint64_t>& data, const std::string& name);
-    // table[index] for an integer-valued index in the precise type (a gather across lanes).
-    llvm::Value* fetch(llvm::GlobalVariable* table, llvm::Value* index);
+    // table[index] of a float table for an integer-valued index in the
+    // precise type (a gather across lanes), or in the type of `math` where
+    // given (so are lerpFetch's and bilerpFetch's arguments and results).
+    llvm::Value* fetch(llvm::GlobalVariable* table, llvm::Value* index, MathEmitter* math = nullptr);
     // 4-point Lagrange interpolation in a double table of `size` nodes at the
     // node coordinate u in [0, size - 1], all in double.
     llvm::Value* lagrangeFetch(llvm::GlobalVariable* table, int size, llvm::Value* u);
@@ -253,10 +250,10 @@ public:
     LagrangeStencil lagrangeStencil(int size, int n, llvm::Value* u);
     llvm::Value* stencilFetch(llvm::GlobalVariable* table, const LagrangeStencil& st, llvm::Value* base);
     // table[index] + t (table[index + 1] - table[index]).
-    llvm::Value* lerpFetch(llvm::GlobalVariable* table, llvm::Value* index, llvm::Value* t);
+    llvm::Value* lerpFetch(llvm::GlobalVariable* table, llvm::Value* index, llvm::Value* t, MathEmitter* math = nullptr);
     // Bilinear interpolation in a row-major table with `stride` entries per row.
     llvm::Value* bilerpFetch(llvm::GlobalVariable* table, int stride, llvm::Value* row, llvm::Value* col,
-                             llvm::Value* tRow, llvm::Value* tCol);
+                             llvm::Value* tRow, llvm::Value* tCol, MathEmitter* math = nullptr);
 
 private:
     llvm::Type* boolType();

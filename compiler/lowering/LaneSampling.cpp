@@ -95,66 +95,9 @@ Value* LaneEmitter::invertIncreasing(MathEmitter& pm, const CdfAndPdf& cdfAndPdf
     return bracketedNewton(pm, phi, pm.mul(pm.add(lo, hi), pm.c(0.5)), lo, hi, steps);
 }
 
-// The steps run in a loop of the IR rather than unrolled: each step holds a
-// whole CDF evaluation (gaussian: a 12-point quadrature), so unrolling
-// multiplies the sampler module's size and its compile time.
 Value* LaneEmitter::bracketedNewton(MathEmitter& pm, const std::function<NewtonTerms(Value*)>& eval, Value* v0,
-                                    Value* lo0, Value* hi0, int steps) {
-    llvm::IRBuilder<>& b = builder;
-    llvm::Function* fn = b.GetInsertBlock()->getParent();
-    llvm::BasicBlock* pre = b.GetInsertBlock();
-    auto* loop = llvm::BasicBlock::Create(b.getContext(), "newton.step", fn);
-    auto* done = llvm::BasicBlock::Create(b.getContext(), "newton.done", fn);
-    b.CreateBr(loop);
-
-    b.SetInsertPoint(loop);
-    llvm::PHINode* k = b.CreatePHI(b.getInt32Ty(), 2, "newton.k");
-    llvm::PHINode* v = b.CreatePHI(pm.type(), 2, "newton.v");
-    llvm::PHINode* lo = b.CreatePHI(pm.type(), 2, "newton.lo");
-    llvm::PHINode* hi = b.CreatePHI(pm.type(), 2, "newton.hi");
-    k->addIncoming(b.getInt32(0), pre);
-    v->addIncoming(v0, pre);
-    lo->addIncoming(lo0, pre);
-    hi->addIncoming(hi0, pre);
-    NewtonTerms t = eval(v);
-    // phi(v) > 0: the root is below v. (phi = 0 keeps v: the step is 0.)
-    Value* above = pm.gt(t.phi, pm.c(0.0));
-    Value* nextHi = pm.select(above, v, hi);
-    Value* nextLo = pm.select(above, lo, v);
-    Value* newton = pm.sub(v, pm.div(t.phi, t.slope));
-    Value* inside = b.CreateAnd(pm.ge(newton, nextLo), pm.le(newton, nextHi));  // ordered: false for NaN
-    Value* next = pm.select(inside, newton, pm.mul(pm.add(nextLo, nextHi), pm.c(0.5)));
-    Value* k1 = b.CreateAdd(k, b.getInt32(1));
-    llvm::BasicBlock* latch = b.GetInsertBlock();
-    k->addIncoming(k1, latch);
-    v->addIncoming(next, latch);
-    lo->addIncoming(nextLo, latch);
-    hi->addIncoming(nextHi, latch);
-    // Leave early once every lane has settled: its last step moved v by at
-    // most 2^-40 |v| in double, 2^-20 |v| in float (Newton's error is then of
-    // the order of that step squared; a bisection's bracket is that narrow),
-    // or it is NaN (and stays NaN). Waiting for next == v exactly would run
-    // all `steps` on most vectors: some lane's last bits keep moving by an
-    // ulp. A root at 0 never settles early and runs every step.
-    const double settledStep = pm.type()->getScalarType()->isFloatTy() ? 0x1p-20 : 0x1p-40;
-    Value* settled = b.CreateOr(b.CreateFCmpUNO(next, v),
-                                pm.le(pm.abs(pm.sub(next, v)), pm.mul(pm.c(settledStep), pm.abs(v))));
-    if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(settled->getType())) {
-        llvm::Type* bitsTy = b.getIntNTy(unsigned(vt->getNumElements()));
-        settled = b.CreateICmpEQ(b.CreateBitCast(settled, bitsTy), llvm::ConstantInt::getAllOnesValue(bitsTy));
-    }
-    Value* more = b.CreateAnd(b.CreateICmpSLT(k1, b.getInt32(steps)), b.CreateNot(settled));
-    llvm::BranchInst* back = b.CreateCondBr(more, loop, done);
-    // Kept rolled by the optimizer too (a constant trip count invites full
-    // unrolling, which would bring the compile time back).
-    llvm::LLVMContext& ctx = b.getContext();
-    llvm::MDNode* disable = llvm::MDNode::get(ctx, llvm::MDString::get(ctx, "llvm.loop.unroll.disable"));
-    llvm::MDNode* self = llvm::MDNode::getDistinct(ctx, {nullptr, disable});
-    self->replaceOperandWith(0, self);
-    back->setMetadata(llvm::LLVMContext::MD_loop, self);
-
-    b.SetInsertPoint(done);
-    return next;
+                                    Value* lo, Value* hi, int steps, double settledStep, double settledFloor) {
+    return emitBracketedNewton(builder, pm, eval, v0, lo, hi, steps, settledStep, settledFloor);
 }
 
 // p = A_spec / (A_spec + A_other), clamped to [0.05, 0.95], with the

@@ -132,8 +132,8 @@ llvm::GlobalVariable* LaneEmitter::uint64Table(const std::vector<uint64_t>& data
     return constantTable(module_, data, name);
 }
 
-Value* LaneEmitter::fetch(llvm::GlobalVariable* table, Value* index) {
-    MathEmitter& pm = preciseMath_;
+Value* LaneEmitter::fetch(llvm::GlobalVariable* table, Value* index, MathEmitter* math) {
+    MathEmitter& pm = math ? *math : preciseMath_;
     llvm::Type* i32 = builder.getInt32Ty();
     llvm::Type* idxTy = pm.width() > 1 ? (llvm::Type*)llvm::FixedVectorType::get(i32, pm.width()) : i32;
     Value* ptr = builder.CreateGEP(builder.getFloatTy(), table, builder.CreateFPToSI(index, idxTy));
@@ -169,10 +169,10 @@ Value* LaneEmitter::lagrangeFetch(llvm::GlobalVariable* table, int size, Value* 
     return dm.fma(w0, p0, dm.fma(w1, p1, dm.fma(w2, p2, dm.mul(w3, p3))));
 }
 
-Value* LaneEmitter::lerpFetch(llvm::GlobalVariable* table, Value* index, Value* t) {
-    MathEmitter& pm = preciseMath_;
-    Value* a = fetch(table, index);
-    return pm.fma(t, pm.sub(fetch(table, pm.add(index, pm.c(1.0))), a), a);
+Value* LaneEmitter::lerpFetch(llvm::GlobalVariable* table, Value* index, Value* t, MathEmitter* math) {
+    MathEmitter& pm = math ? *math : preciseMath_;
+    Value* a = fetch(table, index, &pm);
+    return pm.fma(t, pm.sub(fetch(table, pm.add(index, pm.c(1.0)), &pm), a), a);
 }
 
 LaneEmitter::LagrangeStencil LaneEmitter::lagrangeStencil(int size, int n, Value* u) {
@@ -214,11 +214,11 @@ Value* LaneEmitter::stencilFetch(llvm::GlobalVariable* table, const LagrangeSten
 }
 
 Value* LaneEmitter::bilerpFetch(llvm::GlobalVariable* table, int stride, Value* row, Value* col, Value* tRow,
-                                Value* tCol) {
-    MathEmitter& pm = preciseMath_;
+                                Value* tCol, MathEmitter* math) {
+    MathEmitter& pm = math ? *math : preciseMath_;
     Value* r0 = pm.fma(row, pm.c(double(stride)), col);
-    Value* lo = lerpFetch(table, r0, tCol);
-    Value* hi = lerpFetch(table, pm.add(r0, pm.c(double(stride))), tCol);
+    Value* lo = lerpFetch(table, r0, tCol, &pm);
+    Value* hi = lerpFetch(table, pm.add(r0, pm.c(double(stride))), tCol, &pm);
     return pm.fma(tRow, pm.sub(hi, lo), lo);
 }
 

@@ -1,4 +1,5 @@
-// VectorMath: elementary functions emitted as straight-line LLVM IR.
+// VectorMath: elementary functions emitted as straight-line LLVM IR (one
+// exception: gaussianQuantile branches around its rare far-tail step).
 //
 // Every function here is written once against IRBuilder and works for any
 // floating type the builder is given: float or double, scalar or a vector of
@@ -101,7 +102,9 @@ public:
     llvm::Value* erfcxWide(llvm::Value* x);
     // y with erfc(-y)/2 = u (the quantile of the density exp(-y^2)/sqrt(pi)),
     // clamped to [-limit, limit], limit <= 8: within 1e-15 of long double
-    // for u in [1e-30, 1 - 2^-24]. Double only.
+    // for u in [1e-30, 1 - 2^-24] (a fit and one Halley step; a second for
+    // u below 2.8e-8, in a branch taken only when a lane needs it). Double
+    // only.
     llvm::Value* gaussianQuantile(llvm::Value* u, double limit);
     // atan2(y, x) for y >= 0, in [0, pi].
     llvm::Value* atan2(llvm::Value* y, llvm::Value* x);

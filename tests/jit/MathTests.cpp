@@ -3,10 +3,12 @@
 // compared with long double libm. The bounds asserted here are the ones
 // VectorMath.h states.
 #include "Jit.h"
+#include "NewtonLoop.h"
 #include "VectorMath.h"
 
 #include <doctest/doctest.h>
 #include <algorithm>
+#include <bit>
 #include <cfloat>
 #include <cmath>
 #include <cstring>
@@ -54,7 +56,7 @@ ArrayFn build(FacetJit& jit, const Emit& emit, bool vector, std::vector<llvm::or
     MathEmitter m(b, ty, fast);
     b.CreateAlignedStore(emit(m, x, y), b.CreateGEP(elem, fn->getArg(2), i), align);
     Value* next = b.CreateAdd(i, b.getInt64(W));
-    i->addIncoming(next, loop);
+    i->addIncoming(next, b.GetInsertBlock());  // `emit` may have branched (gaussianQuantile)
     b.CreateCondBr(b.CreateICmpSLT(next, fn->getArg(3)), loop, done);
     b.SetInsertPoint(done);
     b.CreateRetVoid();
@@ -178,7 +180,10 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
     // bisection on erfcl (from the lower tail by symmetry, where 1 - u is
     // exact), u uniform on (0, 1), log-spaced down to 1e-30 and as close to 1
     // as a float u gets; beyond the limit 8 (u below erfc(8)/2 = 5.6e-30,
-    // and u = 0 or 1) the clamped value.
+    // and u = 0 or 1) the clamped value. The lanes of one vector mix fitted
+    // and far-tail starts (u below 2.8e-8, which take a second step in a
+    // branch): the scalar and vector functions must agree bit for bit (a
+    // lane's value does not depend on whether a neighbour took the branch).
     {
         auto reference = [](long double u) {
             bool upper = u > 0.5L;
@@ -197,11 +202,12 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
             double tail = std::pow(10.0, -7 - 23.0 * i / 4095);
             for (double v : {uniform(rng), tail, 1 - std::max(tail, 0x1p-24)}) x.push_back(v), y.push_back(0);
         }
-        for (double v : {0.0, 1.0, 1e-35, 0.5, 0x1p-24, 1 - 0x1p-24}) x.push_back(v), y.push_back(0);
+        for (double v : {0.0, 1.0, 1e-35, 0.5, 0x1p-24, 1 - 0x1p-24, 2.9e-8, 2.7e-8}) x.push_back(v), y.push_back(0);
         while (x.size() % 16) x.push_back(0.25), y.push_back(0);
         std::vector<long double> want;
         for (double v : x) want.push_back(reference(v));
         double worst = 0;
+        std::vector<double> scalarOut;
         for (bool vector : {false, true}) {
             auto f = reinterpret_cast<DoubleArrayFn>(build(
                 *jit, [](MathEmitter& m, Value* v, Value*) { return m.gaussianQuantile(v, 8.0); }, vector, keep, false,
@@ -214,7 +220,9 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
                 CHECK(err <= 1e-14);
                 worst = std::max(worst, err);
             }
+            if (!vector) scalarOut = out;
         }
+        for (size_t i = 0; i < x.size(); ++i) CHECK(std::bit_cast<uint64_t>(out[i]) == std::bit_cast<uint64_t>(scalarOut[i]));
         MESSAGE("gaussianQuantile (double) max absolute error " << worst);
     }
     u = maxUlp(*jit, [](MathEmitter& m, Value* x, Value* y) { return m.atan2(m.abs(y), x); }, sweep(-10, 10, -10, 10),
@@ -274,6 +282,47 @@ TEST_CASE("vector math accuracy in float, scalar and 16 lanes") {
 // ordered compares on one lane: both must say what not (lo <= x <= hi)
 // says, for float and double lanes, at the bounds and their neighbours,
 // for 0 and -0, negatives, subnormals, infinities and NaN of either sign.
+// emitBracketedNewton (NewtonLoop.h): the cube root of a, Newton's and
+// Halley's steps from a start that is good for some lanes and poor for
+// others, with a loose settling step (2^-9, floor 1), so that lanes settle
+// after different step counts within one vector. Each lane keeps the value
+// of the step that settled it: the 16-lane function gives every lane the
+// bits the one-lane function gives it, and a lane whose neighbours need
+// more steps is not moved by them. Also: the roots within the error the
+// settling step allows, and a lane whose start lies outside the bracket (a
+// = 900, start 900) reaches the root by bisecting first.
+TEST_CASE("bracketed Newton: each lane keeps the step that settled it, whatever its neighbours") {
+    auto jit = FacetJit::Create();
+    std::vector<llvm::orc::JITDylib*> keep;
+    std::vector<double> a, unused;
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> uniform(0.5, 2.0);
+    for (int i = 0; i < 256; ++i) a.push_back(i % 5 == 0 ? 900.0 * uniform(rng) / 2 : uniform(rng));
+    unused.assign(a.size(), 0);
+    for (bool halley : {false, true}) {
+        std::vector<double> outs[2];
+        for (bool vector : {false, true}) {
+            Emit emit = [halley](MathEmitter& m, Value* x, Value*) {
+                auto eval = [&](Value* v) {
+                    NewtonTerms t{m.sub(m.mul(m.mul(v, v), v), x), m.mul(m.c(3.0), m.mul(v, v))};
+                    if (halley) t.curvature = m.mul(m.c(6.0), v);
+                    return t;
+                };
+                return emitBracketedNewton(m.b, m, eval, x, m.c(0.0), m.c(10.0), 40, 0x1p-9, 1.0);
+            };
+            auto f = reinterpret_cast<DoubleArrayFn>(build(*jit, emit, vector, keep, false, true));
+            outs[vector].assign(a.size(), NAN);
+            f(a.data(), unused.data(), outs[vector].data(), int64_t(a.size()));
+        }
+        for (size_t i = 0; i < a.size(); ++i) {
+            INFO("halley " << halley << " a = " << a[i] << ": one lane " << outs[0][i] << ", in a vector "
+                           << outs[1][i]);
+            CHECK(std::bit_cast<uint64_t>(outs[0][i]) == std::bit_cast<uint64_t>(outs[1][i]));
+            CHECK(std::fabs(outs[1][i] - std::cbrt(a[i])) <= 1e-4 * std::cbrt(a[i]));
+        }
+    }
+}
+
 TEST_CASE("outside(x, lo, hi) is not (lo <= x <= hi) on every kind of value") {
     auto jit = FacetJit::Create();
     std::vector<llvm::orc::JITDylib*> keep;

@@ -488,16 +488,21 @@ TEST_CASE("jit sampling: invalid lanes and the C API") {
 // A one-lane sample or pdf call of optimized code (the sampler always is)
 // runs the batch entry's one-lane body (LoweringPlan::oneLaneBody): every
 // lane must get the bits it gets in a long batch, valid or not, with a
-// float-first body (exact) and without (fast), at every width.
+// float-first body (exact) and without (fast), at every width. Beckmann's
+// visible slopes stop each lane's Newton steps where that lane settles and
+// take the Gaussian quantile's far-tail step in a branch: lanes with u in
+// the far tails (u2 = 1e-9, u1 = 1 - 2^-24) sit beside ordinary ones.
 TEST_CASE("jit sampling: short sample and pdf batches (n = 1 .. 9) give the long batch's bits") {
-    const char* text =
-        "material t { input roughness = 0.3; ndf = ggx(roughness); masking = smith_height_correlated; fresnel = "
-        "schlick(0.04); diffuse = lambert(0.5); }";
+    for (const char* text :
+         {"material t { input roughness = 0.3; ndf = ggx(roughness); masking = smith_height_correlated; fresnel = "
+          "schlick(0.04); diffuse = lambert(0.5); }",
+          "material t { input roughness = 0.3; ndf = beckmann(roughness); masking = smith_separable; fresnel = "
+          "schlick(0.04); diffuse = lambert(0.5); }"})
     for (const char* options : {"backend=simd;math=exact;width=16", "backend=simd;math=fast;width=8",
                                 "backend=simd;math=exact;width=4"}) {
         char err[256];
         facet_kernel* k = facet_compile_text(text, "t.mat", nullptr, options, err, sizeof err);
-        INFO(options, " ", err);
+        INFO(text, " ", options, " ", err);
         REQUIRE(k);
         constexpr int n = 45;  // 1 + 2 + ... + 9
         std::mt19937 rng(17);
@@ -510,6 +515,8 @@ TEST_CASE("jit sampling: short sample and pdf batches (n = 1 .. 9) give the long
             wo[0].push_back(float(w.x) * scale), wo[1].push_back(float(w.y) * scale),
                 wo[2].push_back(float(w.z) * scale * side);
             for (int c = 0; c < 3; ++c) u[c].push_back(uniform(rng));
+            if (i % 11 == 4) u[2].back() = 1e-9f;
+            if (i % 13 == 6) u[1].back() = 0.99999994f;
         }
         struct Outputs {
             std::array<std::vector<float>, 3> wi, weight;
