@@ -95,11 +95,7 @@ LaneOutputs emitTwoBodies(llvm::IRBuilder<>& b, llvm::Type* laneTy, llvm::Module
 
     llvm::LLVMContext& ctx = module.getContext();
     llvm::Function* fn = b.GetInsertBlock()->getParent();
-    llvm::Value* anyUntrusted = fl.untrusted;
-    if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(fl.untrusted->getType())) {
-        llvm::Value* bits = b.CreateBitCast(fl.untrusted, b.getIntNTy(unsigned(vt->getNumElements())));
-        anyUntrusted = b.CreateICmpNE(bits, llvm::ConstantInt::get(bits->getType(), 0));
-    }
+    llvm::Value* anyUntrusted = anyLane(b, fl.untrusted);
     // The fallback body is a cold function of its own, called only when
     // needed, so that its code does not take part in the hot loop's register
     // allocation and layout. It is optnone: our own pipeline still runs on

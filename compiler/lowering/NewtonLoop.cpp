@@ -9,9 +9,6 @@ namespace facet {
 
 using llvm::Value;
 
-// The steps run in a loop of the IR rather than unrolled: each step holds a
-// whole CDF evaluation (gaussian: a 12-point quadrature), so unrolling
-// multiplies the sampler module's size and its compile time.
 Value* emitBracketedNewton(llvm::IRBuilder<>& b, MathEmitter& pm, const std::function<NewtonTerms(Value*)>& eval,
                            Value* v0, Value* lo0, Value* hi0, int steps, double settledStep, double settledFloor) {
     llvm::Function* fn = b.GetInsertBlock()->getParent();
@@ -49,19 +46,18 @@ Value* emitBracketedNewton(llvm::IRBuilder<>& b, MathEmitter& pm, const std::fun
     Value* newton = pm.sub(v, step);
     Value* inside = b.CreateAnd(pm.ge(newton, nextLo), pm.le(newton, nextHi));  // ordered: false for NaN
     Value* next = pm.select(inside, newton, pm.mul(pm.add(nextLo, nextHi), pm.c(0.5)));
-    // A lane stops once its step moved v by at most settledStep max(|v|,
-    // settledFloor) (by default 2^-40 |v| in double, 2^-20 |v| in float:
-    // Newton's error is then of the order of that step squared), or v is
-    // NaN (and stays NaN), and
-    // keeps the value that step gave it: more steps for its neighbours do
-    // not move it, so a lane's result is the same in any batch. Waiting for
-    // next == v exactly would run all `steps` on most vectors: some lane's
-    // last bits keep moving by an ulp. Without a floor, a root at 0 never
-    // settles early and runs every step.
+    // A lane stops once a Newton (or Halley) step moved v by at most
+    // settledStep max(|v|, settledFloor) (by default 2^-40 |v| in double,
+    // 2^-20 |v| in float: Newton's error is then of the order of that step
+    // squared), or v is NaN (and stays NaN); a short bisection does not stop
+    // it, since it leaves a bracket that wide. It keeps the value that step
+    // gave it: more steps for its neighbours do not move it, so a lane's
+    // result is the same in any batch. Waiting for next == v exactly would
+    // run all `steps` on most vectors: some lane's last bits keep moving by
+    // an ulp. Without a floor, a root at 0 never settles early and runs
+    // every step.
     if (settledStep == 0) settledStep = pm.type()->getScalarType()->isFloatTy() ? 0x1p-20 : 0x1p-40;
     Value* scale = settledFloor > 0 ? pm.maxnum(pm.abs(v), pm.c(settledFloor)) : pm.abs(v);
-    // Only a Newton (or Halley) step settles a lane: a short bisection
-    // leaves a bracket that wide.
     Value* settles = b.CreateOr(b.CreateFCmpUNO(next, v),
                                 b.CreateAnd(inside, pm.le(pm.abs(pm.sub(next, v)), pm.mul(pm.c(settledStep), scale))));
     Value* out = pm.select(stopped, v, next);
@@ -73,12 +69,7 @@ Value* emitBracketedNewton(llvm::IRBuilder<>& b, MathEmitter& pm, const std::fun
     lo->addIncoming(nextLo, latch);
     hi->addIncoming(nextHi, latch);
     stopped->addIncoming(nowStopped, latch);
-    Value* settled = nowStopped;
-    if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(settled->getType())) {
-        llvm::Type* bitsTy = b.getIntNTy(unsigned(vt->getNumElements()));
-        settled = b.CreateICmpEQ(b.CreateBitCast(settled, bitsTy), llvm::ConstantInt::getAllOnesValue(bitsTy));
-    }
-    Value* more = b.CreateAnd(b.CreateICmpSLT(k1, b.getInt32(steps)), b.CreateNot(settled));
+    Value* more = b.CreateAnd(b.CreateICmpSLT(k1, b.getInt32(steps)), b.CreateNot(allLanes(b, nowStopped)));
     llvm::BranchInst* back = b.CreateCondBr(more, loop, done);
     // Kept rolled by the optimizer too (a constant trip count invites full
     // unrolling, which would bring the compile time back).

@@ -375,12 +375,7 @@ Value* MathEmitter::gaussianQuantile(Value* u, double limit) {
     llvm::Function* fn = before->getParent();
     auto* refine = llvm::BasicBlock::Create(b.getContext(), "quantile.tail", fn);
     auto* join = llvm::BasicBlock::Create(b.getContext(), "quantile.join", fn);
-    Value* any = tail;
-    if (auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(tail->getType())) {
-        llvm::Type* bitsTy = b.getIntNTy(unsigned(vt->getNumElements()));
-        any = b.CreateICmpNE(b.CreateBitCast(tail, bitsTy), llvm::ConstantInt::get(bitsTy, 0));
-    }
-    b.CreateCondBr(any, refine, join);
+    b.CreateCondBr(anyLane(b, tail), refine, join);
     b.SetInsertPoint(refine);
     Value* twice = select(tail, halley(once), once);
     llvm::BasicBlock* refineEnd = b.GetInsertBlock();
@@ -436,6 +431,20 @@ std::pair<Value*, Value*> MathEmitter::sinCosTurns(Value* t) {
     Value* sinV = select(odd, co, s);
     Value* cosV = select(odd, s, co);
     return {select(sinNeg, neg(sinV), sinV), select(cosNeg, neg(cosV), cosV)};
+}
+
+Value* anyLane(llvm::IRBuilder<>& b, Value* mask) {
+    auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(mask->getType());
+    if (!vt) return mask;
+    llvm::Type* bits = b.getIntNTy(unsigned(vt->getNumElements()));
+    return b.CreateICmpNE(b.CreateBitCast(mask, bits), llvm::ConstantInt::get(bits, 0));
+}
+
+Value* allLanes(llvm::IRBuilder<>& b, Value* mask) {
+    auto* vt = llvm::dyn_cast<llvm::FixedVectorType>(mask->getType());
+    if (!vt) return mask;
+    llvm::Type* bits = b.getIntNTy(unsigned(vt->getNumElements()));
+    return b.CreateICmpEQ(b.CreateBitCast(mask, bits), llvm::ConstantInt::getAllOnesValue(bits));
 }
 
 }  // namespace facet

@@ -134,4 +134,9 @@ private:
     bool fast_;
 };
 
+// One i1 from a lane mask (i1 or <W x i1>): whether any lane is set, or all
+// are, for the branches around work only some lanes need.
+llvm::Value* anyLane(llvm::IRBuilder<>& b, llvm::Value* mask);
+llvm::Value* allLanes(llvm::IRBuilder<>& b, llvm::Value* mask);
+
 }  // namespace facet

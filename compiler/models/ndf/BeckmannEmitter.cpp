@@ -162,12 +162,12 @@ const std::vector<float>& slopeStarts() {
 // logarithms are nearly linear in the variables the two parts of [0, 1)
 // invert in: for u < 0.7 log C in x, which goes as -x^2 in the tail; above
 // it log S in z = ln(hi - x), which goes as 2 z where the density vanishes
-// linearly at hi (tanT > 1/8) and as -x^2 in the Gaussian tail. Newton's
+// linearly at hi (tanT > 1/8) and as -x^2 in the Gaussian tail. Halley's
 // steps on them from the tabulated start (slopeStarts), bracketed: x in
-// [-8, hi], z from ln of the bound S(hi - d) <= d max density up to ln(hi +
-// 8). Always in double, fast kernels too: near u = 1 the root moves by S's
-// relative error, S = C(hi) - C(x) is 6e-8 of C there, and C needs erfc to
-// double precision. tanT and u in double.
+// [-8, hi], z from ln of the bound S(hi - d) <= d max density up to ln 16
+// (hi <= 8). Always in double, fast kernels too: near u = 1 the root moves
+// by S's relative error, S = C(hi) - C(x) is 6e-8 of C there, and C needs
+// erfc to double precision. tanT and u in double.
 Value* visibleSlope(LaneEmitter& lane, Value* tanT, Value* u) {
     MathEmitter& pm = lane.doubleMath();
     llvm::IRBuilder<>& b = lane.builder;
@@ -175,9 +175,10 @@ Value* visibleSlope(LaneEmitter& lane, Value* tanT, Value* u) {
     tanT = pm.minnum(tanT, pm.c(kMaxTan));
     Value* hi = pm.minnum(pm.div(pm.c(1.0), tanT), pm.c(kSlopeTail));  // tanT = 0: 1/0 = inf, then 8
     Value* k = pm.mul(tanT, pm.c(1 / rootPi));
-    // C(x) (and the density, times sqrt(pi)) with erfc(-x) = exp(-x^2) erfcx(-x)
-    // for x <= 0 and 2 - exp(-x^2) erfcx(x) above.
-    // (and its derivative: rho' = -(tanT + 2 x (1 - x tanT)+) exp(-x^2)/sqrt(pi)).
+    // C(x) with erfc(-x) = exp(-x^2) erfcx(-x) for x <= 0 and 2 - exp(-x^2)
+    // erfcx(x) above; where asked, the density rho = (1 - x tanT)+
+    // exp(-x^2)/sqrt(pi) and its slope rho' = -(tanT + 2 x (1 - x tanT)+)
+    // exp(-x^2)/sqrt(pi).
     auto cdf = [&](Value* x, Value** density, Value** densitySlope) {
         Value* e = pm.expNormal(pm.neg(pm.mul(x, x)));
         Value* ex = pm.erfcxWide(pm.minnum(pm.abs(x), pm.c(kSlopeTail)));
