@@ -246,11 +246,46 @@ private:
         auto clean = [&] { return diags_.diagnostics().size() == errorsBefore && !diags_.full(); };
         if (lobe.compensatesEnergy() && clean())
             if (auto why = kullaContyUnsupported(out_, lobe)) diags_.error(why->loc, why->message);  // KullaConty.h
+        if (lobe.walksMicrosurface() && clean()) checkRandomWalk(lobe);
         if (lobe.masking.model && lobe.masking.model->smith && ndfEntry(*lobe.ndf.model).tabulatedLambda && clean()) {
             SourceLoc loc = lobe.masking.loc;
             std::string why = tabulatedLambdaUnsupported(out_, lobe, loc);  // LambdaTable.h
             if (!why.empty()) diags_.error(loc, why);
         }
+    }
+
+    // energy = random_walk: the kernels walk the Smith microsurface of the
+    // lobe's NDF with its Fresnel term at every facet, and sample by the
+    // walk. What that needs of the rest of the lobe, each with its reason.
+    void checkRandomWalk(const CheckedLobe& lobe) {
+        const ModelUse& energy = lobe.energy;
+        const NdfEntry& ndf = ndfEntry(*lobe.ndf.model);
+        if (!lobe.implicit)
+            diags_.error(energy.loc, fmt::format("energy 'random_walk' in lobe '{}': the walk's sampler has no density "
+                                                 "in closed form, which a combination's one-sample mixture needs; "
+                                                 "write it as a material of one lobe, or use 'energy = kulla_conty'",
+                                                 lobe.name));
+        else if (!ndf.compiledWalk)
+            diags_.error(lobe.ndf.loc, fmt::format("energy 'random_walk' needs an NDF whose compiled visible-normal "
+                                                   "sampler also takes views below the horizon (the walk's rays go "
+                                                   "up as well as down); ndf '{}' has none; use ggx",
+                                                   ndf.name));
+        else if (!maskingEntry(*lobe.masking.model).heightCorrelated)
+            diags_.error(lobe.masking.loc, fmt::format("energy 'random_walk' needs 'masking = smith_height_correlated': "
+                                                       "the walk's first bounce is the single scattering of that "
+                                                       "masking, and eval and the sampler must describe one BRDF; got "
+                                                       "'{}'",
+                                                       lobe.masking.model->name));
+        else if (fresnelEntry(*lobe.fresnel.model).refractiveIndexParam >= 0)
+            diags_.error(lobe.fresnel.loc, fmt::format("energy 'random_walk' with fresnel '{}': a walk on a dielectric "
+                                                       "microsurface refracts into the medium below, which the compiled "
+                                                       "walk does not follow; use a conductor or Schlick Fresnel term, "
+                                                       "or 'energy = kulla_conty'",
+                                                       lobe.fresnel.model->name));
+        else if (diffuseEntry(*lobe.diffuse.model).present)
+            diags_.error(lobe.diffuse.loc, "energy 'random_walk' with a diffuse term: the walk's sampler has no "
+                                           "density to mix with the diffuse lobe's; put the diffuse base in a lobe "
+                                           "of its own with 'energy = kulla_conty', or leave it out");
     }
 
     void checkBsdf(const BsdfStmt& stmt, const BsdfStmt*& first) {

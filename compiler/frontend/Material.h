@@ -55,6 +55,8 @@ struct CheckedLobe {
     bool hasNdf() const { return ndf.model != nullptr; }
     // Multiple-scattering compensation from a tabulated albedo (kulla_conty).
     bool compensatesEnergy() const { return energy.model && energyEntry(*energy.model).compensates; }
+    // Multiple scattering by a random walk on the microsurface (random_walk).
+    bool walksMicrosurface() const { return energy.model && energyEntry(*energy.model).walks; }
     ModelUse& use(ModelSlot slot);
     const ModelUse& use(ModelSlot slot) const;
     // The slot of `use`, one of this lobe's own uses.

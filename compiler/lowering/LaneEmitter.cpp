@@ -447,6 +447,10 @@ std::array<Value*, 3> LaneEmitter::brdfPrecise(const LaneGeometry& geo, Value*& 
         std::array<Value*, 3> ms = emitters_.energy.compensation(*this, ndf, n, emitters_.fresnel, ci, co);
         for (int ch = 0; ch < 3; ++ch) total.c[ch] = pm.add(total.c[ch], ms[ch]);
     }
+    if (plan.walksMicrosurface) {
+        std::array<Value*, 3> ms = walkScattering(geo, b.CreateAnd(above, geo.hNonZero));  // LaneWalk.cpp
+        for (int ch = 0; ch < 3; ++ch) total.c[ch] = pm.add(total.c[ch], ms[ch]);
+    }
     // Below the horizon (or wi + wo = 0): f = 0, a valid lane. (A guarded
     // body distrusts |wi + wo|^2 < 1e-8 already.)
     valid = body.guarded() ? above : b.CreateAnd(above, geo.hNonZero);

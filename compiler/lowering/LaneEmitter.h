@@ -289,8 +289,26 @@ private:
     };
     CorrectedPair floatPairCorrections(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo);
 
+    // LaneWalk.cpp: energy = random_walk
+    struct WalkState;
+    using WalkStep = std::function<std::vector<llvm::Value*>(const WalkState&, llvm::Value* order, llvm::Value* met,
+                                                             llvm::Value* left, const std::vector<llvm::Value*>& carried)>;
+    std::vector<llvm::Value*> emitWalk(const std::array<llvm::Value*, 3>& wo, llvm::Value* seed, llvm::Value* walking,
+                                       const std::vector<llvm::Value*>& carriedInit, const WalkStep& step);
+    LVal walkFresnel(llvm::Value* cosine);
+    std::array<llvm::Value*, 3> walkScattering(const LaneGeometry& geo, llvm::Value* above);
+    struct WalkExit {
+        std::array<llvm::Value*, 3> wi, weight;
+    };
+    WalkExit walkFromView(const std::array<llvm::Value*, 3>& wo, llvm::Value* walking,
+                          const std::array<llvm::Value*, 3>& u);
+
     // LaneSampling.cpp
     struct SamplingTerms;
+    SampleResult emitWalkSample(const std::array<llvm::Value*, 3>& wo, const std::array<llvm::Value*, 3>& u,
+                                const std::vector<llvm::Value*>& slots);
+    llvm::Value* walkPdf(SamplingTerms& t, const std::array<llvm::Value*, 3>& wi);
+    void finishSample(SampleResult& r, llvm::Value* noSample);
     SamplingTerms samplingTerms(const std::array<llvm::Value*, 3>& wo);
     llvm::Value* specularProbability(SamplingTerms& t);
     llvm::Value* specularPdf(SamplingTerms& t, const std::array<llvm::Value*, 3>& m, llvm::Value* om);

@@ -193,6 +193,7 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woArg, const Vec& u
     llvm::IRBuilder<>& b = builder;
     const SamplingPlan& sp = plan.sampling;
     internal_assert(sp.specular != SpecularSampling::None) << "a sampler without a specular technique";
+    if (sp.walk) return emitWalkSample(woArg, u, slots);
     const Vec woIn = readDirection(woArg);
     Vec wo;
     if (body.correctedSums) {
@@ -311,16 +312,23 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woArg, const Vec& u
         r.weight[ch] = fm.convert(w, fm.type());
     }
     r.wi = wiLane;
-    // As in eval: a result float cannot hold is an invalid lane.
+    finishSample(r, b.CreateNot(t.above));
+    return r;
+}
+
+// As in eval: a result float cannot hold is an invalid lane. Invalid lanes
+// and those of `noSample` return wi = 0, pdf = 0 and weight = 0.
+void LaneEmitter::finishSample(SampleResult& r, Value* noSample) {
+    MathEmitter& fm = floatMath_;
+    llvm::IRBuilder<>& b = builder;
     markInvalid(fm.anyNanInfOrNegative({r.pdf, r.weight[0], r.weight[1], r.weight[2]}));
     for (Value* x : r.wi) markInvalid(b.CreateNot(fm.isFinite(x)));
-    Value* zero = b.CreateOr(invalid_, b.CreateNot(t.above));
+    Value* zero = b.CreateOr(invalid_, noSample);
     for (Value*& x : r.wi) x = fm.select(zero, fm.c(0.0), x);
     r.pdf = fm.select(zero, fm.c(0.0), r.pdf);
     for (Value*& x : r.weight) x = fm.select(zero, fm.c(0.0), x);
     r.invalid = invalid_;
     r.untrusted = b.CreateOr(untrusted_, invalid_);
-    return r;
 }
 
 LaneEmitter::PdfResult LaneEmitter::emitPdf(const Vec& wiIn, const Vec& woIn, const std::vector<Value*>& slots) {
@@ -333,9 +341,14 @@ LaneEmitter::PdfResult LaneEmitter::emitPdf(const Vec& wiIn, const Vec& woIn, co
     lowerInputsAndLets(slots);
 
     SamplingTerms t = samplingTerms(wo);
-    HalfNormal h = halfNormal(pm, wi, t.wo);
-    Value* spec = pm.select(h.exists, specularPdf(t, h.m, h.om), pm.c(0.0));
-    Value* pdf = pm.select(t.above, mixturePdf(t, spec, wi), pm.c(0.0));
+    Value* pdf;
+    if (plan.sampling.walk) {
+        pdf = pm.select(t.above, walkPdf(t, wi), pm.c(0.0));
+    } else {
+        HalfNormal h = halfNormal(pm, wi, t.wo);
+        Value* spec = pm.select(h.exists, specularPdf(t, h.m, h.om), pm.c(0.0));
+        pdf = pm.select(t.above, mixturePdf(t, spec, wi), pm.c(0.0));
+    }
 
     PdfResult r;
     r.pdf = fm.convert(pdf, fm.type());
@@ -343,6 +356,45 @@ LaneEmitter::PdfResult LaneEmitter::emitPdf(const Vec& wiIn, const Vec& woIn, co
     r.pdf = fm.select(invalid_, fm.c(0.0), r.pdf);
     r.invalid = invalid_;
     return r;
+}
+
+// energy = random_walk (LaneWalk.cpp): the walk from wo; wi is where it
+// leaves and the weight the product of the Fresnel terms met, which is f
+// (n.wi) over the walk's own density; pdf is walkPdf's, for MIS.
+LaneEmitter::SampleResult LaneEmitter::emitWalkSample(const Vec& woArg, const Vec& u, const std::vector<Value*>& slots) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& pm = preciseMath_;
+    llvm::IRBuilder<>& b = builder;
+    Vec woF{};
+    Vec wo = unitDirection(readDirection(woArg), woF);
+    for (Value* x : u)
+        rejectInput([&] { return b.CreateNot(b.CreateAnd(fm.ge(x, fm.c(0.0)), fm.lt(x, fm.c(1.0)))); });
+    lowerInputsAndLets(slots);
+    SamplingTerms t = samplingTerms(wo);
+    WalkExit exit = walkFromView(t.wo, t.above, u);
+    Value* left = pm.gt(exit.wi[2], pm.c(0.0));  // not cut
+    Value* pdf = pm.select(left, walkPdf(t, exit.wi), pm.c(0.0));
+
+    SampleResult r;
+    r.pdf = fm.convert(pdf, fm.type());
+    for (int i = 0; i < 3; ++i) r.wi[i] = fm.convert(exit.wi[i], fm.type());
+    for (int ch = 0; ch < 3; ++ch) r.weight[ch] = fm.convert(pm.select(left, exit.weight[ch], pm.c(0.0)), fm.type());
+    finishSample(r, b.CreateNot(b.CreateAnd(t.above, left)));
+    return r;
+}
+
+// The random-walk lobe's density for MIS (compiler/reference/WalkLobe.h):
+// (1 - q) p_ss(wi) + q (n.wi)+ / pi, p_ss the reflection of a visible normal
+// of wo and q = Lambda(wo) / (1 + Lambda(wo)) in [0.05, 0.95].
+Value* LaneEmitter::walkPdf(SamplingTerms& t, const Vec& wi) {
+    MathEmitter& pm = preciseMath_;
+    HalfNormal h = halfNormal(pm, wi, t.wo);
+    Value* single = pm.select(h.exists, specularPdf(t, h.m, h.om), pm.c(0.0));
+    Value* cl = emitters_.ndf.visibleCosLambda(*this, t.n, t.wo);
+    Value* q = pm.div(cl, pm.add(t.wo[2], cl));
+    q = pm.minnum(pm.maxnum(q, pm.c(kMinLobeProbability)), pm.c(1 - kMinLobeProbability));
+    Value* cosine = pm.select(pm.gt(wi[2], pm.c(0.0)), pm.mul(wi[2], pm.c(1.0 / kPi)), pm.c(0.0));
+    return pm.fma(pm.sub(pm.c(1.0), q), single, pm.mul(q, cosine));
 }
 
 }  // namespace facet

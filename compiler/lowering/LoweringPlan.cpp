@@ -254,12 +254,69 @@ bool hasCompiledSampler(const CheckedMaterial& material) {
 
 bool LoweringPlan::slotRead(int slot) const { return reads.slots.at(size_t(slot)); }
 
+namespace {
+
+// The parameters' plans (the clamp LaneEmitter::clampParam applies; a NaN
+// argument or a clamped value beyond float makes the lane invalid, so the
+// lowering tests for what the range leaves possible).
+void planParams(const CheckedMaterial& material, LoweringPlan& plan) {
+    const ValueRanges ranges(material);
+    for (int s = 0; s < kModelSlotCount; ++s) {
+        const ModelUse& use = material.singleLobe().use(ModelSlot(s));
+        for (int p = 0; use.model && p < int(use.model->canonical.size()); ++p) {
+            const ModelParam& domain = use.model->canonical[p];
+            ValueRange arg = ranges.argument(use, p);
+            ParamPlan param;
+            param.range = arg.clampedTo(domain.lo, domain.hi);
+            param.testNaN = arg.maybeNaN;
+            param.testFloatRange = !param.range.withinFloat();
+            plan.params[s].push_back(param);
+        }
+    }
+}
+
+}  // namespace
+
+// energy = random_walk: the exact variant's plain double body everywhere
+// (the walk branches on its random numbers: in float a lane would leave
+// the reference's path), closed-form Smith sums (GGX, the checker's
+// condition) and the walk's sampler.
+static LoweringPlan planWalk(const CheckedMaterial& material, const MaterialEmitters& em, LoweringPlan plan,
+                      const MathVariant& requested, bool trustInputs) {
+    (void)requested;  // a fast kernel computes what the exact one does
+    plan.variant = MathVariant::exact();
+    plan.trustInputs = trustInputs;
+    plan.ndfIsotropic = ndfIsIsotropic(material.singleLobe().ndf);
+    plan.reads = material.readByModels();
+    internal_assert(em.ndf.traits.smithRootSums && em.ndf.traits.samplesVisibleNormals)
+        << "random_walk lowered for an NDF without closed-form Smith sums and a visible-normal sampler";
+    plan.lambda = LambdaForm::RootSums;
+    const FresnelEmitter& fresnel = em.fresnel;
+    plan.fresnel.exactInFloat = fresnel.evaluableInFloat(material.singleLobe().fresnel);
+    plan.fresnel.rangeGuard = !fresnel.atLeast(material.singleLobe().fresnel, 1e-6);
+    plan.fresnel.atMostOne = fresnel.atMostOne();
+    plan.fresnel.canVanish = fresnel.canVanish() && !fresnel.atLeast(material.singleLobe().fresnel, 1e-12);
+    plan.scalarBody = planBody(material, em, plan, BodyRole::Plain, plan.variant);
+    plan.batchBodies = BatchBodies::Plain;
+    plan.batchBody = plan.scalarBody;
+    planParams(material, plan);
+    plan.sampling.specular = plannedSpecularSampling(material);
+    internal_assert(plan.sampling.specular == SpecularSampling::VisibleNormals) << "random_walk without visible normals";
+    plan.sampling.compiled = true;
+    plan.sampling.walk = true;
+    plan.sampling.body = plan.scalarBody;
+    plan.sampling.batchBody = plan.scalarBody;
+    return plan;
+}
+
 LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs,
                           const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables, bool samplerTables) {
     if (material.combinesLobes())
         return planCombination(material, variant, trustInputs, lobeEnergyTables, samplerTables);
     const MaterialEmitters em = termEmitters(material);
     LoweringPlan plan;
+    plan.walksMicrosurface = material.singleLobe().walksMicrosurface();
+    if (plan.walksMicrosurface) return planWalk(material, em, plan, variant, trustInputs);
     plan.variant = variant;
     plan.trustInputs = trustInputs;
     plan.ndfIsotropic = ndfIsIsotropic(material.singleLobe().ndf);
@@ -310,23 +367,8 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
         plan.batchBody = plan.scalarBody;
     }
 
-    // The clamp is the one LaneEmitter::clampParam applies (a caller's
-    // tighter cap only narrows it); a NaN argument or a clamped value
-    // beyond float makes the lane invalid, so the lowering tests for what
-    // the range leaves possible.
-    const ValueRanges ranges(material);
-    for (int s = 0; s < kModelSlotCount; ++s) {
-        const ModelUse& use = material.singleLobe().use(ModelSlot(s));
-        for (int p = 0; use.model && p < int(use.model->canonical.size()); ++p) {
-            const ModelParam& domain = use.model->canonical[p];
-            ValueRange arg = ranges.argument(use, p);
-            ParamPlan param;
-            param.range = arg.clampedTo(domain.lo, domain.hi);
-            param.testNaN = arg.maybeNaN;
-            param.testFloatRange = !param.range.withinFloat();
-            plan.params[s].push_back(param);
-        }
-    }
+    // (A caller's tighter cap only narrows the clamp.)
+    planParams(material, plan);
 
     plan.sampling.specular = plannedSpecularSampling(material);
     plan.sampling.compiled = plan.sampling.specular != SpecularSampling::None;
@@ -383,6 +425,7 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
        << " exact-in-float=" << yesNo(plan.fresnel.exactInFloat) << " range-guard=" << yesNo(plan.fresnel.rangeGuard)
        << " at-most-one=" << yesNo(plan.fresnel.atMostOne) << " can-vanish=" << yesNo(plan.fresnel.canVanish) << "\n";
     os << "energy-compensation: " << yesNo(plan.compensatesEnergy) << "\n";
+    if (plan.walksMicrosurface) os << "random-walk: yes (exact double body; sampler walks, pdf for MIS)\n";
     os << "trust-inputs: " << yesNo(plan.trustInputs) << "\n";
     auto count = [](const std::vector<bool>& v) { return std::count(v.begin(), v.end(), true); };
     os << "reads: inputs " << count(plan.reads.inputs) << " of " << plan.reads.inputs.size() << ", lets "

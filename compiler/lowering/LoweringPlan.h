@@ -177,6 +177,9 @@ struct SamplingPlan {
     SpecularSampling specular = SpecularSampling::None;
     bool cosineLobe = false;          // diffuse base or Kulla-Conty compensation
     bool compensationAlbedo = false;  // the lobe probability reads the Kulla-Conty table
+    // energy = random_walk: sample by walking the microsurface, and the
+    // walk's MIS density as pdf (LaneWalk.cpp, compiler/reference/WalkLobe.h).
+    bool walk = false;
     // The plain body: the scalar sample and pdf entries, the batch pdf
     // entry, and the lanes a float-first sample batch body distrusts.
     BodyPlan body;
@@ -218,6 +221,10 @@ struct LoweringPlan {
     std::shared_ptr<const LambdaTable> lambdaTable;  // LambdaForm::Table: the material's table
     FresnelPlan fresnel;
     bool compensatesEnergy = false;
+    // energy = random_walk: eval adds a walk's estimate of the orders >= 2
+    // (LaneWalk.cpp); every body is the exact plain body (fast mode too: a
+    // walk in float would branch away from the reference's path).
+    bool walksMicrosurface = false;
     // The host's promise (assume=unit): finite directions with |w| within
     // 1e-3 of 1, finite inputs, u in [0, 1). The kernel then drops the work
     // whose only purpose is to find lanes that break it: the direction,

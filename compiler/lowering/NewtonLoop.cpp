@@ -70,17 +70,18 @@ Value* emitBracketedNewton(llvm::IRBuilder<>& b, MathEmitter& pm, const std::fun
     hi->addIncoming(nextHi, latch);
     stopped->addIncoming(nowStopped, latch);
     Value* more = b.CreateAnd(b.CreateICmpSLT(k1, b.getInt32(steps)), b.CreateNot(allLanes(b, nowStopped)));
-    llvm::BranchInst* back = b.CreateCondBr(more, loop, done);
-    // Kept rolled by the optimizer too (a constant trip count invites full
-    // unrolling, which would bring the compile time back).
-    llvm::LLVMContext& ctx = b.getContext();
+    keepLoopRolled(b.CreateCondBr(more, loop, done));
+
+    b.SetInsertPoint(done);
+    return out;
+}
+
+void keepLoopRolled(llvm::BranchInst* back) {
+    llvm::LLVMContext& ctx = back->getContext();
     llvm::MDNode* disable = llvm::MDNode::get(ctx, llvm::MDString::get(ctx, "llvm.loop.unroll.disable"));
     llvm::MDNode* self = llvm::MDNode::getDistinct(ctx, {nullptr, disable});
     self->replaceOperandWith(0, self);
     back->setMetadata(llvm::LLVMContext::MD_loop, self);
-
-    b.SetInsertPoint(done);
-    return out;
 }
 
 }  // namespace facet

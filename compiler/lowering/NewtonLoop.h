@@ -37,4 +37,9 @@ llvm::Value* emitBracketedNewton(llvm::IRBuilder<>& builder, MathEmitter& math,
                                  llvm::Value* lo, llvm::Value* hi, int steps, double settledStep = 0,
                                  double settledFloor = 0);
 
+// Marks the loop whose back edge is `back` as not to be unrolled: its trip
+// count is the lanes' (a constant bound invites full unrolling, which
+// would bring the compile time back). The walk's loop uses it too.
+void keepLoopRolled(llvm::BranchInst* back);
+
 }  // namespace facet

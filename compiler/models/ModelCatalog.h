@@ -306,6 +306,10 @@ struct NdfEntry : ModelInfo {
     // visibleCosLambda exact for its D, so that the visible-normal density
     // integrates to 1.
     bool visibleNormals = false;
+    // Its emitter's visible-normal sampler also takes directions below the
+    // horizon (a ray going up through the microsurface meets facets facing
+    // down its path), so `energy = random_walk` compiles for it.
+    bool compiledWalk = false;
     FormulaSet<NdfFormulas> formulas;
 };
 
@@ -322,6 +326,9 @@ struct MaskingEntry : ModelInfo {
     // Why the F = 1 albedo of this masking is not bounded by 1 by
     // construction ("" when it is).
     const char* energyNote = "";
+    // The masking of the Smith microsurface with uncorrelated heights, whose
+    // single scattering is order 1 of the random walk (random_walk needs it).
+    bool heightCorrelated = false;
     FormulaSet<MaskingFormulas> formulas;
 };
 
@@ -341,6 +348,10 @@ struct FresnelEntry : ModelInfo {
 struct EnergyEntry : ModelInfo {
     // Multiple-scattering compensation from a tabulated albedo (kulla_conty).
     bool compensates = false;
+    // The multiple scattering of the Smith microsurface by a random walk
+    // (random_walk, Heitz et al. 2016): eval adds a one-walk estimate of the
+    // orders >= 2 and the sampler walks (SPEC 13, docs/sampling.md).
+    bool walks = false;
 };
 
 struct DiffuseEntry : ModelInfo {

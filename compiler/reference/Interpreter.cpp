@@ -3,6 +3,7 @@
 // any template that calls them (Builtins.h, <complex>); see QuadMath.h.
 #include "QuadMath.h"
 #include "Interpreter.h"
+#include "WalkLobe.h"
 
 #include "Diagnostics.h"
 #include "KullaContyEval.h"
@@ -257,6 +258,10 @@ std::array<Real, 3> ResolvedMaterial<Real>::brdf(const Vec3<Real>& wi, const Vec
     }
     if (energy->compensates) {
         std::array<Real, 3> ms = kullaContyBrdf(*this, ci, co);
+        for (int ch = 0; ch < 3; ++ch) out[ch] += ms[ch];
+    }
+    if (energy->walks) {
+        std::array<Real, 3> ms = walkMultipleScattering(*this, wi, wo);  // WalkLobe.h
         for (int ch = 0; ch < 3; ++ch) out[ch] += ms[ch];
     }
     if (diffuse->present)

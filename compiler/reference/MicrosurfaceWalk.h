@@ -61,6 +61,10 @@ namespace facet {
 // the walks before them used (a walk cut early leaves the next one as it
 // was), and a seed gives the same numbers on every platform. Uniform
 // doubles in [0, 1) from the 53 high bits.
+//
+// Or, for the random-walk lobe (energy = random_walk, WalkLobe.h), the
+// counter stream the kernels compute per lane in 32-bit integers: number k
+// is walkHash(seed + k 0x9e3779b9) >> 8, times 2^-24.
 class WalkRandom {
 public:
     WalkRandom(uint64_t seed, uint64_t path) {
@@ -68,7 +72,20 @@ public:
         x = splitmix64(x) ^ path;  // the seed hashed first, so that nearby seeds do not share streams
         for (uint64_t& word : state_) word = splitmix64(x);
     }
-    double next() { return double(nextBits() >> 11) * 0x1p-53; }
+    static WalkRandom counterStream(uint32_t seed) {
+        WalkRandom r(0, 0);
+        r.counter_ = true, r.seed32_ = seed;
+        return r;
+    }
+    double next() {
+        if (counter_) return double(walkHash(seed32_ + 0x9e3779b9u * count_++) >> 8) * 0x1p-24;
+        return double(nextBits() >> 11) * 0x1p-53;
+    }
+    // Wellons's lowbias32 integer hash (a bijection of 32-bit words).
+    static uint32_t walkHash(uint32_t x) {
+        x ^= x >> 16, x *= 0x7feb352du, x ^= x >> 15, x *= 0x846ca68bu, x ^= x >> 16;
+        return x;
+    }
 
 private:
     static uint64_t splitmix64(uint64_t& x) {
@@ -85,15 +102,21 @@ private:
         return result;
     }
     std::array<uint64_t, 4> state_{};
+    bool counter_ = false;
+    uint32_t seed32_ = 0, count_ = 0;
 };
 
 // Which reflections count: `onlyOrder` > 0 keeps that scattering order
 // alone; `maxOrder` > 0 ends every walk after that many reflections (a path
-// cut there has no direction and weight 0).
+// cut there has no direction and weight 0); orders below `minOrder` do not
+// count (the random-walk lobe adds orders >= 2 to its exact order 1).
 struct WalkOrders {
     int onlyOrder = 0;
     int maxOrder = 0;
-    bool counts(int order) const { return (onlyOrder == 0 || order == onlyOrder) && (maxOrder == 0 || order <= maxOrder); }
+    int minOrder = 1;
+    bool counts(int order) const {
+        return order >= minOrder && (onlyOrder == 0 || order == onlyOrder) && (maxOrder == 0 || order <= maxOrder);
+    }
 };
 
 // The mean of `paths` independent estimates per channel and its standard

@@ -5,6 +5,7 @@
 
 #include "KullaContyEval.h"
 #include "LayerAlbedo.h"
+#include "WalkLobe.h"
 
 #include <cmath>
 
@@ -133,6 +134,7 @@ Real specularPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Ve
 template <typename Real>
 Real brdfPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo, SamplingTechnique technique) {
     if (!(wo.z > 0)) return 0;
+    if (r.energy->walks && technique == SamplingTechnique::Material) return walkLobePdf(r, wi, wo);
     return mixturePdf(r, technique, specularProbability(r, wo, technique), specularPdf(r, wi, wo, technique),
                       cosinePdf(wi));
 }
@@ -141,6 +143,7 @@ template <typename Real>
 SampleResult<Real> sampleBrdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo, const std::array<Real, 3>& u,
                               SamplingTechnique technique) {
     using std::cos; using std::sin; using std::sqrt;
+    if (r.energy->walks && technique == SamplingTechnique::Material) return sampleWalkLobe(r, wo, u);  // WalkLobe.h
     SampleResult<Real> out;
     if (!(wo.z > 0)) return out;
     Real pSpec = specularProbability(r, wo, technique);

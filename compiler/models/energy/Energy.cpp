@@ -1,6 +1,9 @@
-// The energy slot: none, or Kulla & Conty 2017 multiple-scattering
+// The energy slot: none; Kulla & Conty 2017 multiple-scattering
 // compensation from the tabulated albedo of the material's NDF and masking
-// (compiler/reference/KullaConty.h builds the tables).
+// (compiler/reference/KullaConty.h builds the tables); or random_walk, the
+// multiple scattering of Heitz et al. 2016 by a random walk on the Smith
+// microsurface (compiler/reference/MicrosurfaceWalk.h is its reference),
+// which the kernels walk per lane (compiler/lowering/WalkEmitter.h).
 #include "models/ModelMath.h"
 #include "Immortal.h"
 
@@ -30,7 +33,18 @@ std::vector<const ModelInfo*> facetModels_energy_Energy() {
         };
         return e;
     }());
-    return {&none, &kullaConty};
+    static const EnergyEntry& randomWalk = immortal<EnergyEntry>([&] {
+        EnergyEntry e = entry(2, "random_walk", "Heitz et al. 2016 multiple scattering by a random walk", false);
+        e.walks = true;
+        // The walk from grazing and normal views, alpha per lane up to 1.
+        e.hardCases = {
+            {"hcc_rw_ggx_conductor",
+             "input alpha = 0.6 in 0.001 .. 1; ndf = ggx(alpha); masking = smith_height_correlated; "
+             "fresnel = conductor(eta = rgb(0.2, 0.9, 1.1), k = rgb(3.9, 2.4, 2.2)); energy = random_walk;"},
+        };
+        return e;
+    }());
+    return {&none, &kullaConty, &randomWalk};
 }
 
 }  // namespace facet::models

@@ -101,7 +101,13 @@ public:
 std::vector<TermEmitterEntry> facetEmitters_energy_EnergyEmitter() {
     static const NoCompensationEmitter& none = immortal<NoCompensationEmitter>();
     static const KullaContyEmitter& kullaConty = immortal<KullaContyEmitter>();
-    return {{ModelSlot::Energy, "none", &none}, {ModelSlot::Energy, "kulla_conty", &kullaConty}};
+    // random_walk adds no closed-form term: the lane bodies walk the
+    // microsurface (compiler/lowering/LaneWalk.cpp) from the NDF's and the
+    // Fresnel term's emitters.
+    static const NoCompensationEmitter& randomWalk = immortal<NoCompensationEmitter>();
+    return {{ModelSlot::Energy, "none", &none},
+            {ModelSlot::Energy, "kulla_conty", &kullaConty},
+            {ModelSlot::Energy, "random_walk", &randomWalk}};
 }
 
 }  // namespace facet

@@ -116,6 +116,7 @@ std::vector<const ModelInfo*> facetModels_masking_Smith() {
     static const MaskingEntry& height = immortal<MaskingEntry>([] {
         MaskingEntry e = smith(7, "smith_height_correlated", "height-correlated Smith (Heitz 2014)");
         e.representative = true;
+        e.heightCorrelated = true;
         e.formulas = makeFormulas<MaskingFormulas, HeightCorrelatedSmith>();
         return e;
     }());

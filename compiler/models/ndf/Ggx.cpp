@@ -58,6 +58,7 @@ std::vector<const ModelInfo*> facetModels_ndf_Ggx() {
         e.smith = true;
         e.shapeInvariant = true;
         e.visibleNormals = true;
+        e.compiledWalk = true;  // the spherical cap holds for any view
         e.representative = true;
         e.hardCases = {
             {"hcc_ggx_alpha_min", "ndf = ggx(1e-4); masking = smith_height_correlated;"},
