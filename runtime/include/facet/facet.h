@@ -94,6 +94,10 @@ int64_t facet_eval_batch_status(const facet_kernel* k, int64_t n, const float* c
    - invalid lanes (a non-finite or non-unit wo, u outside [0, 1) or NaN, a
      non-finite input, a result float cannot hold): wi = 0, pdf = 0,
      weight = 0, counted in the return value.
+   - a material with energy = random_walk (docs/models.md): u seeds a walk
+     on the microsurface; weight = f (n.wi) / p for the walk's own density
+     p, which has no closed form, and pdf is a density for MIS only; its
+     eval is a Monte Carlo estimate seeded by the directions.
    facet_sample returns 1 for an invalid lane, else 0 (NULL k, wo or u count
    as invalid; NULL outputs are not written). */
 int facet_sample(const facet_kernel* k, const float wo[3], const float u[3], const float* inputs, float wi_out[3],
