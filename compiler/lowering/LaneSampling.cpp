@@ -20,16 +20,6 @@ namespace {
 // a lobe whose f is not zero.
 constexpr double kMinLobeProbability = 0.05;
 
-Value* dot(MathEmitter& m, const Vec& a, const Vec& b) {
-    return m.fma(a[0], b[0], m.fma(a[1], b[1], m.mul(a[2], b[2])));
-}
-
-Vec selectVec(MathEmitter& m, Value* cond, const Vec& a, const Vec& b) {
-    return {m.select(cond, a[0], b[0]), m.select(cond, a[1], b[1]), m.select(cond, a[2], b[2])};
-}
-
-Vec constantVec(MathEmitter& m, double x, double y, double z) { return {m.c(x), m.c(y), m.c(z)}; }
-
 Value* channelMean(MathEmitter& m, const LVal& v) {
     if (v.gray()) return v.c[0];
     return m.mul(m.add(m.add(v.c[0], v.c[1]), v.c[2]), m.c(1.0 / 3.0));

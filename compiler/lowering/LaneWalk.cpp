@@ -34,8 +34,6 @@ constexpr int kMaxOrder = 256;
 constexpr double kSeedGrid = 65536.0, kSeedOffset = 0.3183;
 constexpr uint32_t kGolden = 0x9e3779b9u, kEvalSalt = 0x5bd1e995u;
 
-Value* dot(MathEmitter& m, const Vec& a, const Vec& b) { return m.fma(a[0], b[0], m.fma(a[1], b[1], m.mul(a[2], b[2]))); }
-
 // The random numbers of one lane as 32-bit words.
 class LaneRandomWords {
 public:
@@ -124,12 +122,11 @@ std::vector<Value*> LaneEmitter::emitWalk(const Vec& wo, Value* seed, Value* wal
     Value* logV = pm.log(pm.sub(pm.c(1.0), u));
     Value* up = pm.gt(dir[2], pm.c(0.0));
     Value* down = pm.lt(dir[2], pm.c(0.0));
-    Vec above = {pm.select(up, dir[0], pm.neg(dir[0])), pm.select(up, dir[1], pm.neg(dir[1])),
-                 pm.select(up, dir[2], pm.neg(dir[2]))};
+    const Vec back = {pm.neg(dir[0]), pm.neg(dir[1]), pm.neg(dir[2])};  // v = -w, toward where the ray came from
+    Vec above = selectVec(pm, up, dir, back);
     // (A lane that has left or never walked computes from a valid direction.)
     Value* usable = b.CreateAnd(walking, b.CreateOr(up, down));
-    above = {pm.select(usable, above[0], pm.c(0.0)), pm.select(usable, above[1], pm.c(0.0)),
-             pm.select(usable, above[2], pm.c(1.0))};
+    above = selectVec(pm, usable, above, constantVec(pm, 0, 0, 1));
     Value* cosLambda = ndf.visibleCosLambda(*this, n, above);
     Value* lambda = pm.div(cosLambda, above[2]);
     Value* leaves = b.CreateAnd(up, b.CreateOr(pm.eq(cosLambda, pm.c(0.0)), pm.lt(logV, pm.mul(lambda, logC))));
@@ -144,8 +141,7 @@ std::vector<Value*> LaneEmitter::emitWalk(const Vec& wo, Value* seed, Value* wal
     internal_assert(carriedNext.size() == carried.size()) << "walk step changed its carried values";
 
     // The facet met: a visible normal of v = -w, reflected about; F at v.m.
-    Vec v = {pm.neg(dir[0]), pm.neg(dir[1]), pm.neg(dir[2])};
-    v = {pm.select(met, v[0], pm.c(0.0)), pm.select(met, v[1], pm.c(0.0)), pm.select(met, v[2], pm.c(1.0))};
+    Vec v = selectVec(pm, met, back, constantVec(pm, 0, 0, 1));
     Value* u1 = words.uniform(pm, seed, b.CreateSub(index, b.getInt32(2)));
     Value* u2 = words.uniform(pm, seed, b.CreateSub(index, b.getInt32(1)));
     Vec m = ndf.sampleVisibleNormal(*this, n, v, u1, u2);
@@ -191,12 +187,9 @@ std::array<Value*, 3> LaneEmitter::walkScattering(const LaneGeometry& geo, Value
     const NdfEmitter& ndf = emitters_.ndf;
     NdfParams n = ndf.params(*this);
     LaneRandomWords words(b, pm.width());
-    Vec wi = geo.wiD, wo = geo.woD;
     // Lanes below the horizon walk from n toward n (their f is 0 anyway).
-    for (int i = 0; i < 3; ++i) {
-        wi[i] = pm.select(above, wi[i], pm.c(i == 2 ? 1.0 : 0.0));
-        wo[i] = pm.select(above, wo[i], pm.c(i == 2 ? 1.0 : 0.0));
-    }
+    const Vec normal = constantVec(pm, 0, 0, 1);
+    const Vec wi = selectVec(pm, above, geo.wiD, normal), wo = selectVec(pm, above, geo.woD, normal);
     Value* seed = words.splat(kEvalSalt);
     for (Value* x : {wi[0], wi[1], wi[2], wo[0], wo[1], wo[2]}) {
         Value* cell = intrinsic(llvm::Intrinsic::floor, pm.fma(x, pm.c(kSeedGrid), pm.c(kSeedOffset)));
@@ -214,13 +207,10 @@ std::array<Value*, 3> LaneEmitter::walkScattering(const LaneGeometry& geo, Value
         Value* higher = b.CreateICmpSGE(order, b.getInt32(2));  // one value for every lane
         if (pm.width() > 1) higher = b.CreateVectorSplat(pm.width(), higher);
         Value* counts = b.CreateAnd(b.CreateAnd(met, higher), geometric);
-        auto safe = [&](const Vec& x) {
-            return Vec{pm.select(counts, x[0], pm.c(0.0)), pm.select(counts, x[1], pm.c(0.0)),
-                       pm.select(counts, x[2], pm.c(1.0))};
-        };
+        auto safe = [&](const Vec& x) { return selectVec(pm, counts, x, normal); };
         // A(v): (n.v)(1 + Lambda(v)) for v above, (n.-v) Lambda(-v) below.
         Value* vUp = pm.gt(v[2], pm.c(0.0));
-        Vec vAbove = safe({pm.select(vUp, v[0], s.w[0]), pm.select(vUp, v[1], s.w[1]), pm.select(vUp, v[2], s.w[2])});
+        Vec vAbove = safe(selectVec(pm, vUp, v, s.w));
         Value* area = pm.add(ndf.visibleCosLambda(*this, n, vAbove), pm.select(vUp, v[2], pm.c(0.0)));
         LaneGeometry atH{};
         Vec hSafe = safe(h);

@@ -447,4 +447,14 @@ Value* allLanes(llvm::IRBuilder<>& b, Value* mask) {
     return b.CreateICmpEQ(b.CreateBitCast(mask, bits), llvm::ConstantInt::getAllOnesValue(bits));
 }
 
+Value* dot(MathEmitter& m, const LaneVec3& a, const LaneVec3& b) {
+    return m.fma(a[0], b[0], m.fma(a[1], b[1], m.mul(a[2], b[2])));
+}
+
+LaneVec3 selectVec(MathEmitter& m, Value* cond, const LaneVec3& a, const LaneVec3& b) {
+    return {m.select(cond, a[0], b[0]), m.select(cond, a[1], b[1]), m.select(cond, a[2], b[2])};
+}
+
+LaneVec3 constantVec(MathEmitter& m, double x, double y, double z) { return {m.c(x), m.c(y), m.c(z)}; }
+
 }  // namespace facet

@@ -18,6 +18,7 @@
 
 #include <llvm/IR/IRBuilder.h>
 
+#include <array>
 #include <utility>
 
 namespace facet {
@@ -138,5 +139,12 @@ private:
 // are, for the branches around work only some lanes need.
 llvm::Value* anyLane(llvm::IRBuilder<>& b, llvm::Value* mask);
 llvm::Value* allLanes(llvm::IRBuilder<>& b, llvm::Value* mask);
+
+// Three lane values as a vector (a direction, a normal): their dot
+// product, a lane-wise choice between two vectors, and a constant vector.
+using LaneVec3 = std::array<llvm::Value*, 3>;
+llvm::Value* dot(MathEmitter& m, const LaneVec3& a, const LaneVec3& b);
+LaneVec3 selectVec(MathEmitter& m, llvm::Value* cond, const LaneVec3& a, const LaneVec3& b);
+LaneVec3 constantVec(MathEmitter& m, double x, double y, double z);
 
 }  // namespace facet
