@@ -102,6 +102,9 @@ std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) 
             error = choose(key, value, {{"on", true}, {"off", false}}, out.floatFirst);
         } else if (key == "assume") {
             error = choose(key, value, {{"unit", true}, {"none", false}}, out.assumeUnit);
+        } else if (key == "transport") {
+            error = choose(key, value, {{"radiance", Transport::Radiance}, {"importance", Transport::Importance}},
+                           out.transport);
         } else if (key == "codegen") {
             error = choose(key, value,
                            {{"tiered", Codegen::Tiered}, {"quick", Codegen::Quick}, {"optimized", Codegen::Optimized}},
@@ -123,7 +126,7 @@ std::string CompileOptions::parse(const std::string& spec, CompileOptions& out) 
                 return fmt::format("{}: expected one value or three (r,g,b)", key);
             out.bindings[key.substr(4)] = values;
         } else {
-            return fmt::format("unknown option '{}' (known: backend, math, tolerance, width, cache, float_first, codegen, assume, set.NAME)", key);
+            return fmt::format("unknown option '{}' (known: backend, math, tolerance, width, cache, float_first, codegen, assume, transport, set.NAME)", key);
         }
         if (!error.empty()) return error;
     }
@@ -136,6 +139,7 @@ std::string CompileOptions::canonical() const {
     if (!floatFirst) s += ";float_first=off";
     if (assumeUnit) s += ";assume=unit";
     if (codegen == Codegen::Quick) s += ";codegen=quick";
+    if (transport == Transport::Importance) s += ";transport=importance";
     for (const auto& [name, values] : bindings) {
         s += ";set." + name + "=";
         for (size_t i = 0; i < values.size(); ++i) s += fmt::format("{}{}", i ? "," : "", values[i]);

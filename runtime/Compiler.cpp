@@ -102,6 +102,7 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
     std::unique_ptr<Kernel> kernel(new Kernel());
     kernel->material_ = run.specialized;
     kernel->backend_ = options.backend;
+    kernel->transport_ = options.transport;
     kernel->energyTable_ = run.energyTable;
     kernel->lobeEnergyTables_ = run.specialized.combinesLobes()
                                     ? run.lobeEnergyTables

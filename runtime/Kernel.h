@@ -87,6 +87,9 @@ struct CompileOptions {
     // status array is all 0; other inputs give undefined values, but never
     // a crash or an out-of-bounds read. The interpreter always validates.
     bool assumeUnit = false;
+    // transport=radiance|importance (SPEC 11): the transport of a refracting
+    // lobe's f; radiance includes the 1/eta^2 of transmitted radiance.
+    Transport transport = Transport::Radiance;
 
     // Parses the ';'-separated option string; returns an error message or "".
     static std::string parse(const std::string& spec, CompileOptions& out);
@@ -133,6 +136,8 @@ public:
     const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables() const { return lobeEnergyTables_; }
     double measuredError() const { return measuredError_; }
     double compileMillis() const { return compileMillis_; }
+    // The transport option (SPEC 11) the reference fallbacks evaluate with.
+    Transport transport() const { return transport_; }
     // The code the entry points run now: "quick" or "optimized" (tiered
     // kernels change from the first to the second once), "interpreter".
     std::string codeTier() const;
@@ -163,7 +168,8 @@ public:
     // non-unit direction, u outside [0, 1), a non-finite input it reads, or a result
     // float cannot hold; its outputs are 0. With n.wo <= 0 there is no
     // sample (wi = 0, pdf = 0, weight = 0, a valid lane); a sample below
-    // the horizon is valid with weight 0 and its pdf reported.
+    // the horizon is valid with weight 0 and its pdf reported. A lobe that
+    // scatters below the surface (SPEC 11) takes wo and wi on either side.
     bool sample(const float wo[3], const float u[3], const float* inputs, float wi[3], float* pdf,
                 float weight[3]) const;
     float pdf(const float wi[3], const float wo[3], const float* inputs) const;
@@ -226,6 +232,7 @@ private:
     std::vector<std::shared_ptr<const EnergyTable>> lobeEnergyTables_;
     double measuredError_ = -1;
     double compileMillis_ = 0;
+    Transport transport_ = Transport::Radiance;  // of the reference fallbacks (SPEC 11)
 };
 
 // An ahead-of-time build of a material (`facet build`, Compiler::compileAot).

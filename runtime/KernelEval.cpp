@@ -135,7 +135,7 @@ int64_t Kernel::evalBatch(int64_t n, const float* const wi[3], const float* cons
     // Scalar and interpreter kernels: one lane at a time, same conventions.
     ScalarStatusFn scalar = entryPoint(code_, &KernelCode::scalarStatus);
     std::optional<Interpreter<double>> interp;
-    if (!scalar) interp.emplace(material_, lobeEnergyTables_);
+    if (!scalar) interp.emplace(material_, lobeEnergyTables_), interp->setTransport(transport_);
     return forEachLane(material_, n, inputs, [&](int64_t i, const double* lane, const float* laneF) {
         float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, out[3];
         const bool bad = scalar ? scalar(a, b, laneF, out) != 0 : !referenceEval(*interp, a, b, lane, out);
@@ -174,7 +174,7 @@ int64_t Kernel::sampleBatch(int64_t n, const float* const wo[3], const float* co
     if (SampleBatchFn fn = entryPoint(code_, &KernelCode::sampleBatch)) return fn(n, wo, u, inputs, wi, pdf, weight);
     SampleScalarFn scalar = entryPoint(code_, &KernelCode::sampleScalar);
     std::optional<Interpreter<double>> interp;
-    if (!scalar) interp.emplace(material_, lobeEnergyTables_);
+    if (!scalar) interp.emplace(material_, lobeEnergyTables_), interp->setTransport(transport_);
     return forEachLane(material_, n, inputs, [&](int64_t i, const double* lane, const float* laneF) {
         float o[3] = {wo[0][i], wo[1][i], wo[2][i]}, uu[3] = {u[0][i], u[1][i], u[2][i]};
         float w[3] = {0, 0, 0}, p = 0, wt[3] = {0, 0, 0};
@@ -193,7 +193,7 @@ int64_t Kernel::pdfBatch(int64_t n, const float* const wi[3], const float* const
     if (PdfBatchFn fn = entryPoint(code_, &KernelCode::pdfBatch)) return fn(n, wi, wo, inputs, pdf);
     PdfScalarFn scalar = entryPoint(code_, &KernelCode::pdfScalar);
     std::optional<Interpreter<double>> interp;
-    if (!scalar) interp.emplace(material_, lobeEnergyTables_);
+    if (!scalar) interp.emplace(material_, lobeEnergyTables_), interp->setTransport(transport_);
     return forEachLane(material_, n, inputs, [&](int64_t i, const double* lane, const float* laneF) {
         float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, p = 0;
         const bool bad = scalar ? scalar(a, b, laneF, &p) != 0 : !referencePdf(*interp, a, b, lane, p);

@@ -15,7 +15,8 @@ quadrature with nodes computed here by Newton iteration, and the Smith Lambda
 of the NDFs without a closed form a 2-D quadrature of a different integral
 than the one Facet tabulates.
 
-Materials of several lobes (SPEC 10: lobe blocks, bsdf = EXPR, layer) and
+Lobes that scatter below the surface (SPEC 11) are evaluated by
+reference_transmission.py. Materials of several lobes (SPEC 10: lobe blocks, bsdf = EXPR, layer) and
 energy = kulla_conty are evaluated by reference_lobes.py, independent in the
 same way (its own albedo quadrature and its own solve of the layer's balance).
 
@@ -685,6 +686,9 @@ def new_models():
 
 def read_model(st, models, model_args):
     _, slot, model, args = st
+    if slot in ("scatter", "thin"):  # SPEC 11: a word, read by reference_transmission
+        models[slot] = model
+        return
     if model == "trowbridge_reitz":
         model = "ggx"  # SPEC 3 alias
     models[slot] = model
@@ -780,6 +784,8 @@ class Material:
         if self.bsdf is not None:
             return reference_lobes.eval_material(self, wi, wo, values)
         params = self.resolve(values)
+        if reference_transmission.whole_sphere(self.models):
+            return reference_transmission.bsdf(self.models, params, wi, wo)
         if self.models["energy"] == "kulla_conty":
             return reference_lobes.lobe_value(reference_lobes.ResolvedLobe(self.models, params), wi, wo)
         return brdf(self.models, params, wi, wo)
@@ -1035,6 +1041,7 @@ def cmd_selftest():
 # copy of the caches and classes, not two).
 sys.modules.setdefault("reference_values", sys.modules[__name__])
 import reference_lobes  # noqa: E402  (needs the definitions above)
+import reference_transmission  # noqa: E402  (SPEC 11; needs the definitions above)
 
 
 def main(argv):

@@ -40,6 +40,8 @@ const char* modelSlotName(ModelSlot slot) {
     return "?";
 }
 
+bool isLobeOption(const std::string& name) { return name == "scatter" || name == "thin"; }
+
 void ExprVisitor::visit(const Expr& e) {
     switch (e.kind) {
         case ExprKind::Number: return visitNumber(static_cast<const NumberExpr&>(e));

@@ -108,12 +108,25 @@ struct ModelStmt {
     std::vector<Argument> args;
 };
 
-// `lobe NAME { slot = model(args); ... }` (SPEC 10): the model statements of
-// one lobe. Inputs and lets stay at material level.
+// `scatter = both;`, `thin = true;` (SPEC 11): how a lobe scatters, a word
+// after the option's name. The checker knows the options and their words.
+struct LobeOptionStmt {
+    SourceLoc loc;  // of the option's name
+    std::string option;
+    SourceLoc valueLoc;
+    std::string value;
+};
+// The options a lobe statement may set (the parser tells them from model
+// statements by these names).
+bool isLobeOption(const std::string& name);
+
+// `lobe NAME { slot = model(args); ... }` (SPEC 10): the model statements and
+// options of one lobe. Inputs and lets stay at material level.
 struct LobeDecl {
     SourceLoc loc;  // of the name
     std::string name;
     std::vector<ModelStmt> statements;
+    std::vector<LobeOptionStmt> options;
 };
 
 // `bsdf = EXPR;`: how the lobes combine. The expression is parsed with the
@@ -124,7 +137,7 @@ struct BsdfStmt {
     ExprPtr value;
 };
 
-using Stmt = std::variant<InputDecl, LetDecl, ModelStmt, LobeDecl, BsdfStmt>;
+using Stmt = std::variant<InputDecl, LetDecl, ModelStmt, LobeOptionStmt, LobeDecl, BsdfStmt>;
 
 struct MaterialDecl {
     SourceLoc loc;  // of the name

@@ -7,6 +7,7 @@
 #include "KullaConty.h"
 #include "LambdaTable.h"
 #include "Parser.h"
+#include "ScatterRules.h"
 
 #include <algorithm>
 #include <cmath>
@@ -112,7 +113,13 @@ public:
             else if (auto* let = std::get_if<LetDecl>(&s)) checkLet(*let);
             else if (auto* lobe = std::get_if<LobeDecl>(&s)) checkLobe(*lobe);
             else if (auto* b = std::get_if<BsdfStmt>(&s)) checkBsdf(*b, bsdf);
-            else if (lobes_.empty()) checkModelStmt(std::get<ModelStmt>(s), seen, implicit);
+            else if (auto* o = std::get_if<LobeOptionStmt>(&s)) {
+                if (lobes_.empty()) checkLobeOption(*o, implicit);
+                else
+                    diags_.error(o->loc, fmt::format("'{}' statement outside a lobe: material '{}' has lobe blocks, "
+                                                     "so it belongs in the lobe it applies to",
+                                                     o->option, decl_.name));
+            } else if (lobes_.empty()) checkModelStmt(std::get<ModelStmt>(s), seen, implicit);
             else
                 diags_.error(std::get<ModelStmt>(s).loc,
                              fmt::format("'{}' statement outside a lobe: material '{}' has lobe blocks, so every "
@@ -144,6 +151,8 @@ public:
                     diags_.error(out_.lobes[i].loc, fmt::format("lobe '{}' is not used in the bsdf statement at {}",
                                                                 out_.lobes[i].name, bsdf->loc.str()));
         }
+        if (diags_.diagnostics().size() == errorsBefore && !diags_.full() && !out_.bsdf.empty())
+            if (auto why = wholeSphereCombinationUnsupported(out_)) diags_.error(why->loc, why->message);
         if (diags_.diagnostics().size() == errorsBefore && !diags_.full())
             if (auto why = exceedsComputeBudget(out_)) diags_.error(why->loc, why->message);
         return std::move(out_);
@@ -213,6 +222,7 @@ private:
         lobe.name = decl.name;
         std::array<const ModelStmt*, kModelSlotCount> seen{};
         for (const ModelStmt& stmt : decl.statements) checkModelStmt(stmt, seen, lobe);
+        for (const LobeOptionStmt& option : decl.options) checkLobeOption(option, lobe);
         if (!seen[int(ModelSlot::Ndf)]) {
             if (!seen[int(ModelSlot::Diffuse)])
                 diags_.error(decl.loc, fmt::format("lobe '{}' has neither an 'ndf' nor a 'diffuse' statement; a "
@@ -241,12 +251,16 @@ private:
                 use.loc = lobe.loc;
             }
         }
+        if (lobe.wholeSphere() && !lobe.ndf.model && seen[int(ModelSlot::Diffuse)])  // a diffuse lobe
+            if (auto why = wholeSphereLobeUnsupported(lobe)) diags_.error(why->loc, why->message);
         if (!seen[int(ModelSlot::Ndf)] || !lobe.ndf.model) return;
         checkCombination(lobe, seen);
         auto clean = [&] { return diags_.diagnostics().size() == errorsBefore && !diags_.full(); };
         if (lobe.compensatesEnergy() && clean())
             if (auto why = kullaContyUnsupported(out_, lobe)) diags_.error(why->loc, why->message);  // KullaConty.h
         if (lobe.walksMicrosurface() && clean()) checkRandomWalk(lobe);
+        if (lobe.wholeSphere() && clean())
+            if (auto why = wholeSphereLobeUnsupported(lobe)) diags_.error(why->loc, why->message);  // ScatterRules.h
         if (lobe.masking.model && lobe.masking.model->smith && ndfEntry(*lobe.ndf.model).tabulatedLambda && clean()) {
             SourceLoc loc = lobe.masking.loc;
             std::string why = tabulatedLambdaUnsupported(out_, lobe, loc);  // LambdaTable.h
@@ -286,6 +300,17 @@ private:
             diags_.error(lobe.diffuse.loc, "energy 'random_walk' with a diffuse term: the walk's sampler has no "
                                            "density to mix with the diffuse lobe's; put the diffuse base in a lobe "
                                            "of its own with 'energy = kulla_conty', or leave it out");
+    }
+
+    // `scatter = ...;` or `thin = ...;` in `lobe` (once each).
+    void checkLobeOption(const LobeOptionStmt& stmt, CheckedLobe& lobe) {
+        const SourceLoc& earlier = stmt.option == "scatter" ? lobe.scatterLoc : lobe.thinLoc;
+        if (earlier.line > 0) {
+            diags_.error(stmt.loc, fmt::format("duplicate '{}' statement in lobe '{}'; first given at {}", stmt.option,
+                                               lobe.name, earlier.str()));
+            return;
+        }
+        if (auto why = applyLobeOption(stmt, lobe)) diags_.error(why->loc, why->message);
     }
 
     void checkBsdf(const BsdfStmt& stmt, const BsdfStmt*& first) {

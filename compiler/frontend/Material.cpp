@@ -16,6 +16,15 @@ const CheckedInput* CheckedMaterial::findInput(std::string_view n) const {
     return nullptr;
 }
 
+const char* scatterName(Scatter scatter) {
+    switch (scatter) {
+        case Scatter::Reflect: return "reflect";
+        case Scatter::Transmit: return "transmit";
+        case Scatter::Both: return "both";
+    }
+    return "?";
+}
+
 ModelUse& CheckedLobe::use(ModelSlot slot) {
     switch (slot) {
         case ModelSlot::Ndf: return ndf;
@@ -61,6 +70,13 @@ std::string printBsdf(const CheckedMaterial& m, const BsdfNode& node) {
 }
 
 std::string compiledBackendsRefuse(const CheckedMaterial& m) {
+    // SPEC 11's lobes are evaluated and sampled by the reference
+    // (DielectricLobe.h); their lowering is not built yet.
+    for (const CheckedLobe& lobe : m.lobes)
+        if (lobe.wholeSphere())
+            return "material '" + m.name + "': lobe '" + lobe.name + "' scatters below the surface (" +
+                   (lobe.thin ? std::string("thin = true") : "scatter = " + std::string(scatterName(lobe.scatter))) +
+                   "), which only the reference evaluates so far; use --backend interp";
     // A layer's tables are baked when the kernel is compiled, from constant
     // parameters: a per-lane table (3D over the top's parameters) is not
     // built yet. Binding the input (`--set`) makes it constant.

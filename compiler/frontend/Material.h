@@ -43,6 +43,15 @@ struct ModelUse {
     bool has(int p) const { return p < int(args.size()) && args[p] != nullptr; }
 };
 
+// Where a lobe scatters (SPEC 11): `scatter = reflect | transmit | both`.
+enum class Scatter { Reflect, Transmit, Both };
+const char* scatterName(Scatter scatter);
+// Which way light travels through a refracting lobe (SPEC 11; the compile
+// option transport=): radiance (f of a path traced from the camera, pbrt-v4's
+// TransportMode::Radiance, with the 1/eta^2 of transmitted radiance) or
+// importance (its adjoint).
+enum class Transport { Radiance, Importance };
+
 // One lobe (SPEC 10): the five model uses of a one-lobe material. A lobe
 // with no ndf (ndf.model null) is a diffuse lobe: only `diffuse` is set, the
 // other uses are `none`.
@@ -51,12 +60,22 @@ struct CheckedLobe {
     std::string name;
     bool implicit = false;  // the model statements of a material without lobe blocks
     ModelUse ndf, masking, fresnel, energy, diffuse;
+    // SPEC 11: what the lobe scatters into, and whether it is a thin-walled
+    // sheet (the same interface on both sides). The locations are of the
+    // statements, or the lobe's where they are left out.
+    Scatter scatter = Scatter::Reflect;
+    bool thin = false;
+    SourceLoc scatterLoc, thinLoc;
 
     bool hasNdf() const { return ndf.model != nullptr; }
     // Multiple-scattering compensation from a tabulated albedo (kulla_conty).
     bool compensatesEnergy() const { return energy.model && energyEntry(*energy.model).compensates; }
     // Multiple scattering by a random walk on the microsurface (random_walk).
     bool walksMicrosurface() const { return energy.model && energyEntry(*energy.model).walks; }
+    // The lobe scatters over the whole sphere (both directions on either
+    // side; the dielectric lobe of SPEC 11) rather than as a BRDF above the
+    // surface: it transmits or is a thin sheet.
+    bool wholeSphere() const { return scatter != Scatter::Reflect || thin; }
     ModelUse& use(ModelSlot slot);
     const ModelUse& use(ModelSlot slot) const;
     // The slot of `use`, one of this lobe's own uses.

@@ -90,7 +90,7 @@ private:
 
     // statement := 'input' IDENT '=' expr [ 'in' expr '..' expr ] ';'
     //            | 'let' IDENT '=' expr ';'
-    //            | model-statement | lobe | bsdf
+    //            | model-statement | lobe-option | lobe | bsdf
     Stmt statement() {
         if (at(TokenKind::KwInput)) {
             advance();
@@ -121,7 +121,9 @@ private:
         }
         if (at(TokenKind::Identifier) && peek().text == "lobe" && peek(1).kind == TokenKind::Identifier) return lobe();
         if (at(TokenKind::Identifier) && peek().text == "bsdf" && peek(1).kind == TokenKind::Equal) return bsdf();
-        if (at(TokenKind::Identifier)) return modelStatement("input, let, lobe, bsdf, ndf, masking, fresnel, energy or diffuse");
+        if (at(TokenKind::Identifier) && isLobeOption(peek().text)) return lobeOption();
+        if (at(TokenKind::Identifier))
+            return modelStatement("input, let, lobe, bsdf, ndf, masking, fresnel, energy, diffuse, scatter or thin");
         report(peek(), fmt::format("expected a statement, found {}", describe(peek())));
         throw SyntaxError{};
     }
@@ -144,7 +146,22 @@ private:
         return stmt;
     }
 
-    // lobe := 'lobe' IDENT '{' model-statement* '}'
+    // lobe-option := ('scatter' | 'thin') '=' IDENT ';'
+    LobeOptionStmt lobeOption() {
+        LobeOptionStmt stmt;
+        const Token& head = advance();
+        stmt.loc = head.loc;
+        stmt.option = head.text;
+        expect(TokenKind::Equal, fmt::format("'=' after '{}'", stmt.option));
+        const Token& value = expect(TokenKind::Identifier, fmt::format("a word after '{} =' (e.g. {})", stmt.option,
+                                                                        stmt.option == "thin" ? "true" : "both"));
+        stmt.valueLoc = value.loc;
+        stmt.value = value.text;
+        expect(TokenKind::Semicolon, fmt::format("';' after the {} statement", stmt.option));
+        return stmt;
+    }
+
+    // lobe := 'lobe' IDENT '{' (model-statement | lobe-option)* '}'
     // A syntax error inside the block skips that statement only (the rest
     // of the lobe still parses); the material is marked as having errors.
     LobeDecl lobe() {
@@ -167,7 +184,11 @@ private:
                                                describe(peek())));
                     throw SyntaxError{};
                 }
-                decl.statements.push_back(modelStatement("ndf, masking, fresnel, energy or diffuse inside a lobe"));
+                if (isLobeOption(peek().text))
+                    decl.options.push_back(lobeOption());
+                else
+                    decl.statements.push_back(
+                        modelStatement("ndf, masking, fresnel, energy, diffuse, scatter or thin inside a lobe"));
             } catch (SyntaxError&) {
                 lobeHadErrors_ = true;
                 synchronize();

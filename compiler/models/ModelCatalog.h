@@ -200,6 +200,14 @@ struct MaskingFormulas {
     // cosines (no 0/0 or 0 * Inf where they underflow together at grazing);
     // scale > 0, and for Smith forms g.oh > 0.
     virtual Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const = 0;
+    // For a pair on opposite sides of the surface (SPEC 11), with both
+    // directions mirrored above it (z -> |z|): scale G / ((n.wi)(n.wo)) of
+    // the transmission form. Only for entries with `transmission`.
+    virtual Real transmittedGOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g,
+                                         Real scale) const {
+        (void)r, (void)g, (void)scale;
+        return Real(-1);  // never called: the checker refuses transmission without the form
+    }
 };
 
 template <typename Real>
@@ -207,6 +215,16 @@ struct FresnelFormulas {
     virtual ~FresnelFormulas() = default;
     // F of channel ch at c = wi.h, given also s2 = 1 - c^2 (accurate near c = 1).
     virtual Real F(const ModelArgs<Real>& a, Real c, Real s2, int ch) const = 0;
+    // 1 - F, the share a refracting boundary transmits (SPEC 11); a model
+    // whose F nears 1 (grazing facets) forms it without that cancellation.
+    virtual Real transmittance(const ModelArgs<Real>& a, Real c, Real s2, int ch) const { return 1 - F(a, c, s2, ch); }
+    // The same for a refracted pair, given also the far side's cosine ct
+    // (> 0): near the critical angle ct from 1 - c^2 cancels, and the pair
+    // knows it directly.
+    virtual Real pairTransmittance(const ModelArgs<Real>& a, Real c, Real ct, int ch) const {
+        (void)ct;
+        return transmittance(a, c, (1 - c) * (1 + c), ch);
+    }
     // F_avg = 2 Int_0^1 F(mu) mu dmu in closed form, if the model has one.
     virtual std::optional<Real> closedFormAverage(const ModelArgs<Real>& a, int ch) const {
         (void)a, (void)ch;
@@ -329,6 +347,9 @@ struct MaskingEntry : ModelInfo {
     // The masking of the Smith microsurface with uncorrelated heights, whose
     // single scattering is order 1 of the random walk (random_walk needs it).
     bool heightCorrelated = false;
+    // Has a form for transmission (transmittedGOverCosines): the lobes of
+    // SPEC 11 that scatter below the surface need one.
+    bool transmission = false;
     FormulaSet<MaskingFormulas> formulas;
 };
 

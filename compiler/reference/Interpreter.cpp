@@ -3,6 +3,7 @@
 // any template that calls them (Builtins.h, <complex>); see QuadMath.h.
 #include "QuadMath.h"
 #include "Interpreter.h"
+#include "DielectricLobe.h"
 #include "WalkLobe.h"
 
 #include "Diagnostics.h"
@@ -228,6 +229,7 @@ template <typename Real>
 std::array<Real, 3> ResolvedMaterial<Real>::brdf(const Vec3<Real>& wi, const Vec3<Real>& wo,
                                                  const Vec3<Real>& sum) const {
     using std::exp; using std::sqrt;
+    if (wholeSphere()) return dielectricBsdf(*this, wi, wo, sum);  // DielectricLobe.h
     std::array<Real, 3> out{};
     Real ci = wi.z, co = wo.z;
     if (ci <= 0 || co <= 0) return out;
@@ -352,6 +354,9 @@ ResolvedBsdf<Real> Interpreter<Real>::resolveAll(const Real* slots) const {
         out.fresnel = &fresnelEntry(*lobe.fresnel.model);
         out.energy = &energyEntry(*lobe.energy.model);
         out.diffuse = &diffuseEntry(*lobe.diffuse.model);
+        out.scatter = lobe.scatter;
+        out.thin = lobe.thin;
+        out.transport = transport_;
         auto resolveArgs = [&](const ModelUse& use, ModelArgs<Real>& args) {
             if (!use.model) return;
             for (size_t p = 0; p < use.model->canonical.size(); ++p) {

@@ -45,6 +45,14 @@ struct ResolvedMaterial {
     std::shared_ptr<const EnergyTable> energyTable;
     Real energyAlpha = 1, ecAvg = 0;
     std::array<Real, 3> favg{};
+    // SPEC 11: where the lobe scatters, whether it is a thin sheet, and the
+    // transport of its transmission (DielectricLobe.h).
+    Scatter scatter = Scatter::Reflect;
+    bool thin = false;
+    Transport transport = Transport::Radiance;
+
+    // Scatters over the whole sphere (DielectricLobe.h) rather than as a BRDF.
+    bool wholeSphere() const { return scatter != Scatter::Reflect || thin; }
 
     // The specular lobe alone: no Fresnel term, no energy compensation, no
     // diffuse base (the F = 1 albedo of the physics checks).
@@ -74,7 +82,8 @@ struct ResolvedMaterial {
     // The same, given also sin^2 = 1 - cos^2 (accurate near cos = 1).
     Real fresnelAt(Real cosTheta, Real sin2Theta, int ch) const;
     // The BRDF (without the cosine factor), rgb; wi and wo must be unit
-    // vectors. Zero for directions below the horizon.
+    // vectors. Zero for directions below the horizon, except for a
+    // whole-sphere lobe (the BSDF of DielectricLobe.h).
     std::array<Real, 3> brdf(const Vec3<Real>& wi, const Vec3<Real>& wo) const;
     // The same with wi + wo given (eval() computes it more accurately than
     // the sum of the rounded unit vectors).
@@ -150,6 +159,9 @@ public:
     PdfResult<Real> pdf(const Real wi[3], const Real wo[3], const Real* slots) const;
 
     const CheckedMaterial& material() const { return material_; }
+    // The transport of refracting lobes (SPEC 11; radiance unless set).
+    void setTransport(Transport transport) { transport_ = transport; }
+    Transport transport() const { return transport_; }
 
     // The material resolved at its inputs' defaults, in double: what the
     // sampler estimates a combination's leaf probabilities from (LobeSampling.h).
@@ -160,6 +172,7 @@ public:
 private:
     const CheckedMaterial& material_;
     CheckedMaterial::Reads read_;  // what the models read: nothing else is evaluated
+    Transport transport_ = Transport::Radiance;
     std::vector<std::shared_ptr<EnergyTableSlot>> energy_;  // per lobe; kulla_conty lobes only
     struct ResolvedDefaults {
         std::once_flag once;

@@ -3,6 +3,7 @@
 #include "QuadMath.h"
 #include "Sampling.h"
 
+#include "DielectricLobe.h"
 #include "KullaContyEval.h"
 #include "LayerAlbedo.h"
 #include "WalkLobe.h"
@@ -133,6 +134,7 @@ Real specularPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Ve
 
 template <typename Real>
 Real brdfPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo, SamplingTechnique technique) {
+    if (r.wholeSphere()) return dielectricLobePdf(r, wi, wo);  // DielectricLobe.h
     if (!(wo.z > 0)) return 0;
     if (r.energy->walks && technique == SamplingTechnique::Material) return walkLobePdf(r, wi, wo);
     return mixturePdf(r, technique, specularProbability(r, wo, technique), specularPdf(r, wi, wo, technique),
@@ -144,6 +146,7 @@ SampleResult<Real> sampleBrdf(const ResolvedMaterial<Real>& r, const Vec3<Real>&
                               SamplingTechnique technique) {
     using std::cos; using std::sin; using std::sqrt;
     if (r.energy->walks && technique == SamplingTechnique::Material) return sampleWalkLobe(r, wo, u);  // WalkLobe.h
+    if (r.wholeSphere()) return sampleDielectricLobe(r, wo, u);                                       // DielectricLobe.h
     SampleResult<Real> out;
     if (!(wo.z > 0)) return out;
     Real pSpec = specularProbability(r, wo, technique);

@@ -10,7 +10,8 @@ compile(path=None, text=None, material=None, **options) takes the options of
 SPEC 4 as keywords: backend ("simd", "scalar", "interp"), math ("exact",
 "fast"), tolerance, width (4, 8, 16), cache ("on", "off", "memory"),
 codegen ("tiered", "quick", "optimized"), float_first (bool), assume
-("unit", "none") and set={"name": value} (rgb values as 3-tuples). A
+("unit", "none"), transport ("radiance", "importance": the eta^2 convention of
+refracting lobes) and set={"name": value} (rgb values as 3-tuples). A
 mistake in the material raises MaterialError (file, line, column, message);
 a bad option raises ValueError or TypeError.
 
@@ -74,7 +75,7 @@ Kernel.inputs = property(_inputs, doc="The material's inputs (Input tuples), in 
 
 # Options whose values are words; the library checks the words
 # (CompileOptions::parse), so that its choices are written down once.
-_WORD_OPTIONS = ("backend", "math", "cache", "codegen", "assume")
+_WORD_OPTIONS = ("backend", "math", "cache", "codegen", "assume", "transport")
 
 
 def _number(name, value):

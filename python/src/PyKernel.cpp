@@ -73,7 +73,10 @@ struct PyKernel::InputColumns {
 
 PyKernel::PyKernel(std::shared_ptr<Compiler> compiler, std::unique_ptr<Kernel> kernel, std::string options)
     : compiler_(std::move(compiler)), kernel_(std::move(kernel)), options_(std::move(options)) {
-    if (kernel_->backend() == Backend::Interp) interp_.emplace(kernel_->material(), kernel_->lobeEnergyTables());
+    if (kernel_->backend() == Backend::Interp) {
+        interp_.emplace(kernel_->material(), kernel_->lobeEnergyTables());
+        interp_->setTransport(kernel_->transport());
+    }
 }
 
 template <typename T>

@@ -92,3 +92,24 @@ def test_sample_is_consistent_with_pdf_and_eval(rng):
     assert np.allclose(k.pdf(wi[ok], wo[ok]), pdf[ok], rtol=1e-9)
     f = k.eval(wi[ok], wo[ok])
     assert np.allclose(weight[ok], f * wi[ok, 2:3] / pdf[ok, None], rtol=1e-9)
+
+
+def test_a_refracting_lobe_through_the_reference():
+    # SPEC 11: backend="interp" evaluates and samples a rough dielectric over
+    # the whole sphere; transport="importance" drops the 1/eta^2 of radiance.
+    text = ("material glass { ndf = ggx(0.3); masking = smith_height_correlated; "
+            "fresnel = dielectric(1.5); scatter = both; }\n")
+    radiance = facet.compile(text=text, backend="interp")
+    importance = facet.compile(text=text, backend="interp", transport="importance")
+    assert importance.options["canonical"].endswith("transport=importance")
+    wi = np.array([-0.2, -0.1, -0.974679]) / np.linalg.norm([-0.2, -0.1, -0.974679])
+    wo = np.array([0.4, 0.1, 0.910494]) / np.linalg.norm([0.4, 0.1, 0.910494])
+    r, i = radiance.eval(wi, wo)[0], importance.eval(wi, wo)[0]
+    assert r > 0 and i == pytest.approx(r * 1.5 ** 2, rel=1e-12)
+    u = np.random.default_rng(3).random((4000, 3))
+    s_wi, pdf, weight = radiance.sample(np.tile(wo, (4000, 1)), u)
+    assert (s_wi[:, 2] < 0).mean() > 0.8  # glass at 24 degrees transmits most of the light
+    with pytest.raises(facet.MaterialError, match="scatters below the surface"):
+        facet.compile(text=text, backend="simd")
+    with pytest.raises(ValueError, match="transport 'photons' is not radiance or importance"):
+        facet.compile(text=text, backend="interp", transport="photons")

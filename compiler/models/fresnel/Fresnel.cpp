@@ -66,6 +66,24 @@ struct DielectricFresnel final : FresnelFormulas<Real> {
         Real rp = e * (n2 * (c * c) - s2) / sq(n2 * c + g);
         return (rs * rs + rp * rp) / 2;
     }
+    // 1 - rs^2 = 4 c g / (c + g)^2 and 1 - rp^2 = 4 eta^2 c g / (eta^2 c + g)^2:
+    // T = 2 c g (1 / (c + g)^2 + eta^2 / (eta^2 c + g)^2), every term
+    // positive, so T keeps its relative precision where F -> 1 (grazing).
+    Real transmittance(const ModelArgs<Real>& a, Real c, Real s2, int ch) const override {
+        using std::abs; using std::sqrt;
+        Real n = a.channel(kEta, ch);
+        Real e = (n - 1) * (n + 1);
+        Real g2 = n * n + s2 < abs(e) + c * c ? n * n - s2 : e + c * c;
+        if (g2 <= 0 || c <= 0) return 0;
+        Real g = sqrt(g2), n2 = n * n;
+        return 2 * c * g * (1 / sq(c + g) + n2 / sq(n2 * c + g));
+    }
+    // g = eta cos(theta_t) from the refracted direction itself.
+    Real pairTransmittance(const ModelArgs<Real>& a, Real c, Real ct, int ch) const override {
+        Real n = a.channel(kEta, ch), n2 = n * n, g = n * ct;
+        if (c <= 0 || !(g > 0)) return 0;
+        return 2 * c * g * (1 / sq(c + g) + n2 / sq(n2 * c + g));
+    }
 };
 
 template <typename Real>

@@ -49,7 +49,28 @@ struct SeparableSmith final : MaskingFormulas<Real> {
     Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const override {
         return scale / (g.wi.z + r.cosLambda(g.wi)) / (g.wo.z + r.cosLambda(g.wo));
     }
+    // Uncorrelated heights: the two sides' masking are independent either way.
+    Real transmittedGOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g,
+                                 Real scale) const override {
+        return GOverCosines(r, g, scale);
+    }
 };
+
+// Heitz 2014, section 6 (transmission): a facet at height h (CDF c) is seen
+// from above with probability c^Lambda(wi) and from below with (1 -
+// c)^Lambda(wo); over the heights, G = B(1 + Lambda(wi), 1 + Lambda(wo)), the
+// Beta function (not the reflection form 1 / (1 + Li + Lo), which pbrt-v4
+// reuses for transmission). Formed in logarithms: at grazing Lambda grows
+// like 1/(n.w) and G like (n.w)^(1 + Lo), both far below the range of a
+// product of the factors.
+template <typename Real>
+Real heightCorrelatedTransmission(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) {
+    using std::exp; using std::isinf; using std::lgamma; using std::log;
+    Real li = r.lambda(g.wi), lo = r.lambda(g.wo);
+    if (isinf(li) || isinf(lo)) return 0;  // a grazing direction (n.w underflowed in Lambda = (n.w Lambda) / n.w)
+    Real logG = lgamma(1 + li) + lgamma(1 + lo) - lgamma(2 + li + lo);
+    return scale * exp(logG - log(g.wi.z) - log(g.wo.z));
+}
 
 template <typename Real>
 struct HeightCorrelatedSmith final : MaskingFormulas<Real> {
@@ -61,6 +82,10 @@ struct HeightCorrelatedSmith final : MaskingFormulas<Real> {
     Real GOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g, Real scale) const override {
         auto [ci, co, up] = scaledCosines(g);
         return scale / (ci * co / up + co * r.cosLambda(g.wi) + ci * r.cosLambda(g.wo)) * up;
+    }
+    Real transmittedGOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g,
+                                 Real scale) const override {
+        return heightCorrelatedTransmission(r, g, scale);
     }
 };
 
@@ -81,6 +106,12 @@ struct DirectionCorrelatedSmith final : MaskingFormulas<Real> {
         Real w = azimuthWeight(g);
         return w * scale / ai / ao + (1 - w) * (scale / max(ai * co, ao * ci) * up);
     }
+    // Directions on opposite sides see different sides of the surface: no
+    // directional correlation is left, and the form is the separable one.
+    Real transmittedGOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g,
+                                 Real scale) const override {
+        return scale / (g.wi.z + r.cosLambda(g.wi)) / (g.wo.z + r.cosLambda(g.wo));
+    }
 };
 
 template <typename Real>
@@ -96,11 +127,17 @@ struct HeightDirectionCorrelatedSmith final : MaskingFormulas<Real> {
         Real li = co * r.cosLambda(g.wi), lo = ci * r.cosLambda(g.wo);  // ci co Li, ci co Lo (times up)
         return scale / (ci * co / up + max(li, lo) + azimuthWeight(g) * min(li, lo)) * up;
     }
+    // As for direction-correlated: across the surface only the heights correlate.
+    Real transmittedGOverCosines(const ResolvedMaterial<Real>& r, const MaskingGeometry<Real>& g,
+                                 Real scale) const override {
+        return heightCorrelatedTransmission(r, g, scale);
+    }
 };
 
 MaskingEntry smith(int id, const char* name, const char* summary) {
     MaskingEntry e = makeEntry<MaskingEntry>(ModelSlot::Masking, id, name, summary);
     e.smith = true;
+    e.transmission = true;
     e.examples = {{name, "", name}};
     return e;
 }

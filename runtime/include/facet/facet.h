@@ -98,6 +98,14 @@ int64_t facet_eval_batch_status(const facet_kernel* k, int64_t n, const float* c
      on the microsurface; weight = f (n.wi) / p for the walk's own density
      p, which has no closed form, and pdf is a density for MIS only; its
      eval is a Monte Carlo estimate seeded by the directions.
+   - a lobe that scatters below the surface (scatter = transmit | both,
+     thin = true; backend=interp only so far): wo and wi may lie on either
+     side (the inside is -z); wi is a reflection on wo's side or a
+     refraction across, weight = f |n.wi| / pdf; a draw that leaves no
+     direction (a reflection past the horizon, no refraction past the
+     critical angle with scatter = transmit) is no sample (wi = 0, pdf = 0,
+     weight = 0, a valid lane). eval follows the transport option
+     (radiance: f carries 1/eta^2 of the transmitted radiance).
    facet_sample returns 1 for an invalid lane, else 0 (NULL k, wo or u count
    as invalid; NULL outputs are not written). */
 int facet_sample(const facet_kernel* k, const float wo[3], const float u[3], const float* inputs, float wi_out[3],
