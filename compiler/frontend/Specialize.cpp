@@ -207,6 +207,10 @@ std::string printMaterial(const CheckedMaterial& m) {
             }
             s += ";\n";
         }
+        // SPEC 11's options where they differ from the default (a lobe that
+        // only reflects prints as before).
+        if (lobe.scatter != Scatter::Reflect) s += fmt::format("{}scatter = {};\n", indent, scatterName(lobe.scatter));
+        if (lobe.thin) s += fmt::format("{}thin = true;\n", indent);
         if (!lobe.implicit) s += "    }\n";
     }
     if (!m.lobes.empty() && !m.lobes.front().implicit) s += fmt::format("    bsdf = {};\n", printBsdf(m, m.bsdfRoot()));

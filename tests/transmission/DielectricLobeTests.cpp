@@ -23,6 +23,7 @@
 #include "Kernel.h"
 #include "MicrosurfaceWalk.h"
 #include "SamplingCheck.h"
+#include "Specialize.h"
 #include "Sampling.h"
 
 #include <doctest/doctest.h>
@@ -585,6 +586,22 @@ TEST_CASE("the APIs: backend=interp evaluates and samples it, transport=importan
     facet::DiagnosticEngine refused;
     CHECK(compiler.compileText(text, "glass.mat", "", simd, refused) == nullptr);
     CHECK(refused.str().find("lobe 't' scatters below the surface (scatter = both)") != std::string::npos);
+}
+
+TEST_CASE("the printed material (ir --stages, the cache key) keeps scatter and thin, and reads back the same") {
+    Reference sheet("material t { ndf = ggx(0.4); masking = smith_height_correlated; "
+                    "fresnel = dielectric(1.45); thin = true; scatter = transmit; }\n");
+    std::string printed = facet::printMaterial(*sheet.program.find("t"));
+    CHECK(printed.find("    scatter = transmit;\n") != std::string::npos);
+    CHECK(printed.find("    thin = true;\n") != std::string::npos);
+    Reference again(printed);
+    std::mt19937_64 rng(43);
+    for (int k = 0; k < 50; ++k) {
+        V3 wi = uniformSphere(rng), wo = uniformSphere(rng);
+        CHECK(again.f(wi, wo) == sheet.f(wi, wo));
+    }
+    Reference reflecting(glass("ggx(0.3)", 1.5, "smith_height_correlated", "reflect"));
+    CHECK(facet::printMaterial(*reflecting.program.find("t")).find("scatter") == std::string::npos);
 }
 
 }  // TEST_SUITE
