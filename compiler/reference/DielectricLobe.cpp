@@ -132,6 +132,19 @@ bool keeps(const ResolvedMaterial<Real>& r, bool reflected) {
     return reflected ? r.scatter != Scatter::Transmit : r.scatter != Scatter::Reflect;
 }
 
+// The sheet's unnormalized probabilities of reflecting and transmitting at
+// cos c: R' and T' summed over the channels, 0 for what `scatter` drops.
+template <typename Real>
+std::array<Real, 2> sheetChoice(const ResolvedMaterial<Real>& r, Real c) {
+    Real pr = 0, pt = 0;
+    for (int ch = 0; ch < 3; ++ch) {
+        std::array<Real, 2> w = sheetWeights(r, c, ch);
+        pr += keeps(r, true) ? w[0] : Real(0);
+        pt += keeps(r, false) ? w[1] : Real(0);
+    }
+    return {pr, pt};
+}
+
 template <typename Real>
 std::array<Real, 3> thinSheetBsdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo,
                                   const Vec3<Real>& sum) {
@@ -221,12 +234,7 @@ Real dielectricLobePdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, co
         if (!(len > 0)) return 0;
         Vec3<Real> h{s.x / len, s.y / len, s.z / len};
         Real c = len / 2;
-        Real pr = 0, pt = 0;
-        for (int ch = 0; ch < 3; ++ch) {
-            std::array<Real, 2> w = sheetWeights(r, c, ch);
-            pr += keeps(r, true) ? w[0] : Real(0);
-            pt += keeps(r, false) ? w[1] : Real(0);
-        }
+        auto [pr, pt] = sheetChoice(r, c);
         if (!(pr + pt > 0)) return 0;
         return (reflected ? pr : pt) / (pr + pt) * facetPdf(r, o, h) / (4 * c);
     }
@@ -274,12 +282,7 @@ SampleResult<Real> sampleDielectricLobe(const ResolvedMaterial<Real>& r, const V
     bool reflected;
     Real pdf;
     if (r.thin) {
-        Real pr = 0, pt = 0;
-        for (int ch = 0; ch < 3; ++ch) {
-            std::array<Real, 2> w = sheetWeights(r, om, ch);
-            pr += keeps(r, true) ? w[0] : Real(0);
-            pt += keeps(r, false) ? w[1] : Real(0);
-        }
+        auto [pr, pt] = sheetChoice(r, om);
         if (!(pr + pt > 0)) return out;
         reflected = u[0] * (pr + pt) < pr;
         i = {2 * om * m.x - o.x, 2 * om * m.y - o.y, 2 * om * m.z - o.z};
