@@ -4,6 +4,7 @@
 #include "models/ModelCatalog.h"
 
 #include <fmt/format.h>
+#include <vector>
 
 namespace facet {
 
@@ -59,11 +60,17 @@ std::optional<ScatterRuleBroken> wholeSphereLobeUnsupported(const CheckedLobe& l
     const MaskingEntry& masking = maskingEntry(*lobe.masking.model);
     if (!masking.transmission) {
         const bool none = lobe.masking.model->name == std::string("none");
+        // The maskings with a transmission form, from the catalog: "a, b, c or d".
+        std::vector<std::string> forms;
+        for (const ModelInfo* m : catalogSlot(ModelSlot::Masking))
+            if (maskingEntry(*m).transmission) forms.push_back(m->name);
+        std::string list;
+        for (size_t k = 0; k < forms.size(); ++k)
+            list += (k == 0 ? "" : k + 1 == forms.size() ? " or " : ", ") + forms[k];
         return ScatterRuleBroken{none ? at : lobe.masking.loc,
-                                 fmt::format("'{}' needs a Smith masking (smith_separable, smith_height_correlated, "
-                                             "smith_direction_correlated or smith_height_direction_correlated): its "
-                                             "transmission form follows from the NDF's Lambda; {}",
-                                             what,
+                                 fmt::format("'{}' needs a Smith masking ({}): its transmission form follows from "
+                                             "the NDF's Lambda; {}",
+                                             what, list,
                                              none ? "the lobe has no masking statement"
                                                   : fmt::format("'{}' has none", lobe.masking.model->name))};
     }
