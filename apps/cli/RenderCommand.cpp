@@ -5,9 +5,12 @@
 //                [--sky gradient|constant|none] [--sky-radiance L] [--samples N]
 //                [--exposure EV] [--threads N] [--backend simd|scalar|interp]
 //                [--math exact|fast] [--set NAME=VALUE]...
-//       a lit sphere, shaded by the compiled kernel (SphereRender.h)
+//       a lit sphere, shaded by the compiled kernel (SphereRender.h); a
+//       material that scatters below its surface (--backend interp) is lit
+//       through it, from behind unless --light says otherwise
 //   facet render FILE --plot lobe -o lobe.png [--theta-i A,B,...] [--size W]
 //       the BRDF in the plane of incidence, one polar curve per theta_i
+//       (the whole circle, theta_i up to 180, for a lobe that scatters below)
 //   facet render FILE --plot ndf -o ndf.png [--alpha A,B,...] [--size W]
 //       D(theta_m) of the material's NDF at several roughnesses
 //   facet render --plot ndf --compare ggx,beckmann,student_t:gamma=3 [--alpha A,...] -o ndf.png
@@ -104,6 +107,7 @@ struct RenderArgs {
     std::vector<double> thetaI, alphas;
     std::optional<int> size;
     std::string wo;                // --plot pdf: the view direction
+    bool lightGiven = false;       // --light was given
     long samples = 1000000;        // --plot pdf: -n (--plot walk: walks per angle, when given)
     bool samplesGiven = false;
     uint64_t seed = 1;             // --plot pdf: --seed
@@ -126,7 +130,10 @@ RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
                 throw RenderUsageError{fmt::format("--plot expects lobe, ndf, pdf or walk, got '{}'", r.plot)};
         } else if (a == "--compare") r.compare = value();
         else if (a == "--size") r.size = parseInteger(a, value(), 8, 16384);
-        else if (a == "--light") std::tie(r.scene.lightThetaDeg, r.scene.lightPhiDeg) = parseAngles(a, value());
+        else if (a == "--light") {
+            std::tie(r.scene.lightThetaDeg, r.scene.lightPhiDeg) = parseAngles(a, value());
+            r.lightGiven = true;
+        }
         else if (a == "--view") std::tie(r.scene.viewThetaDeg, r.scene.viewPhiDeg) = parseAngles(a, value());
         else if (a == "--irradiance") r.scene.lightIrradiance = parseOneNumber(a, value());
         else if (a == "--sky") {
@@ -199,12 +206,26 @@ std::unique_ptr<Kernel> compileForRender(Compiler& compiler, const RenderArgs& r
     return kernel;
 }
 
+// The default light of a material that scatters below its surface: behind
+// the sphere, up and to the left, so that the rim shows what comes through.
+constexpr double kLightBehindThetaDeg = 135;
+
 int renderSphereCommand(const RenderArgs& r) {
     Compiler compiler;
     int exitCode = kExitOk;
     std::unique_ptr<Kernel> kernel = compileForRender(compiler, r, exitCode);
     if (!kernel) return exitCode;
-    preview::SphereImage image = preview::renderSphere(*kernel, r.scene);
+    preview::SphereScene scene = r.scene;
+    const CheckedMaterial& m = kernel->material();
+    if (!m.combinesLobes() && m.singleLobe().wholeSphere()) {
+        // What comes through: the light behind the sphere unless placed.
+        scene.lightThrough = true;
+        if (!r.lightGiven) scene.lightThetaDeg = kLightBehindThetaDeg;
+        std::printf("material %s scatters below its surface: the sphere is that one surface, lit through it from "
+                    "(theta %g, phi %g)\n",
+                    m.name.c_str(), scene.lightThetaDeg, scene.lightPhiDeg);
+    }
+    preview::SphereImage image = preview::renderSphere(*kernel, scene);
     const preview::RenderStats& s = image.stats;
     std::printf("material %s: %s %s kernel (%s, %d lanes), compiled in %.1f ms (%s)\n", kernel->material().name.c_str(),
                 backendName(kernel->backend()), kernel->variant().c_str(), r.math.c_str(), kernel->width(),
@@ -216,7 +237,7 @@ int renderSphereCommand(const RenderArgs& r) {
                 "sampler %s)\n",
                 r.scene.size, r.scene.size, (long long)s.pixels, skySamples, lanes / 1e6, s.seconds, s.threads,
                 lanes / 1e6 / std::max(s.seconds, 1e-9), s.kernelSeconds, kernel->samplerTier().c_str());
-    if (std::string err = preview::writeSphereImage(image, r.scene, r.out); !err.empty()) {
+    if (std::string err = preview::writeSphereImage(image, scene, r.out); !err.empty()) {
         std::fprintf(stderr, "facet: render: %s\n", err.c_str());
         return kExitFailed;
     }
@@ -244,9 +265,14 @@ int lobePlotCommand(const RenderArgs& r) {
     std::unique_ptr<Kernel> kernel = compileForRender(compiler, r, exitCode);
     if (!kernel) return exitCode;
     preview::LobePlotOptions opt;
+    const CheckedMaterial& m = kernel->material();
+    opt.wholeSphere = !m.combinesLobes() && m.singleLobe().wholeSphere();
+    if (opt.wholeSphere) opt.incidentDegrees = {0, 40, 70, 140};  // 140: light arriving from inside
     if (!r.thetaI.empty()) opt.incidentDegrees = r.thetaI;
-    if (r.size) opt.width = *r.size, opt.height = *r.size * 5 / 8;
-    opt.title = fmt::format("{}: f cos(theta_o) in the plane of incidence", kernel->material().name);
+    if (r.size) opt.width = *r.size, opt.height = *r.size * (opt.wholeSphere ? 9 : 5) / 8;
+    if (opt.wholeSphere && !r.size) opt.height = opt.width * 9 / 8;
+    opt.title = fmt::format("{}: f |cos(theta_o)| in the plane of incidence{}", m.name,
+                            opt.wholeSphere ? ", both sides of the surface" : "");
     preview::LobePlotResult result = preview::writeLobePlot(*kernel, opt, r.out);
     if (!result.error.empty()) {
         std::fprintf(stderr, "facet: render: %s\n", result.error.c_str());
@@ -379,6 +405,7 @@ int pdfPlotCommand(const RenderArgs& r) {
     NamedMaterial named = loadRenderMaterial(r);
     const CheckedMaterial* m = named.material;
     if (!m) return kExitMaterialError;
+    if (std::string why = viewSideProblem("--wo", r.wo, wo, *m); !why.empty()) throw RenderUsageError{why};
     std::unique_ptr<Interpreter<double>> sampler = referenceInterpreter(*m);
 
     SphereGrid grid = SphereGrid::equalArea(kPdfPlotRows, kPdfPlotColumns);

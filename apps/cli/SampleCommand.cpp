@@ -13,7 +13,7 @@
 // gives the same samples on every platform. With
 // --out, a summary goes to standard output: the mean weight per channel
 // (an estimate of the directional albedo) and how many samples fell below
-// the horizon.
+// the horizon (a refracting lobe's transmitted ones; wo may be below it too).
 #include "Commands.h"
 
 #include "Checker.h"
@@ -37,7 +37,8 @@ namespace {
 constexpr const char* kSampleUsage =
     "usage: facet sample FILE --wo X,Y,Z [-n N] [--out OUT.csv] [--seed S] [--material NAME]\n"
     "                     [--backend interp|scalar|simd] [--math exact|fast]\n"
-    "  wo: the unit view direction, pointing away from the surface (n = +z)\n";
+    "  wo: the unit view direction, pointing away from the surface (n = +z); on either side of it\n"
+    "      for a lobe that scatters below the surface (scatter = transmit | both, thin = true)\n";
 constexpr long kMaxSamples = 100000000;
 constexpr long kSampleChunk = 65536;
 
@@ -95,6 +96,7 @@ int runSample(const std::vector<std::string>& args) {
     if (named.fileErrors) return kExitMaterialError;
     if (!named.material) throw SampleUsageError{named.missing};
     const CheckedMaterial* m = named.material;
+    if (std::string why = viewSideProblem("--wo", wo, view, *m); !why.empty()) throw SampleUsageError{why};
     SampleUniforms uniforms(seed);
     auto uniform = [&] { return uniforms.next(); };
     std::array<double, 3> sum{};

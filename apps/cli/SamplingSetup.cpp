@@ -26,7 +26,17 @@ std::string parseViewDirection(const std::string& option, const std::string& tex
     if (!(std::abs(len - 1) <= kUnitTolerance))
         return fmt::format("{} {} has length {:.6g}; it must be a unit vector (within {:g})", option, text, len,
                            kUnitTolerance);
-    if (!(view[2] > 0))
+    return "";
+}
+
+std::string viewSideProblem(const std::string& option, const std::string& text, const std::array<double, 3>& view,
+                            const CheckedMaterial& material) {
+    const bool eitherSide = !material.combinesLobes() && material.singleLobe().wholeSphere();
+    if (eitherSide && view[2] == 0)
+        return fmt::format("{} {} lies in the surface (z = 0): material '{}' scatters on both sides of it, and wo "
+                           "must be on one of them",
+                           option, text, material.name);
+    if (!eitherSide && !(view[2] > 0))
         return fmt::format("{} {} points into the surface (z <= 0); wo points away from it, towards the viewer "
                            "(n = +z)",
                            option, text);

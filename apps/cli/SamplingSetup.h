@@ -14,9 +14,14 @@
 namespace facet {
 
 // Parses "X,Y,Z" (three finite numbers forming a unit vector within
-// kUnitTolerance, pointing away from the surface: z > 0) into `view`.
-// Returns "" or the reason, naming the option `option`.
+// kUnitTolerance) into `view`. Returns "" or the reason, naming the option
+// `option`.
 std::string parseViewDirection(const std::string& option, const std::string& text, std::array<double, 3>& view);
+// Whether `view` is on a side of the surface `material` is seen from: above
+// (z > 0), or either side (z != 0) for a lobe that scatters below the
+// surface (SPEC 11). Returns "" or the reason.
+std::string viewSideProblem(const std::string& option, const std::string& text, const std::array<double, 3>& view,
+                            const CheckedMaterial& material);
 
 // The uniform numbers of `facet sample` and `facet render --plot pdf`: a
 // 64-bit Mersenne Twister seeded with `seed`, 53 bits per number, in [0, 1),

@@ -63,6 +63,10 @@ Stroke curveStroke(size_t i, double fontSize) {
 }
 
 double thetaAt(int k) { return -90.0 + 180.0 * k / (kSamples - 1); }
+// The lobe plot over the whole circle (a lobe that scatters below the
+// surface): theta_o in [-180, 180], twice the samples for the same step.
+constexpr int kCircleSamples = 2 * kSamples - 1;
+double circleThetaAt(int k) { return -180.0 + 360.0 * k / (kCircleSamples - 1); }
 
 // The next, smaller font size for a layout that did not fit; below ~6
 // pixels text is illegible and the plot is better drawn without.
@@ -82,7 +86,8 @@ std::string degrees(const PlotCanvas& canvas, const std::string& number) {
 
 struct LobeCurve {
     double thetaI = 0;
-    std::vector<double> value;  // luminance(f) cos(theta_o) per sample
+    std::vector<double> theta;  // signed theta_o of each sample, degrees
+    std::vector<double> value;  // luminance(f) |cos(theta_o)| per sample
     double peak = 0;
     int peakIndex = 0;
 };
@@ -92,21 +97,26 @@ std::string checkLobeOptions(const LobePlotOptions& o, const std::string& path) 
     if (std::string e = checkPlotSize(o.width, o.height); !e.empty()) return e;
     if (o.incidentDegrees.empty()) return "the lobe plot needs at least one incident angle";
     if (o.incidentDegrees.size() > kMaxLobes) return fmt::format("the lobe plot draws at most {} incident angles", kMaxLobes);
+    const double top = o.wholeSphere ? 180 : 90;
     for (double t : o.incidentDegrees)
-        if (!(t >= 0 && t < 90)) return fmt::format("incident angle theta_i = {:g} is outside [0, 90) degrees", t);
+        if (!(t >= 0 && t < top) || (o.wholeSphere && t == 90))
+            return fmt::format("incident angle theta_i = {:g} is outside [0, {:g}) degrees{}", t, top,
+                               o.wholeSphere ? " or in the surface (90)" : "");
     return "";
 }
 
 // One curve: the kernel in the plane of incidence at default inputs.
-LobeCurve evaluateLobe(const Kernel& kernel, double thetaI, int64_t& invalid) {
+LobeCurve evaluateLobe(const Kernel& kernel, double thetaI, bool wholeSphere, int64_t& invalid) {
     LobeCurve c;
     c.thetaI = thetaI;
+    const int samples = wholeSphere ? kCircleSamples : kSamples;
+    for (int k = 0; k < samples; ++k) c.theta.push_back(wholeSphere ? circleThetaAt(k) : thetaAt(k));
     std::vector<float> dir[6], rgb[3];
-    for (auto& d : dir) d.resize(kSamples);
-    for (auto& ch : rgb) ch.assign(kSamples, 0.0f);
+    for (auto& d : dir) d.resize(samples);
+    for (auto& ch : rgb) ch.assign(samples, 0.0f);
     float sinI = float(std::sin(thetaI * kDeg)), cosI = float(std::cos(thetaI * kDeg));
-    for (int k = 0; k < kSamples; ++k) {
-        double to = thetaAt(k) * kDeg;
+    for (int k = 0; k < samples; ++k) {
+        double to = c.theta[k] * kDeg;
         dir[0][k] = -sinI;
         dir[1][k] = 0;
         dir[2][k] = cosI;
@@ -117,11 +127,11 @@ LobeCurve evaluateLobe(const Kernel& kernel, double thetaI, int64_t& invalid) {
     const float* wi[3] = {dir[0].data(), dir[1].data(), dir[2].data()};
     const float* wo[3] = {dir[3].data(), dir[4].data(), dir[5].data()};
     float* out[3] = {rgb[0].data(), rgb[1].data(), rgb[2].data()};
-    invalid += kernel.evalBatch(kSamples, wi, wo, nullptr, out);
+    invalid += kernel.evalBatch(samples, wi, wo, nullptr, out);
 
-    c.value.resize(kSamples);
-    for (int k = 0; k < kSamples; ++k) {
-        double v = luminance(rgb[0][k], rgb[1][k], rgb[2][k]) * std::cos(thetaAt(k) * kDeg);
+    c.value.resize(samples);
+    for (int k = 0; k < samples; ++k) {
+        double v = luminance(rgb[0][k], rgb[1][k], rgb[2][k]) * std::abs(std::cos(c.theta[k] * kDeg));
         // The kernel never returns NaN, Inf or negatives (SPEC 2); if it
         // did, the picture shows a gap rather than a scale ruined by it.
         c.value[k] = std::isfinite(v) && v > 0 ? v : 0;
@@ -134,16 +144,17 @@ LobeCurve evaluateLobe(const Kernel& kernel, double thetaI, int64_t& invalid) {
 }
 
 // What the radius means, under the legend.
-constexpr const char* kLobeNote = "radius: luminance(f) cos(theta_o) / peak (f in 1/sr); dashed: incident direction";
+constexpr const char* kLobeNote = "radius: luminance(f) |cos(theta_o)| / peak (f in 1/sr); dashed: incident direction";
 
 std::string lobeLegendText(const PlotCanvas& canvas, const LobeCurve& c) {
     std::string head = "theta_i = " + degrees(canvas, fmt::format("{:g}", c.thetaI));
     if (c.peak <= 0) return head + ": zero";
-    return head + fmt::format(": peak {:.3g} at theta_o = ", c.peak) + degrees(canvas, fmt::format("{:g}", thetaAt(c.peakIndex)));
+    return head + fmt::format(": peak {:.3g} at theta_o = ", c.peak) + degrees(canvas, fmt::format("{:g}", c.theta[size_t(c.peakIndex)]));
 }
 
 // Returns whether the labels fitted (false: drawn without text).
-bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, const std::string& title) {
+// `whole`: the full circle (below the surface too), else the upper half.
+bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, const std::string& title, bool whole) {
     const double W = canvas.width(), H = canvas.height();
     double fs = plotFontSize(canvas.width(), canvas.height());
     bool text = canvas.hasFont();
@@ -169,15 +180,16 @@ bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, cons
         cols = text ? std::clamp<size_t>(size_t(fitting), 1, curves.size()) : 1;
         rows = text ? (curves.size() + cols - 1) / cols : 0;
         legendRowH = 1.6 * fs;
-        double belowDisk = radiusLabelH + rows * legendRowH + noteH;
-        R = std::min((W - 2 * margin - 2 * angleLabelW) / 2, H - 2 * margin - titleH - angleLabelH - belowDisk);
+        double belowDisk = (whole ? (angleLabelH + radiusLabelH) : radiusLabelH) + rows * legendRowH + noteH;
+        R = std::min((W - 2 * margin - 2 * angleLabelW) / 2,
+                     (H - 2 * margin - titleH - angleLabelH - belowDisk) / (whole ? 2 : 1));
         double widest = std::max(entryW, canvas.textWidth(kLobeNote, 0.8 * fs));
         if (!text || (R >= 4 * fs && widest <= W - 2 * margin)) break;
         shrinkOrDropText(fs, text);
     }
     R = std::max(R, 4.0);
-    double belowDisk = radiusLabelH + rows * legendRowH + noteH;
-    double contentH = titleH + angleLabelH + R + belowDisk;
+    double belowDisk = (whole ? (angleLabelH + radiusLabelH) : radiusLabelH) + rows * legendRowH + noteH;
+    double contentH = titleH + angleLabelH + (whole ? 2 : 1) * R + belowDisk;
     double top = margin + std::max(0.0, (H - 2 * margin - contentH) / 2);  // centre vertically
     Point centre{W / 2, top + titleH + angleLabelH + R};
     auto polar = [&](double thetaDeg, double r) {
@@ -187,10 +199,10 @@ bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, cons
     if (text && !title.empty()) canvas.text({W / 2, top}, title, 1.25 * fs, kInk, HAlign::Center, VAlign::Top);
 
     // Grid: radial lines every 15 degrees, circles at quarter steps of the peak.
-    for (int a = -75; a <= 75; a += 15)
-        canvas.line(centre, polar(a, 1), {a % 30 == 0 ? kGrid : kGridMinor, 1});
+    for (int a = whole ? -165 : -75; a <= (whole ? 180 : 75); a += 15)
+        if (std::abs(a) != 90) canvas.line(centre, polar(a, 1), {a % 30 == 0 ? kGrid : kGridMinor, 1});
     for (int q = 1; q <= 4; ++q)
-        canvas.arc(centre, R * q / 4, 0, kPi, {q == 4 ? kMuted : kGrid, q == 4 ? 1.2 : 1});
+        canvas.arc(centre, R * q / 4, 0, whole ? 2 * kPi : kPi, {q == 4 ? kMuted : kGrid, q == 4 ? 1.2 : 1});
     // The surface, a little wider than the disk.
     double overhang = 0.25 * margin + 2;
     canvas.line({centre.x - R - overhang, centre.y}, {centre.x + R + overhang, centre.y}, {kInk, 2});
@@ -198,7 +210,7 @@ bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, cons
     if (text) {
         // theta_o labels every 30 degrees just outside the disk (signed: the
         // incident side is negative), the +-90 ones beside the surface ends.
-        for (int a = -90; a <= 90; a += 30) {
+        for (int a = whole ? -150 : -90; a <= (whole ? 180 : 90); a += 30) {
             std::string s = degrees(canvas, fmt::format("{}", a));
             if (std::abs(a) == 90) {
                 Point p{centre.x + (a < 0 ? -1 : 1) * (R + overhang + 0.3 * fs), centre.y};
@@ -206,8 +218,9 @@ bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, cons
                 continue;
             }
             Point p = polar(a, 1 + 0.35 * fs / R);
-            canvas.text(p, s, 0.9 * fs, kMuted, a < 0 ? HAlign::Right : a > 0 ? HAlign::Left : HAlign::Center,
-                        VAlign::Bottom);
+            bool lower = std::abs(a) > 90;  // (the whole circle's lower half: labels below the disk)
+            HAlign h = a % 180 == 0 ? HAlign::Center : (a < 0) ? HAlign::Right : HAlign::Left;
+            canvas.text(p, s, 0.9 * fs, kMuted, h, lower ? VAlign::Top : VAlign::Bottom);
         }
         // Radius labels under the surface, on the reflected side.
         for (int q = 1; q <= 4; ++q) {
@@ -223,13 +236,13 @@ bool drawLobePlot(PlotCanvas& canvas, const std::vector<LobeCurve>& curves, cons
     for (size_t i = 0; i < curves.size(); ++i) {
         const LobeCurve& c = curves[i];
         if (c.peak <= 0) continue;  // nothing reflected: no curve (the legend says "zero")
-        std::vector<Point> pts(kSamples);
-        for (int k = 0; k < kSamples; ++k) pts[size_t(k)] = polar(thetaAt(k), c.value[size_t(k)] / c.peak);
+        std::vector<Point> pts(c.theta.size());
+        for (size_t k = 0; k < pts.size(); ++k) pts[k] = polar(c.theta[k], c.value[k] / c.peak);
         canvas.polyline(pts, {curveColor(i), 2.2});
     }
 
     if (!text) return false;
-    double legendTop = centre.y + radiusLabelH;
+    double legendTop = centre.y + (whole ? R + (angleLabelH + radiusLabelH) : radiusLabelH);
     double legendW = cols * entryW + (cols - 1) * colGap;
     double left = (W - legendW) / 2;
     for (size_t i = 0; i < curves.size(); ++i) {
@@ -408,14 +421,14 @@ LobePlotResult writeLobePlot(const Kernel& kernel, const LobePlotOptions& option
     try {
         std::vector<LobeCurve> curves;
         for (double ti : options.incidentDegrees) {
-            curves.push_back(evaluateLobe(kernel, ti, result.invalidLanes));
+            curves.push_back(evaluateLobe(kernel, ti, options.wholeSphere, result.invalidLanes));
             result.peakValue.push_back(curves.back().peak);
-            result.peakThetaDeg.push_back(thetaAt(curves.back().peakIndex));
+            result.peakThetaDeg.push_back(curves.back().theta[size_t(curves.back().peakIndex)]);
         }
         std::string font = plotFontOrDefault(options.fontPath);
         PlotCanvas canvas(options.width, options.height, font);
         result.warning = noTextWarning(canvas, font);
-        noteNoRoomForText(canvas, drawLobePlot(canvas, curves, options.title), result.warning);
+        noteNoRoomForText(canvas, drawLobePlot(canvas, curves, options.title, options.wholeSphere), result.warning);
         result.error = canvas.write(path);
     } catch (const std::exception& e) {
         // Out of memory for a huge canvas, or an OIIO failure: a message, not a crash.

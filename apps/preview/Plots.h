@@ -21,6 +21,9 @@ namespace facet::preview {
 
 struct LobePlotOptions {
     std::vector<double> incidentDegrees{0, 30, 60, 80};  // theta_i of each curve, in [0, 90)
+    // The whole circle of theta_o (a lobe that scatters below the surface):
+    // theta_i in [0, 180) too (past 90: light arriving from inside).
+    bool wholeSphere = false;
     int width = 960, height = 600;
     std::string title;  // drawn at the top; empty: none
     // TrueType font for the labels: "" finds one (findPlotFont in
@@ -38,8 +41,8 @@ struct LobePlotResult {
 };
 
 // Evaluates `kernel` (default inputs) with wi = (-sin ti, 0, cos ti) and
-// wo = (sin to, 0, cos to) for signed to in [-90, 90] degrees and draws
-// luminance(f) cos(to) in polar form, each curve normalized to its own peak
+// wo = (sin to, 0, cos to) for signed to in [-90, 90] degrees ([-180, 180]
+// with wholeSphere) and draws luminance(f) |cos(to)| in polar form, each curve normalized to its own peak
 // (the legend gives the peak), with the incident directions as dashed rays.
 LobePlotResult writeLobePlot(const Kernel& kernel, const LobePlotOptions& options, const std::string& path);
 

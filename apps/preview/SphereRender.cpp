@@ -230,7 +230,8 @@ private:
         batch.frames.push_back(frame);
         Vec wo = frame.toLocal(camera_.view);
         Vec wl = frame.toLocal(light_);
-        batch.pushLight(wl, wo, float(scene_.lightIrradiance * std::max(0.0, wl.z)));
+        double cosine = scene_.lightThrough ? std::abs(wl.z) : std::max(0.0, wl.z);
+        batch.pushLight(wl, wo, float(scene_.lightIrradiance * cosine));
         uint64_t h = splitMix64(pixelIndex);
         double shift[3];
         for (double& d : shift) {

@@ -47,6 +47,11 @@ struct SphereScene {
     int skySamples = 64;                            // per pixel
     double exposureEv = 0;                          // PNG tone mapping: radiance * 2^EV
     int threads = 0;                                // 0: every core
+    // The material scatters below its surface (SPEC 11): the sphere is that
+    // one surface, and light from behind it reaches the camera through it
+    // (the light's weight is irradiance |cos|, not max(0, cos)). A preview of
+    // what comes through, not a solid ball (no second refraction).
+    bool lightThrough = false;
 };
 
 struct RenderStats {

@@ -74,11 +74,8 @@ std::optional<ScatterRuleBroken> wholeSphereLobeUnsupported(const CheckedLobe& l
                                              none ? "the lobe has no masking statement"
                                                   : fmt::format("'{}' has none", lobe.masking.model->name))};
     }
-    if (energyEntry(*lobe.energy.model).compensates || energyEntry(*lobe.energy.model).walks)
-        return ScatterRuleBroken{lobe.energy.loc, fmt::format("energy '{}' on a lobe with '{}': the energy terms are "
-                                                              "built for reflection above the surface only; leave "
-                                                              "energy out of this lobe",
-                                                              lobe.energy.model->name, what)};
+    // (energy = random_walk is refused with any dielectric Fresnel term by
+    // the random walk's own rule; kulla_conty compensates from both sides.)
     if (diffuseEntry(*lobe.diffuse.model).present)
         return ScatterRuleBroken{lobe.diffuse.loc, fmt::format("a diffuse term on a lobe with '{}': the diffuse base "
                                                                "reflects above the surface only; put it in a lobe of "

@@ -22,7 +22,7 @@ std::optional<ScatterRuleBroken> applyLobeOption(const LobeOptionStmt& stmt, Che
 
 // A whole-sphere lobe's models: an NDF with a Smith Lambda, a Smith masking
 // with a transmission form, the dielectric Fresnel term (one index of
-// refraction unless the lobe is thin), no energy or diffuse term.
+// refraction unless the lobe is thin), no diffuse term.
 std::optional<ScatterRuleBroken> wholeSphereLobeUnsupported(const CheckedLobe& lobe);
 
 // A whole-sphere lobe in a combination: the combination's sampler and the

@@ -3,6 +3,8 @@
 #include "QuadMath.h"
 #include "DielectricLobe.h"
 
+#include "DielectricEnergy.h"
+
 #include "Diagnostics.h"
 
 #include <algorithm>
@@ -116,6 +118,41 @@ Real facetPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& o, const Vec3<R
     return specularNormalPdf(r, o, m, SamplingTechnique::Material);
 }
 
+// Where the facet m (om = wo.m > 0) sends the view o (above) by reflection
+// or by refraction, in wo's frame: wi, wi + wo, and the Jacobian dm/dwi (wi's
+// density per unit density of m); valid is false where no direction leaves
+// on the right side (below the horizon, total internal reflection).
+template <typename Real>
+struct FacetBranch {
+    Vec3<Real> wi, sum;
+    Real jacobian = 0;
+    bool valid = false;
+};
+
+template <typename Real>
+FacetBranch<Real> facetBranch(const Vec3<Real>& o, const Vec3<Real>& m, Real om, const RelativeEta<Real>& eta,
+                              bool reflected) {
+    using std::sqrt;
+    FacetBranch<Real> b;
+    if (reflected) {
+        b.wi = {2 * om * m.x - o.x, 2 * om * m.y - o.y, 2 * om * m.z - o.z};
+        b.sum = {2 * om * m.x, 2 * om * m.y, 2 * om * m.z};
+        b.jacobian = 1 / (4 * om);
+        b.valid = b.wi.z > 0;
+        return b;
+    }
+    // Snell: the refracted direction's cosine with -m, ct^2 = 1 - (1 - om^2) / eta'^2.
+    Real ct2 = 1 - (1 - om) * (1 + om) / (eta.eta * eta.eta);
+    if (!(ct2 > 0)) return b;  // total internal reflection
+    Real ct = sqrt(ct2), k = om / eta.eta - ct;
+    b.wi = {-o.x / eta.eta + k * m.x, -o.y / eta.eta + k * m.y, -o.z / eta.eta + k * m.z};
+    b.sum = {b.wi.x + o.x, b.wi.y + o.y, b.wi.z + o.z};
+    Real denom = om - eta.eta * ct;  // eta' wi.m + wo.m
+    b.jacobian = eta.eta * eta.eta * ct / (denom * denom);
+    b.valid = b.wi.z < 0;
+    return b;
+}
+
 // The sheet's reflectance and transmittance of channel ch at cos c:
 // R' = 2F / (1 + F) and T' = (1 - F) / (1 + F) = T / (2 - T), T = 1 - F.
 template <typename Real>
@@ -178,20 +215,17 @@ std::array<Real, 3> thinSheetBsdf(const ResolvedMaterial<Real>& r, const Vec3<Re
 template <typename Real>
 Real clampedEta(const ResolvedMaterial<Real>& r, int ch) {
     internal_assert(r.fresnel->refractiveIndexParam >= 0) << "a whole-sphere lobe with fresnel " << r.fresnel->name;
-    Real eta = r.fresnelArgs.value[size_t(r.fresnel->refractiveIndexParam)][size_t(ch)];
-    const Real clamp = Real(kEtaClampFromOne);
-    if (eta >= 1 && eta < 1 + clamp) return 1 + clamp;
-    if (eta < 1 && eta > 1 - clamp) return 1 - clamp;
-    return eta;
+    return clampedFromOne(r.fresnelArgs.value[size_t(r.fresnel->refractiveIndexParam)][size_t(ch)]);
 }
 
+namespace {
+
+// The rough interface's single-scattering BSDF.
 template <typename Real>
-std::array<Real, 3> dielectricBsdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo,
-                                   const Vec3<Real>& sum) {
+std::array<Real, 3> interfaceBsdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo,
+                                  const Vec3<Real>& sum) {
     using std::sqrt;
     std::array<Real, 3> out{};
-    if (!r.ndf || wi.z == 0 || wo.z == 0) return out;
-    if (r.thin) return thinSheetBsdf(r, wi, wo, sum);
     WoFrame<Real> p = woFrame(wi, wo, sum);
     bool reflected = p.wi.z > 0;
     if (!keeps(r, reflected)) return out;
@@ -220,10 +254,26 @@ std::array<Real, 3> dielectricBsdf(const ResolvedMaterial<Real>& r, const Vec3<R
     return out;
 }
 
+}  // namespace
+
 template <typename Real>
-Real dielectricLobePdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo) {
+std::array<Real, 3> dielectricBsdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo,
+                                   const Vec3<Real>& sum) {
+    if (!r.ndf || wi.z == 0 || wo.z == 0) return {};
+    std::array<Real, 3> f = r.thin ? thinSheetBsdf(r, wi, wo, sum) : interfaceBsdf(r, wi, wo, sum);
+    if (r.energyTable) {
+        std::array<Real, 3> ms = wholeSphereCompensation(r, wi, wo);  // DielectricEnergy.h
+        for (int ch = 0; ch < 3; ++ch) f[ch] += ms[ch];
+    }
+    return f;
+}
+
+namespace {
+
+// The single-scattering sampler's density (DielectricLobe.h).
+template <typename Real>
+Real singleScatteringPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo) {
     using std::abs; using std::sqrt;
-    if (!r.ndf || wi.z == 0 || wo.z == 0) return 0;
     Vec3<Real> sum{wi.x + wo.x, wi.y + wo.y, wi.z + wo.z};
     if (r.thin) {
         bool reflected = (wi.z > 0) == (wo.z > 0);
@@ -265,12 +315,13 @@ Real dielectricLobePdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, co
     return (reflected ? pr : pt) / (pr + pt) * facetPdf(r, p.wo, m) * jacobian;
 }
 
+// The single-scattering sampler: out.wi and out.pdf (its own density),
+// and wi + wo in `sum`, formed accurately; out.pdf = 0 without a sample.
 template <typename Real>
-SampleResult<Real> sampleDielectricLobe(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo,
-                                        const std::array<Real, 3>& u) {
+SampleResult<Real> sampleSingleScattering(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo,
+                                          const std::array<Real, 3>& u, Vec3<Real>& sum) {
     using std::abs; using std::sqrt;
     SampleResult<Real> out;
-    if (!r.ndf || wo.z == 0) return out;
     Real sign = wo.z > 0 ? Real(1) : Real(-1);
     Vec3<Real> o = withZ(wo, abs(wo.z));
     const NdfFormulas<Real>& ndf = r.ndf->formulas.template get<Real>();
@@ -300,31 +351,81 @@ SampleResult<Real> sampleDielectricLobe(const ResolvedMaterial<Real>& r, const V
         Real pt = transmittanceAcross(r, eta.eta, om);
         if (!(pr + pt > 0)) return out;
         reflected = u[0] * (pr + pt) < pr;
-        if (reflected) {
-            i = {2 * om * m.x - o.x, 2 * om * m.y - o.y, 2 * om * m.z - o.z};
-            s = {2 * om * m.x, 2 * om * m.y, 2 * om * m.z};
-            if (!(i.z > 0)) return out;
-            pdf = pr / (pr + pt) * facetPdf(r, o, m) / (4 * om);
-        } else {
-            // Snell: the refracted direction's cosine with -m, ct^2 = 1 - (1 - om^2) / eta'^2.
-            Real ct2 = 1 - (1 - om) * (1 + om) / (eta.eta * eta.eta);
-            if (!(ct2 > 0)) return out;  // total internal reflection (then pt = 0 too)
-            Real ct = sqrt(ct2), k = om / eta.eta - ct;
-            i = {-o.x / eta.eta + k * m.x, -o.y / eta.eta + k * m.y, -o.z / eta.eta + k * m.z};
-            if (!(i.z < 0)) return out;
-            s = {i.x + o.x, i.y + o.y, i.z + o.z};
-            Real im = -ct, denom = eta.eta * im + om;
-            pdf = pt / (pr + pt) * facetPdf(r, o, m) * eta.eta * eta.eta * ct / (denom * denom);
-        }
+        FacetBranch<Real> b = facetBranch(o, m, om, eta, reflected);
+        if (!b.valid) return out;  // (total internal reflection has pt = 0)
+        i = b.wi;
+        s = b.sum;
+        pdf = (reflected ? pr : pt) / (pr + pt) * facetPdf(r, o, m) * b.jacobian;
         out.wi = withZ(i, i.z * sign);
         s = withZ(s, s.z * sign);
     }
     out.pdf = pdf;
+    sum = s;
+    return out;
+}
+
+}  // namespace
+
+template <typename Real>
+Real dielectricLobePdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo) {
+    if (!r.ndf || wi.z == 0 || wo.z == 0) return 0;
+    Real p = compensationProbability(r, wo);  // DielectricEnergy.h; 0 without compensation
+    Real single = singleScatteringPdf(r, wi, wo);
+    return p > 0 ? (1 - p) * single + p * compensationPdf(r, wi, wo) : single;
+}
+
+// A mixture of the single-scattering sampler and, with probability p, the
+// compensation's (u[0] picks, then is reused rescaled).
+template <typename Real>
+SampleResult<Real> sampleDielectricLobe(const ResolvedMaterial<Real>& r, const Vec3<Real>& wo,
+                                        const std::array<Real, 3>& u) {
+    using std::abs;
+    SampleResult<Real> out;
+    if (!r.ndf || wo.z == 0) return out;
+    Real p = compensationProbability(r, wo);
+    Vec3<Real> sum;
+    if (p > 0 && u[0] < p) {
+        out.wi = sampleCompensation(r, wo, {u[0] / p, u[1], u[2]});
+        if (out.wi.z == 0) return SampleResult<Real>{};
+        sum = {out.wi.x + wo.x, out.wi.y + wo.y, out.wi.z + wo.z};
+    } else {
+        Real u0 = p > 0 ? (u[0] - p) / (1 - p) : u[0];  // (1 by rounding only chooses refraction)
+        out = sampleSingleScattering(r, wo, {u0, u[1], u[2]}, sum);
+        if (!(out.pdf > 0)) return SampleResult<Real>{};
+    }
+    out.pdf = p > 0 ? dielectricLobePdf(r, out.wi, wo) : out.pdf;
     if (out.pdf > 0) {
-        std::array<Real, 3> f = dielectricBsdf(r, out.wi, wo, s);
+        std::array<Real, 3> f = dielectricBsdf(r, out.wi, wo, sum);
         for (int ch = 0; ch < 3; ++ch) out.weight[size_t(ch)] = f[size_t(ch)] * abs(out.wi.z) / out.pdf;
     }
     return out;
+}
+
+double interfaceAlbedo(const ResolvedMaterial<double>& r, double mu, int grid) {
+    using std::sqrt;
+    internal_assert(!r.thin && r.scatter == Scatter::Both && r.transport == Transport::Importance)
+        << "interfaceAlbedo of a lobe that is not a whole interface in importance transport";
+    const Vec3<double> o{sqrt((1 - mu) * (1 + mu)), 0, mu};
+    const RelativeEta<double> eta = relativeEta(r, 1.0);
+    const NdfFormulas<double>& ndf = r.ndf->formulas.get<double>();
+    const bool visible = visibleNormalSampling(r);
+    double total = 0;
+    for (int a = 0; a < grid; ++a)
+        for (int b = 0; b < grid; ++b) {
+            double u1 = (a + 0.5) / grid, u2 = (b + 0.5) / grid;
+            Vec3<double> m = visible ? ndf.sampleVisibleNormal(r.ndfArgs, o, u1, u2) : ndf.sampleNormal(r.ndfArgs, u1, u2);
+            double om = dot(o, m), pm = om > 0 ? facetPdf(r, o, m) : 0.0;
+            if (!(pm > 0)) continue;
+            // Both branches of the facet: f |n.wi| over wi's density given m.
+            for (bool reflected : {true, false}) {
+                FacetBranch<double> fb = facetBranch(o, m, om, eta, reflected);
+                if (!fb.valid) continue;
+                double f = dielectricBsdf(r, fb.wi, o, fb.sum)[0];
+                double term = f * std::abs(fb.wi.z) / (pm * fb.jacobian);
+                if (std::isfinite(term)) total += term;
+            }
+        }
+    return total / (double(grid) * grid);
 }
 
 #define FACET_DIELECTRIC_LOBE(Real)                                                                               \

@@ -56,6 +56,15 @@ namespace facet {
 
 inline constexpr double kEtaClampFromOne = 1e-3;
 
+// eta moved out of (1 - kEtaClampFromOne, 1 + kEtaClampFromOne), away from 1.
+template <typename Real>
+Real clampedFromOne(Real eta) {
+    const Real clamp = Real(kEtaClampFromOne);
+    if (eta >= 1 && eta < 1 + clamp) return 1 + clamp;
+    if (eta < 1 && eta > 1 - clamp) return 1 - clamp;
+    return eta;
+}
+
 // The BSDF of a whole-sphere lobe (r.wholeSphere()); `sum` = wi + wo,
 // computed accurately by the caller.
 template <typename Real>
@@ -68,6 +77,13 @@ SampleResult<Real> sampleDielectricLobe(const ResolvedMaterial<Real>& r, const V
 
 template <typename Real>
 Real dielectricLobePdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, const Vec3<Real>& wo);
+
+// R + T of the interface lobe r (scatter = both, importance transport, so
+// that f |n.wi| integrates to the power scattered) seen from mu = n.wo > 0
+// above, whose relative index is r's eta: over the facets the sampler draws
+// for wo from a grid x grid midpoint grid of (u1, u2), both branches of each
+// facet (DielectricEnergy.h's tables).
+double interfaceAlbedo(const ResolvedMaterial<double>& r, double mu, int grid);
 
 // The lobe's index of refraction of channel ch, clamped away from 1.
 template <typename Real>

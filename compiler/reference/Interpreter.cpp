@@ -3,6 +3,7 @@
 // any template that calls them (Builtins.h, <complex>); see QuadMath.h.
 #include "QuadMath.h"
 #include "Interpreter.h"
+#include "DielectricEnergy.h"
 #include "DielectricLobe.h"
 #include "WalkLobe.h"
 
@@ -279,6 +280,20 @@ Interpreter<Real>::Interpreter(const CheckedMaterial& material, std::shared_ptr<
                               ? std::make_shared<EnergyTableSlot>(energyTableKey(material, lobe),
                                                                   material.combinesLobes() ? nullptr : energyTable)
                               : nullptr);
+    addInsideTables();
+}
+
+template <typename Real>
+void Interpreter<Real>::addInsideTables() {
+    for (size_t l = 0; l < material_.lobes.size(); ++l) {
+        const CheckedLobe& lobe = material_.lobes[l];
+        bool both = lobe.compensatesEnergy() && lobe.wholeSphere();
+        // A thin sheet's tables are the same on both sides.
+        energyInside_.push_back(!both      ? nullptr
+                                : lobe.thin ? energy_[l]
+                                            : std::make_shared<EnergyTableSlot>(
+                                                  insideTableKey(energyTableKey(material_, lobe)), nullptr));
+    }
 }
 
 template <typename Real>
@@ -292,6 +307,7 @@ Interpreter<Real>::Interpreter(const CheckedMaterial& material,
                                                                   l < lobeTables.size() ? lobeTables[l] : nullptr)
                               : nullptr);
     }
+    addInsideTables();
 }
 
 template <typename Real>
@@ -375,7 +391,12 @@ ResolvedBsdf<Real> Interpreter<Real>::resolveAll(const Real* slots) const {
         resolveArgs(lobe.masking, out.maskingArgs);
         resolveArgs(lobe.fresnel, out.fresnelArgs);
         resolveArgs(lobe.diffuse, out.diffuseArgs);
-        if (energy_[l] && r.valid) resolveKullaConty(out, energy_[l]->get());
+        if (energy_[l] && r.valid) {
+            if (energyInside_[l])
+                resolveWholeSphereCompensation(out, energy_[l]->get(), energyInside_[l]->get());  // DielectricEnergy.h
+            else
+                resolveKullaConty(out, energy_[l]->get());
+        }
     }
     // The combination's weights (SPEC 10): a scale is clamped to >= 0, a
     // mix's and a layer's to [0, 1].

@@ -45,6 +45,13 @@ struct ResolvedMaterial {
     std::shared_ptr<const EnergyTable> energyTable;
     Real energyAlpha = 1, ecAvg = 0;
     std::array<Real, 3> favg{};
+    // A whole-sphere lobe's compensation (DielectricEnergy.h): energyTable
+    // is the table seen from outside, this one from inside (the same table
+    // for a thin sheet), 1 - E_avg there, and the share of the compensated
+    // energy that crosses the surface, per channel, from outside and from inside.
+    std::shared_ptr<const EnergyTable> energyTableInside;
+    Real ecAvgInside = 0;
+    std::array<Real, 3> crossingOutside{}, crossingInside{};
     // SPEC 11: where the lobe scatters, whether it is a thin sheet, and the
     // transport of its transmission (DielectricLobe.h).
     Scatter scatter = Scatter::Reflect;
@@ -170,10 +177,14 @@ public:
     const ResolvedBsdf<double>& resolvedDefaults() const;
 
 private:
+    void addInsideTables();
     const CheckedMaterial& material_;
     CheckedMaterial::Reads read_;  // what the models read: nothing else is evaluated
     Transport transport_ = Transport::Radiance;
     std::vector<std::shared_ptr<EnergyTableSlot>> energy_;  // per lobe; kulla_conty lobes only
+    // Per lobe: the inside's table of a whole-sphere lobe with kulla_conty
+    // (DielectricEnergy.h), built in memory on first use; null elsewhere.
+    std::vector<std::shared_ptr<EnergyTableSlot>> energyInside_;
     struct ResolvedDefaults {
         std::once_flag once;
         ResolvedBsdf<double> value;

@@ -3,6 +3,7 @@
 
 #include "ExprEval.h"
 #include "Interpolation.h"
+#include "DielectricLobe.h"
 #include "Interpreter.h"
 #include "Quadrature.h"
 
@@ -10,6 +11,8 @@
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
+#include <map>
+#include <mutex>
 #include <thread>
 
 namespace facet {
@@ -23,9 +26,19 @@ using quadrature::GradePoint;
 using quadrature::gradedBreaks;
 using quadrature::integratePanels;
 
-// The specular lobe of a table key at one alpha, F = 1, as a reference material.
-ResolvedMaterial<double> lobeMaterial(const EnergyTableKey& key, double alpha) {
-    return lobeAtAlpha(*key.ndf, *key.masking, alpha, key.shape);
+// The lobe of a table key at one alpha as a reference material: the
+// specular lobe with F = 1, or the non-absorbing interface of relative
+// index key.interfaceEta over the whole sphere in importance transport (its
+// R + T is the power it scatters).
+ResolvedMaterial<double> tableLobe(const EnergyTableKey& key, double alpha) {
+    ResolvedMaterial<double> r = lobeAtAlpha(*key.ndf, *key.masking, alpha, key.shape);
+    if (key.interfaceEta == 0) return r;
+    r.fresnel = &fresnelEntry(*findModel(ModelSlot::Fresnel, "dielectric"));
+    r.fresnelArgs = {};
+    r.fresnelArgs.set(r.fresnel->refractiveIndexParam, key.interfaceEta);
+    r.scatter = Scatter::Both;
+    r.transport = Transport::Importance;
+    return r;
 }
 
 // E(mu) = Int f(wi, wo) (n.wi) dwi with F = 1, integrated over the half
@@ -208,13 +221,15 @@ std::string EnergyTableKey::name() const {
         s += model->name;
         for (int p : model->tableShapeParams) s += fmt::format("_{}{}", model->canonical[p].tableTag, shortNumber(shape.at(i++)));
     }
+    if (interfaceEta != 0) s += fmt::format("_interface{}", shortNumber(interfaceEta));
     return s;
 }
 
 bool EnergyTableKey::operator<(const EnergyTableKey& o) const {
     if (ndf->id != o.ndf->id) return ndf->id < o.ndf->id;
     if (masking->id != o.masking->id) return masking->id < o.masking->id;
-    return shape < o.shape;
+    if (shape != o.shape) return shape < o.shape;
+    return interfaceEta < o.interfaceEta;
 }
 
 std::optional<EnergyUnsupported> kullaContyUnsupported(const CheckedMaterial& m, const CheckedLobe& lobe) {
@@ -227,22 +242,27 @@ std::optional<EnergyUnsupported> kullaContyUnsupported(const CheckedMaterial& m,
                                              "albedo table; use 'energy = none', or a microfacet NDF such as ggx or "
                                              "beckmann",
                                              ndf.name)};
-    for (const ModelUse* use : {&lobe.ndf, &lobe.masking}) {
-        for (int p : use->model->tableShapeParams) {
-            if (!use->has(p)) continue;
-            const Expr& e = *use->args[p];
-            const char* what = use->model->canonical[p].name;
-            std::string model = fmt::format("{} '{}'", modelSlotName(use->model->slot), use->model->name);
-            if (const CheckedInput* in = inputUsed(e, m))
-                return EnergyUnsupported{e.loc, fmt::format("energy 'kulla_conty' with {} needs a constant {} (its "
-                                                            "albedo table is built for one {}); this one depends on "
-                                                            "input '{}'",
-                                                            model, what, what, in->name)};
-            double v = constantOf(e, m);
-            if (!std::isfinite(v))
-                return EnergyUnsupported{e.loc, fmt::format("energy 'kulla_conty' with {} needs a finite {}, got {}",
-                                                            model, what, v)};
-        }
+    // A rough interface's table is built for one eta (its R + T depends on
+    // it); a thin sheet's is the reflection table (DielectricEnergy.h).
+    std::vector<std::pair<const ModelUse*, int>> constants;
+    if (lobe.wholeSphere() && !lobe.thin && lobe.fresnel.model)
+        constants.push_back({&lobe.fresnel, fresnelEntry(*lobe.fresnel.model).refractiveIndexParam});
+    for (const ModelUse* use : {&lobe.ndf, &lobe.masking})
+        for (int p : use->model->tableShapeParams) constants.push_back({use, p});
+    for (auto [use, p] : constants) {
+        if (p < 0 || !use->has(p)) continue;
+        const Expr& e = *use->args[p];
+        const char* what = use->model->canonical[p].name;
+        std::string model = fmt::format("{} '{}'", modelSlotName(use->model->slot), use->model->name);
+        if (const CheckedInput* in = inputUsed(e, m))
+            return EnergyUnsupported{e.loc, fmt::format("energy 'kulla_conty' with {} needs a constant {} (its "
+                                                        "albedo table is built for one {}); this one depends on "
+                                                        "input '{}'",
+                                                        model, what, what, in->name)};
+        double v = constantOf(e, m);
+        if (!std::isfinite(v))
+            return EnergyUnsupported{e.loc, fmt::format("energy 'kulla_conty' with {} needs a finite {}, got {}",
+                                                        model, what, v)};
     }
     return std::nullopt;
 }
@@ -262,14 +282,23 @@ EnergyTableKey energyTableKey(const CheckedMaterial& m, const CheckedLobe& lobe)
             const ModelParam& param = use->model->canonical[p];
             key.shape.push_back(std::clamp(constantOf(*use->args[p], m), param.lo, param.hi));
         }
+    if (lobe.wholeSphere() && !lobe.thin) {
+        const FresnelEntry& fresnel = fresnelEntry(*lobe.fresnel.model);
+        int p = fresnel.refractiveIndexParam;
+        internal_assert(p >= 0 && lobe.fresnel.has(p) && !inputUsed(*lobe.fresnel.args[p], m))
+            << "kulla_conty on refracting lobe '" << lobe.name << "' without a constant eta";
+        const ModelParam& param = fresnel.canonical[p];
+        key.interfaceEta = clampedFromOne(std::clamp(constantOf(*lobe.fresnel.args[p], m), param.lo, param.hi));
+    }
     return key;
 }
 
 std::string EnergyQuadrature::describe() const {
     return fmt::format("half-vector Gauss-Legendre: theta_h {} points per panel, panels graded from atan(alpha)/8 "
                        "at 0 and {} at the azimuth-cut kinks, max width {}; azimuth {} panels halving toward the "
-                       "cut x {} points; mu = 0 node at mu = {}",
-                       thetaPoints, kinkPanel, thetaMaxPanel, phiPanels, phiPoints, muZero);
+                       "cut x {} points; mu = 0 node at mu = {}; interfaces: visible normals on a {} x {} "
+                       "midpoint grid",
+                       thetaPoints, kinkPanel, thetaMaxPanel, phiPanels, phiPoints, muZero, facetGrid, facetGrid);
 }
 
 // ---- table ----------------------------------------------------------------
@@ -357,9 +386,20 @@ std::string EnergyTable::validate() const {
     return "";
 }
 
-double directionalAlbedo(const EnergyTableKey& key, double mu, double alpha, const EnergyQuadrature& q) {
-    ResolvedMaterial<double> m = lobeMaterial(key, alpha);
+TableGrid defaultTableGrid(const EnergyTableKey& key) {
+    if (key.interfaceEta != 0) return {kInterfaceGrid, kInterfaceGrid};
+    return {EnergyTable::kMuCount, EnergyTable::kAlphaCount};
+}
+
+// E of the table's lobe at (mu, alpha): the reflection albedo, or an interface's R + T.
+double tableAlbedo(const EnergyTableKey& key, const ResolvedMaterial<double>& m, double alpha, double mu,
+                   const EnergyQuadrature& q) {
+    if (key.interfaceEta != 0) return interfaceAlbedo(m, std::clamp(mu, q.muZero, 1.0), q.facetGrid);
     return albedoOf(m, std::max(alpha, kMinAlpha), mu, q);
+}
+
+double directionalAlbedo(const EnergyTableKey& key, double mu, double alpha, const EnergyQuadrature& q) {
+    return tableAlbedo(key, tableLobe(key, alpha), alpha, mu, q);
 }
 
 std::shared_ptr<EnergyTable> buildEnergyTable(const EnergyTableKey& key, const EnergyQuadrature& q, int threads,
@@ -367,8 +407,8 @@ std::shared_ptr<EnergyTable> buildEnergyTable(const EnergyTableKey& key, const E
     auto start = std::chrono::steady_clock::now();
     auto t = std::make_shared<EnergyTable>();
     t->key = key;
-    t->muCount = muCount;
-    t->alphaCount = alphaCount;
+    t->muCount = muCount > 0 ? muCount : defaultTableGrid(key).mu;
+    t->alphaCount = alphaCount > 0 ? alphaCount : defaultTableGrid(key).alpha;
     t->alphaMax = alphaMax;
     t->quadrature = q;
     t->ec.assign(size_t(t->muCount) * t->alphaCount, 0);
@@ -377,9 +417,9 @@ std::shared_ptr<EnergyTable> buildEnergyTable(const EnergyTableKey& key, const E
     auto work = [&](int first) {
         for (int i = first; i < t->alphaCount; i += nt) {
             double alpha = t->alphaNode(i);
-            ResolvedMaterial<double> m = lobeMaterial(key, alpha);
+            ResolvedMaterial<double> m = tableLobe(key, alpha);
             for (int j = 0; j < t->muCount; ++j) {
-                double e = albedoOf(m, alpha, t->muNode(j), q);
+                double e = tableAlbedo(key, m, alpha, t->muNode(j), q);
                 // Clamp: where the lobe creates energy (E > 1) nothing is added.
                 double c = std::clamp(1 - e, 0.0, 1.0);
                 if (!std::isfinite(e)) c = 0;
@@ -412,9 +452,22 @@ EnergyTableSlot::EnergyTableSlot(EnergyTableKey key, std::shared_ptr<const Energ
 
 const std::shared_ptr<const EnergyTable>& EnergyTableSlot::get() {
     std::call_once(once_, [&] {
-        if (!table_) table_ = buildEnergyTable(key_);
+        if (!table_) table_ = key_.interfaceEta != 0 ? residentInterfaceTable(key_) : buildEnergyTable(key_);
     });
     return table_;
+}
+
+std::shared_ptr<const EnergyTable> residentInterfaceTable(const EnergyTableKey& key) {
+    internal_assert(key.interfaceEta != 0) << "residentInterfaceTable of reflection table " << key.name();
+    // Immutable tables, never evicted: a process meets a handful of
+    // refracting materials. One lock for the build too (a second caller of
+    // the same key waits instead of building it again).
+    static std::mutex mutex;
+    static std::map<EnergyTableKey, std::shared_ptr<const EnergyTable>> tables;
+    std::lock_guard<std::mutex> lock(mutex);
+    std::shared_ptr<const EnergyTable>& table = tables[key];
+    if (!table) table = buildEnergyTable(key);
+    return table;
 }
 
 }  // namespace facet

@@ -85,11 +85,17 @@ struct EnergyTableKey {
     const NdfEntry* ndf = nullptr;
     const MaskingEntry* masking = nullptr;
     std::vector<double> shape;
+    // 0: the lobe's reflection albedo with F = 1 (above). Otherwise the table
+    // of a rough dielectric interface (DielectricEnergy.h): E = R + T of the
+    // non-absorbing interface seen from the side whose far side has this
+    // relative index (eta from outside, 1/eta from inside).
+    double interfaceEta = 0;
 
-    // "ggx_smith_height_correlated", "gtr_g1.5_cook_torrance", "ggx_schlick_smith_k0.125".
+    // "ggx_smith_height_correlated", "gtr_g1.5_cook_torrance", "ggx_schlick_smith_k0.125",
+    // "ggx_smith_height_correlated_interface1.5".
     std::string name() const;
     bool operator==(const EnergyTableKey& o) const {
-        return ndf == o.ndf && masking == o.masking && shape == o.shape;
+        return ndf == o.ndf && masking == o.masking && shape == o.shape && interfaceEta == o.interfaceEta;
     }
     bool operator<(const EnergyTableKey& o) const;
 };
@@ -128,6 +134,9 @@ struct EnergyQuadrature {
     int phiPoints = 4;            // Gauss-Legendre points per azimuth panel
     int phiPanels = 3;            // azimuth panels, halving toward the cut
     double muZero = 1e-6;         // the mu = 0 node is integrated here
+    // Interface tables (DielectricEnergy.h): visible normals drawn on a
+    // facetGrid x facetGrid midpoint grid of the sampler's (u1, u2).
+    int facetGrid = 96;
     std::string describe() const;
 };
 
@@ -171,16 +180,26 @@ public:
     void computeAverages();
 };
 
+// The grid a key's table is built on: kMuCount x kAlphaCount for a
+// reflection table, kInterfaceGrid^2 for an interface's (each of its nodes
+// integrates facetGrid^2 sampled facets rather than a panelled quadrature;
+// tests/transmission measures the interpolation error this grid leaves).
+struct TableGrid {
+    int mu, alpha;
+};
+constexpr int kInterfaceGrid = 32;
+TableGrid defaultTableGrid(const EnergyTableKey& key);
+
 // Builds the table by quadrature (threads: 0 = hardware concurrency).
-// (The grid defaults to kMuCount x kAlphaCount over [kAlphaMin, kAlphaMax];
+// (The grid defaults (0) to defaultTableGrid(key) over [kAlphaMin, kAlphaMax];
 // other grids are for experiments and tests.)
 std::shared_ptr<EnergyTable> buildEnergyTable(const EnergyTableKey& key, const EnergyQuadrature& q = {},
-                                              int threads = 0, int muCount = EnergyTable::kMuCount,
-                                              int alphaCount = EnergyTable::kAlphaCount,
+                                              int threads = 0, int muCount = 0, int alphaCount = 0,
                                               double alphaMax = EnergyTable::kAlphaMax);
 
-// The directional albedo E(mu, alpha) with F = 1 of the pair, by the table's
-// quadrature (double, no clamping, no interpolation).
+// The directional albedo E(mu, alpha) with F = 1 of the pair (an
+// interface key: R + T of the interface), by the table's quadrature
+// (double, no clamping, no interpolation).
 double directionalAlbedo(const EnergyTableKey& key, double mu, double alpha, const EnergyQuadrature& q = {});
 
 // ---- Fresnel averages: numeric/FresnelAverage.h -----------------------------
@@ -224,6 +243,9 @@ Real kullaContyLobe(Real ecI, Real ecO, Real ecAvg) {
 
 // Holds (or lazily builds, in memory, on first use) the table of one
 // interpreter's material. Thread-safe; shared by copies of the interpreter.
+// An interface table not given is kept for the process's lifetime
+// (residentInterfaceTable): an interpreter kernel makes an interpreter per
+// batch, and such a table takes about a second to build.
 class EnergyTableSlot {
 public:
     explicit EnergyTableSlot(EnergyTableKey key, std::shared_ptr<const EnergyTable> table = nullptr);
@@ -236,5 +258,9 @@ private:
     std::once_flag once_;
     std::shared_ptr<const EnergyTable> table_;
 };
+
+// The interface table of `key` (interfaceEta != 0), built on the first call
+// in this process and kept (thread-safe).
+std::shared_ptr<const EnergyTable> residentInterfaceTable(const EnergyTableKey& key);
 
 }  // namespace facet

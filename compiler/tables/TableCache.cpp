@@ -117,6 +117,7 @@ std::string encodeEnergyTableExr(const EnergyTable& t, std::string& bytes) {
     std::string shape;
     for (double v : t.key.shape) shape += (shape.empty() ? "" : ",") + exact(v);
     image.strings["facet:shape"] = shape;
+    image.strings["facet:interface_eta"] = exact(t.key.interfaceEta);
     image.ints["facet:mu_count"] = t.muCount;
     image.ints["facet:alpha_count"] = t.alphaCount;
     image.strings["facet:alpha_min"] = exact(t.alphaMin);
@@ -185,18 +186,20 @@ TableFileResult decodeEnergyTableExr(const std::string& bytes, const std::string
         t->key.shape.push_back(std::strtod(shape.substr(pos, end - pos).c_str(), nullptr));
         pos = end + 1;
     }
+    t->key.interfaceEta = std::strtod(in.stringAttribute("facet:interface_eta").c_str(), nullptr);
     t->quadrature = quadrature;
     std::string quad(in.stringAttribute("facet:quadrature"));
     if (expected) {
         if (!(t->key == *expected))
             return fail(TableFileStatus::Stale, fmt::format("{} holds table {}, expected {}", path, t->key.name(),
                                                             expected->name()));
-        if (t->muCount != EnergyTable::kMuCount || t->alphaCount != EnergyTable::kAlphaCount ||
-            t->alphaMin != EnergyTable::kAlphaMin || t->alphaMax != EnergyTable::kAlphaMax)
+        TableGrid grid = defaultTableGrid(*expected);
+        if (t->muCount != grid.mu || t->alphaCount != grid.alpha || t->alphaMin != EnergyTable::kAlphaMin ||
+            t->alphaMax != EnergyTable::kAlphaMax)
             return fail(TableFileStatus::Stale,
                         fmt::format("{} has a {} x {} grid over alpha [{}, {}], expected {} x {} over [{}, {}]", path,
-                                    t->muCount, t->alphaCount, t->alphaMin, t->alphaMax, EnergyTable::kMuCount,
-                                    EnergyTable::kAlphaCount, EnergyTable::kAlphaMin, EnergyTable::kAlphaMax));
+                                    t->muCount, t->alphaCount, t->alphaMin, t->alphaMax, grid.mu, grid.alpha,
+                                    EnergyTable::kAlphaMin, EnergyTable::kAlphaMax));
         if (quad != quadrature.describe())
             return fail(TableFileStatus::Stale, fmt::format("{} was integrated with other quadrature settings ({})",
                                                             path, quad));

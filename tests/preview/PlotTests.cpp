@@ -447,3 +447,38 @@ TEST_CASE("walk plot: the random walk above single scattering on a rough white l
     CHECK_FALSE(writeWalkPlot(rough, grazing, dir.file("t.png")).error.empty());
     CHECK_FALSE(writeWalkPlot(rough, options, dir.file("no/such/dir/walk.png")).error.empty());
 }
+
+TEST_CASE("lobe plot over the whole circle: a refracting lobe peaks at Snell's angle below the surface") {
+    TempDir dir;
+    Compiler compiler;
+    CompileOptions options;
+    REQUIRE(CompileOptions::parse("backend=interp;cache=memory", options).empty());
+    DiagnosticEngine diags;
+    auto kernel = compiler.compileText(R"(material glass {
+        ndf = ggx(0.05); masking = smith_height_correlated; fresnel = dielectric(1.5); scatter = both; })",
+                                       "glass.mat", "", options, diags);
+    REQUIRE_MESSAGE(kernel, diags.str());
+    LobePlotOptions plot;
+    plot.wholeSphere = true;
+    plot.incidentDegrees = {0, 40, 150};  // 150: from inside, 30 degrees from the inward normal
+    plot.width = 480, plot.height = 540;
+    std::string path = dir.file("lobe.png");
+    LobePlotResult r = writeLobePlot(*kernel, plot, path);
+    REQUIRE_MESSAGE(r.error.empty(), r.error);
+    CHECK(r.invalidLanes == 0);
+    REQUIRE(r.peakThetaDeg.size() == 3);
+    // Straight through at normal incidence; refracted toward the normal at 40.
+    CHECK(std::abs(std::abs(r.peakThetaDeg[0]) - 180) <= 1);
+    double refracted = 180 - std::asin(std::sin(40 * kPi / 180) / 1.5) * 180 / kPi;
+    CHECK(std::abs(r.peakThetaDeg[1] - refracted) <= 1.5);
+    // From inside at 30 degrees (below the critical angle, 41.8): out, away from the normal.
+    double out = std::asin(1.5 * std::sin(30 * kPi / 180)) * 180 / kPi;
+    CHECK(std::abs(r.peakThetaDeg[2] - out) <= 2);
+    ImageSummary img = readBack(path);
+    REQUIRE_MESSAGE(img.ok, img.error);
+    CHECK(img.width == 480);
+    CHECK(img.height == 540);
+    // Beyond 90 degrees only for a whole-sphere plot.
+    plot.wholeSphere = false;
+    CHECK(writeLobePlot(*kernel, plot, path).error.find("outside [0, 90)") != std::string::npos);
+}

@@ -322,3 +322,32 @@ TEST_CASE("visible-normal sampling has the lowest image error of the three techn
     }
     CHECK(withVisible == 6);  // GGX, Beckmann and Blinn-Phong at both roughnesses
 }
+
+TEST_CASE("a material that scatters below its surface is lit through it: light from behind reaches the camera") {
+    // Sky off, the light behind the sphere (theta 150 from the view axis):
+    // only a thin rim, where the surface turns toward it, reflects it to the
+    // camera; with lightThrough the light that crosses the surface adds
+    // the rest.
+    Compiler compiler;
+    auto glass = compileSource(compiler, R"(material glass {
+        ndf = ggx(0.2); masking = smith_height_correlated; fresnel = dielectric(1.5); scatter = both; })",
+                               "backend=interp;cache=memory");
+    SphereScene scene;
+    scene.size = 48;
+    scene.sky = SkyModel::None;
+    scene.lightThetaDeg = 150, scene.lightPhiDeg = 90;
+    auto total = [&](const SphereImage& img) {
+        double sum = 0;
+        for (float v : img.radiance) sum += v;
+        return sum;
+    };
+    scene.lightThrough = true;
+    SphereImage through = renderSphere(*glass, scene);
+    CHECK(through.stats.invalidLanes == 0);
+    double lit = total(through);
+    CHECK(lit > 1);
+    scene.lightThrough = false;
+    double reflected = total(renderSphere(*glass, scene));
+    CHECK(reflected > 0);
+    CHECK(lit > 3 * reflected);
+}

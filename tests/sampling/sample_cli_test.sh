@@ -119,6 +119,26 @@ expect_contains "$err" "--wo 0,0,2 has length 2; it must be a unit vector" "not 
 run "$FACET" sample ggx.mat --wo 0,0.6,-0.8
 expect_rc 2 "below the surface"
 expect_contains "$err" "points into the surface" "below the surface message"
+# A lobe that scatters below the surface is seen from either side: wo
+# inside draws directions on both sides (refracted out, reflected in), each
+# row's wi a unit vector; wo in the surface plane is refused.
+cat >glass.mat <<'MAT'
+material glass {
+    ndf = ggx(0.3);
+    masking = smith_height_correlated;
+    fresnel = dielectric(1.5);
+    scatter = both;
+}
+MAT
+run "$FACET" sample glass.mat --wo 0,0.6,-0.8 -n 4000 --backend interp --out "$tmp/glass.csv"
+expect_rc 0 "glass from inside"
+awk_ok "$tmp/glass.csv" 'NR > 1 && $4 > 0 { n++; up += ($3 > 0); down += ($3 < 0)
+    l = $1 * $1 + $2 * $2 + $3 * $3; if (l < 0.999999 || l > 1.000001) bad++ }
+    END { print (n > 3000 && up > 1000 && down > 100 && !bad) ? "ok" : "n " n " up " up " down " down " bad " bad }' \
+    "glass samples on both sides"
+run "$FACET" sample glass.mat --wo 1,0,0 --backend interp
+expect_rc 2 "glass wo in the surface"
+expect_contains "$err" "lies in the surface (z = 0): material 'glass' scatters on both sides" "in the surface message"
 run "$FACET" sample ggx.mat --wo 0,0,1 -n 0
 expect_rc 2 "-n 0"
 expect_contains "$err" "-n expects a whole number" "-n 0 message"
