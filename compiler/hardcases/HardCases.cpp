@@ -11,6 +11,7 @@
 #include "Interpreter.h"
 #include "KullaConty.h"
 #include "LambdaTable.h"
+#include "WholeSphereCases.h"
 
 #include <algorithm>
 #include <cfloat>
@@ -67,6 +68,7 @@ public:
 
     std::vector<HardCase> run() {
         directionCases();
+        for (const DirectionPair& p : wholeSphereDirectionPairs(m_)) push(p.wi, p.wo, defaults_, p.label);
         if (opt_.inputSweeps) inputCases();
         return std::move(out_);
     }

@@ -9,7 +9,8 @@
 //     n.h within 1e-7 of 1 and h tilted by 1e-7; wi + wo nearly zero; one or
 //     both directions below the horizon (also -0 and a negative denormal);
 //     nearly-unit directions (valid), non-unit, zero, NaN and infinite
-//     components (invalid);
+//     components (invalid); for a lobe that scatters below the surface,
+//     SPEC 11's pairs across it (WholeSphereCases.h);
 //   - inputs: every float slot swept over range ends, values outside the
 //     range, 0, denormal, tiny, the roughness ladder {1e-5 (below the 1e-4
 //     clamp), 1e-4, 1e-3, 0.01, 1, 2}, 1 +- 1e-6 (GTR neighbourhoods, eta = 1),
