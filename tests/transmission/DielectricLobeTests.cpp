@@ -20,6 +20,7 @@
 #include "Checker.h"
 #include "DielectricLobe.h"
 #include "Interpreter.h"
+#include "HardCases.h"
 #include "Kernel.h"
 #include "MicrosurfaceWalk.h"
 #include "SamplingCheck.h"
@@ -30,6 +31,7 @@
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -527,3 +529,25 @@ TEST_CASE("the printed material (ir --stages, the cache key) keeps scatter and t
 }
 
 }  // TEST_SUITE
+
+TEST_CASE("the hard-case sample of a whole-sphere material holds SPEC 11's pairs; a reflecting one does not") {
+    auto labels = [](const std::string& text) {
+        facet::DiagnosticEngine diags;
+        facet::CheckedProgram program = facet::loadProgramText(text, "hard.mat", diags);
+        REQUIRE_FALSE(diags.hasErrors());
+        std::vector<std::string> out;
+        for (const facet::HardCase& c : facet::hardCases(*program.find("t"))) out.push_back(c.label);
+        return out;
+    };
+    auto count = [](const std::vector<std::string>& all, const std::string& needle) {
+        return std::count_if(all.begin(), all.end(), [&](const std::string& l) { return l.find(needle) != l.npos; });
+    };
+    std::vector<std::string> glassCases = labels(glass("ggx(0.3)", 1.5));
+    CHECK(count(glassCases, "critical angle") == 20);  // 5 offsets x (grazing, mirror) x both orders
+    CHECK(count(glassCases, "wi = -wo") == 8);
+    CHECK(count(glassCases, "across") == 12);
+    std::vector<std::string> mirrorCases =
+        labels("material t { ndf = ggx(0.3); masking = smith_height_correlated; fresnel = dielectric(1.5); }\n");
+    CHECK(count(mirrorCases, "critical angle") == 0);
+    CHECK(count(mirrorCases, "wi = -wo") == 0);
+}
