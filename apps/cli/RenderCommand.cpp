@@ -280,8 +280,8 @@ int lobePlotCommand(const RenderArgs& r) {
     }
     if (!result.warning.empty()) std::fprintf(stderr, "facet: render: warning: %s\n", result.warning.c_str());
     for (size_t i = 0; i < result.peakValue.size(); ++i)
-        std::printf("theta_i %g: peak of luminance(f) cos(theta_o) = %.6g at theta_o = %.2f\n", opt.incidentDegrees[i],
-                    result.peakValue[i], result.peakThetaDeg[i]);
+        std::printf("theta_i %g: peak of luminance(f) %s = %.6g at theta_o = %.2f\n", opt.incidentDegrees[i],
+                    opt.wholeSphere ? "|cos(theta_o)|" : "cos(theta_o)", result.peakValue[i], result.peakThetaDeg[i]);
     std::printf("wrote %s\n", r.out.c_str());
     if (result.invalidLanes) {
         std::fprintf(stderr, "facet: render: %lld kernel lanes were invalid\n", (long long)result.invalidLanes);
