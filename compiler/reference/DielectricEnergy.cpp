@@ -31,6 +31,15 @@ bool keeps(const ResolvedMaterial<Real>& r, bool crossing) {
 template <typename Real>
 Real sheetTransmittanceAverage(const ResolvedMaterial<Real>& r, int ch) {
     Real eta = r.fresnelArgs.channel(r.fresnel->refractiveIndexParam, ch);
+    // Last result per thread and channel: every lane of a constant eta
+    // integrates once (resolve() runs per lane).
+    struct Memo {
+        Real eta, value;
+        bool set = false;
+    };
+    thread_local Memo memo[3];
+    Memo& mm = memo[ch];
+    if (mm.set && mm.eta == eta) return mm.value;
     std::vector<double> breaks = fresnelAverageBreaks(double(eta), 0.0);
     static const quadrature::GaussLegendre<Real>& gl8 = quadrature::gaussLegendre<Real>(8);
     Real sum = quadrature::integratePanels(
@@ -39,7 +48,8 @@ Real sheetTransmittanceAverage(const ResolvedMaterial<Real>& r, int ch) {
             return (1 - F) / (1 + F) * mu;
         },
         breaks, gl8);
-    return std::clamp(2 * sum, Real(0), Real(1));
+    mm = {eta, std::clamp(2 * sum, Real(0), Real(1)), true};
+    return mm.value;
 }
 
 // Side of a direction: true outside (z > 0).
