@@ -42,9 +42,11 @@
 // (the rough interface; 0 for scatter = transmit) or R' (the sheet;
 // transmission with T'), wi the reflection or refraction of wo about m;
 // pdf = P_R p_m(m) / (4 wo.m) for reflection, P_T p_m(m) eta'^2 |wi.m| /
-// |v|^2 for refraction; weight = f |n.wi| / pdf. The density integrates to 1
-// over the sphere (less with scatter = transmit where total internal
-// reflection leaves no refracted direction).
+// |v|^2 for refraction; weight = f |n.wi| / pdf. The density integrates to
+// the share of draws that give a direction (a reflection past the horizon
+// gives none, as in pbrt-v4). With energy = kulla_conty the lobe also holds
+// the compensation of DielectricEnergy.h: f adds it, and the sampler draws
+// from it with its own probability (a mixture; the pdf is the mixture's).
 #pragma once
 
 #include "Interpreter.h"
