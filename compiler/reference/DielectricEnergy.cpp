@@ -21,11 +21,6 @@ constexpr Real kPi = Real(3.141592653589793238462643383279502884L);
 // single-scattering lobe always keeps a share of the samples.
 constexpr double kMaxCompensationProbability = 0.9;
 
-template <typename Real>
-bool keeps(const ResolvedMaterial<Real>& r, bool crossing) {
-    return crossing ? r.scatter != Scatter::Reflect : r.scatter != Scatter::Transmit;
-}
-
 // The sheet's average transmittance 2 Int T'(mu) mu dmu of channel ch,
 // T' = (1 - F) / (1 + F), on the Fresnel average's panels.
 template <typename Real>
@@ -68,7 +63,7 @@ template <typename Real>
 std::array<Real, 2> keptShares(const ResolvedMaterial<Real>& r, bool out) {
     const std::array<Real, 3>& x = out ? r.crossingOutside : r.crossingInside;
     Real cross = (x[0] + x[1] + x[2]) / 3;
-    return {keeps(r, false) ? 1 - cross : Real(0), keeps(r, true) ? cross : Real(0)};
+    return {keepsPair(r, true) ? 1 - cross : Real(0), keepsPair(r, false) ? cross : Real(0)};
 }
 
 }  // namespace
@@ -108,7 +103,7 @@ std::array<Real, 3> wholeSphereCompensation(const ResolvedMaterial<Real>& r, con
     std::array<Real, 3> out{};
     if (!r.energyTable || !r.energyTableInside || wi.z == 0 || wo.z == 0) return out;
     bool so = outside(wo), si = outside(wi), crossing = so != si;
-    if (!keeps(r, crossing)) return out;
+    if (!keepsPair(r, !crossing)) return out;
     Real a = si ? r.ecAvg : r.ecAvgInside;  // the side wi leaves on
     if (!(a > 0)) return out;
     Real lobe = ecOn(r, so, abs(wo.z)) * ecOn(r, si, abs(wi.z)) / (kPi<Real> * a);

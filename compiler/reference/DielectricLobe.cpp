@@ -164,11 +164,6 @@ std::array<Real, 2> sheetWeights(const ResolvedMaterial<Real>& r, Real c, int ch
     return {2 * F / (1 + F), T / (2 - T)};
 }
 
-template <typename Real>
-bool keeps(const ResolvedMaterial<Real>& r, bool reflected) {
-    return reflected ? r.scatter != Scatter::Transmit : r.scatter != Scatter::Reflect;
-}
-
 // The sheet's unnormalized probabilities of reflecting and transmitting at
 // cos c: R' and T' summed over the channels, 0 for what `scatter` drops.
 template <typename Real>
@@ -176,8 +171,8 @@ std::array<Real, 2> sheetChoice(const ResolvedMaterial<Real>& r, Real c) {
     Real pr = 0, pt = 0;
     for (int ch = 0; ch < 3; ++ch) {
         std::array<Real, 2> w = sheetWeights(r, c, ch);
-        pr += keeps(r, true) ? w[0] : Real(0);
-        pt += keeps(r, false) ? w[1] : Real(0);
+        pr += keepsPair(r, true) ? w[0] : Real(0);
+        pt += keepsPair(r, false) ? w[1] : Real(0);
     }
     return {pr, pt};
 }
@@ -188,7 +183,7 @@ std::array<Real, 3> thinSheetBsdf(const ResolvedMaterial<Real>& r, const Vec3<Re
     using std::abs; using std::sqrt;
     std::array<Real, 3> out{};
     bool reflected = (wi.z > 0) == (wo.z > 0);
-    if (!keeps(r, reflected)) return out;
+    if (!keepsPair(r, reflected)) return out;
     Vec3<Real> i = withZ(wi, abs(wi.z)), o = withZ(wo, abs(wo.z));
     // Mirrored above, the pair's sum: no cancellation in z either way.
     Vec3<Real> s = reflected ? withZ(sum, abs(sum.z)) : Vec3<Real>{sum.x, sum.y, i.z + o.z};
@@ -228,7 +223,7 @@ std::array<Real, 3> interfaceBsdf(const ResolvedMaterial<Real>& r, const Vec3<Re
     std::array<Real, 3> out{};
     WoFrame<Real> p = woFrame(wi, wo, sum);
     bool reflected = p.wi.z > 0;
-    if (!keeps(r, reflected)) return out;
+    if (!keepsPair(r, reflected)) return out;
     RelativeEta<Real> eta = relativeEta(r, p.sign);
     Real value = 0;
     if (reflected) {
@@ -277,7 +272,7 @@ Real singleScatteringPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, 
     Vec3<Real> sum{wi.x + wo.x, wi.y + wo.y, wi.z + wo.z};
     if (r.thin) {
         bool reflected = (wi.z > 0) == (wo.z > 0);
-        if (!keeps(r, reflected)) return 0;
+        if (!keepsPair(r, reflected)) return 0;
         Vec3<Real> i = withZ(wi, abs(wi.z)), o = withZ(wo, abs(wo.z));
         Vec3<Real> s = reflected ? withZ(sum, abs(sum.z)) : Vec3<Real>{sum.x, sum.y, i.z + o.z};
         Real len = length(s);
@@ -290,7 +285,7 @@ Real singleScatteringPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, 
     }
     WoFrame<Real> p = woFrame(wi, wo, sum);
     bool reflected = p.wi.z > 0;
-    if (!keeps(r, reflected)) return 0;
+    if (!keepsPair(r, reflected)) return 0;
     RelativeEta<Real> eta = relativeEta(r, p.sign);
     Vec3<Real> m;
     Real om, jacobian, refractedCos = 0;  // dm/dwi; |wi.m| of a refracted pair
@@ -309,7 +304,7 @@ Real singleScatteringPdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, 
         jacobian = eta.eta * eta.eta * -f.im / f.lenSq;
     }
     // P_T = 1 - F at wo.m (of the refracted pair itself where wi is one).
-    Real pr = keeps(r, true) ? fresnelAcross(r, eta.eta, om) : Real(0);
+    Real pr = keepsPair(r, true) ? fresnelAcross(r, eta.eta, om) : Real(0);
     Real pt = reflected ? transmittanceAcross(r, eta.eta, om) : pairTransmittance(r, eta.eta, om, refractedCos);
     if (!(pr + pt > 0)) return 0;
     return (reflected ? pr : pt) / (pr + pt) * facetPdf(r, p.wo, m) * jacobian;
@@ -347,7 +342,7 @@ SampleResult<Real> sampleSingleScattering(const ResolvedMaterial<Real>& r, const
         s = {2 * om * m.x, 2 * om * m.y, reflected ? 2 * om * m.z * sign : out.wi.z + wo.z};
     } else {
         RelativeEta<Real> eta = relativeEta(r, sign);
-        Real pr = keeps(r, true) ? fresnelAcross(r, eta.eta, om) : Real(0);
+        Real pr = keepsPair(r, true) ? fresnelAcross(r, eta.eta, om) : Real(0);
         Real pt = transmittanceAcross(r, eta.eta, om);
         if (!(pr + pt > 0)) return out;
         reflected = u[0] * (pr + pt) < pr;
@@ -393,7 +388,8 @@ SampleResult<Real> sampleDielectricLobe(const ResolvedMaterial<Real>& r, const V
         out = sampleSingleScattering(r, wo, {u0, u[1], u[2]}, sum);
         if (!(out.pdf > 0)) return SampleResult<Real>{};
     }
-    out.pdf = p > 0 ? dielectricLobePdf(r, out.wi, wo) : out.pdf;
+    // The mixture's density (dielectricLobePdf's, with p already known).
+    if (p > 0) out.pdf = (1 - p) * singleScatteringPdf(r, out.wi, wo) + p * compensationPdf(r, out.wi, wo);
     if (out.pdf > 0) {
         std::array<Real, 3> f = dielectricBsdf(r, out.wi, wo, sum);
         for (int ch = 0; ch < 3; ++ch) out.weight[size_t(ch)] = f[size_t(ch)] * abs(out.wi.z) / out.pdf;

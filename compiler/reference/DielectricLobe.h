@@ -87,6 +87,13 @@ Real dielectricLobePdf(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi, co
 // facet (DielectricEnergy.h's tables).
 double interfaceAlbedo(const ResolvedMaterial<double>& r, double mu, int grid);
 
+// Whether `scatter` keeps a pair on one side of the surface (reflected) or
+// across it: scatter = transmit drops the first, reflect the second.
+template <typename Real>
+bool keepsPair(const ResolvedMaterial<Real>& r, bool reflected) {
+    return reflected ? r.scatter != Scatter::Transmit : r.scatter != Scatter::Reflect;
+}
+
 // The lobe's index of refraction of channel ch, clamped away from 1.
 template <typename Real>
 Real clampedEta(const ResolvedMaterial<Real>& r, int ch);
