@@ -29,4 +29,11 @@ struct NamedMaterial {
 // (the first material when `name` is empty).
 NamedMaterial loadNamedMaterial(const std::string& file, const std::string& name);
 
+// The material's lobe scatters below the surface (SPEC 11; the checker
+// makes such a lobe the material's only one): the commands that handle it
+// apart (verify on the reference, render lit through, either side of wo).
+inline bool scattersBelowSurface(const CheckedMaterial& m) {
+    return !m.combinesLobes() && m.singleLobe().wholeSphere();
+}
+
 }  // namespace facet

@@ -217,7 +217,7 @@ int renderSphereCommand(const RenderArgs& r) {
     if (!kernel) return exitCode;
     preview::SphereScene scene = r.scene;
     const CheckedMaterial& m = kernel->material();
-    if (!m.combinesLobes() && m.singleLobe().wholeSphere()) {
+    if (scattersBelowSurface(m)) {
         // What comes through: the light behind the sphere unless placed.
         scene.lightThrough = true;
         if (!r.lightGiven) scene.lightThetaDeg = kLightBehindThetaDeg;
@@ -266,7 +266,7 @@ int lobePlotCommand(const RenderArgs& r) {
     if (!kernel) return exitCode;
     preview::LobePlotOptions opt;
     const CheckedMaterial& m = kernel->material();
-    opt.wholeSphere = !m.combinesLobes() && m.singleLobe().wholeSphere();
+    opt.wholeSphere = scattersBelowSurface(m);
     if (opt.wholeSphere) opt.incidentDegrees = {0, 40, 70, 140};  // 140: light arriving from inside
     if (!r.thetaI.empty()) opt.incidentDegrees = r.thetaI;
     if (r.size) opt.width = *r.size, opt.height = *r.size * (opt.wholeSphere ? 9 : 5) / 8;

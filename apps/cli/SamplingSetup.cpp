@@ -3,6 +3,7 @@
 
 #include "CacheFiles.h"
 #include "LambdaTable.h"
+#include "MaterialFile.h"
 #include "TableCache.h"
 
 #include <cerrno>
@@ -31,7 +32,7 @@ std::string parseViewDirection(const std::string& option, const std::string& tex
 
 std::string viewSideProblem(const std::string& option, const std::string& text, const std::array<double, 3>& view,
                             const CheckedMaterial& material) {
-    const bool eitherSide = !material.combinesLobes() && material.singleLobe().wholeSphere();
+    const bool eitherSide = scattersBelowSurface(material);
     if (eitherSide && view[2] == 0)
         return fmt::format("{} {} lies in the surface (z = 0): material '{}' scatters on both sides of it, and wo "
                            "must be on one of them",

@@ -205,7 +205,7 @@ bool verifyMaterial(const CheckedMaterial& m, const std::string& path, Compiler&
     ok &= refStats.ok();
 
     // Whole-sphere lobes (SPEC 11) have no compiled form yet: nothing to compare.
-    const bool wholeSphere = !m.combinesLobes() && m.singleLobe().wholeSphere();
+    const bool wholeSphere = scattersBelowSurface(m);
     if (opt.jit && wholeSphere)
         std::printf("    %-14s not compiled: the JIT does not lower lobes that scatter below the surface yet\n",
                     "kernels");
@@ -360,7 +360,7 @@ int cmdVerify(const std::vector<std::string>& args) {
         for (const CheckedMaterial& m : program.materials) {
             if (!opt.material.empty() && m.name != opt.material) continue;
             // A whole-sphere lobe is verified on the reference alone (no kernels).
-            const bool wholeSphere = !m.combinesLobes() && m.singleLobe().wholeSphere();
+            const bool wholeSphere = scattersBelowSurface(m);
             if (std::string why = compiledBackendsRefuse(m); !why.empty() && !wholeSphere) {
                 DiagnosticEngine refused;
                 refused.error(m.loc, why);
