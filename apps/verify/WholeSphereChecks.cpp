@@ -40,17 +40,6 @@ ResolvedMaterial<double> atAlpha(const ResolvedMaterial<double>& base, double al
     return r;
 }
 
-PhysicsCheck check(std::string name, std::string where, double value, double expected, double error, double tol) {
-    PhysicsCheck c;
-    c.name = std::move(name);
-    c.where = std::move(where);
-    c.value = value;
-    c.expected = expected;
-    c.error = error;
-    c.tolerance = tol;
-    return c;
-}
-
 }  // namespace
 
 WholeSphereReport wholeSphereChecks(const CheckedMaterial& m, const Interpreter<double>& interp) {
@@ -105,13 +94,14 @@ WholeSphereReport wholeSphereChecks(const CheckedMaterial& m, const Interpreter<
                 row.plainMax = std::max(row.plainMax, e);
                 std::string where = fmt::format("alpha {} eta {:.4g} {} theta_o {}", alpha, eta,
                                                 in ? "inside" : "outside", theta);
-                report.checks.push_back(check("energy <= 1 (R + T)", where, e, 1, std::max(0.0, e - 1), kEnergySlack));
+                report.checks.push_back(
+                    PhysicsCheck{"energy <= 1 (R + T)", where, e, 1, std::max(0.0, e - 1), kEnergySlack});
                 if (!row.compensated) continue;
                 double ec = furnace(c, wo);
                 row.compensatedMin = std::min(row.compensatedMin, ec);
                 row.compensatedMax = std::max(row.compensatedMax, ec);
                 report.checks.push_back(
-                    check("compensated furnace", where, ec, 1, std::abs(1 - ec), kCompensatedBound));
+                    PhysicsCheck{"compensated furnace", where, ec, 1, std::abs(1 - ec), kCompensatedBound});
             }
             report.furnace.push_back(row);
         }
@@ -141,7 +131,8 @@ WholeSphereReport wholeSphereChecks(const CheckedMaterial& m, const Interpreter<
                                      wo.y, wo.z);
         }
     }
-    report.checks.push_back(check("generalized reciprocity", worstWhere, worst, 0, worst, kReciprocityBound));
+    report.checks.push_back(
+        PhysicsCheck{"generalized reciprocity", worstWhere, worst, 0, worst, kReciprocityBound});
     return report;
 }
 
