@@ -25,25 +25,21 @@ using namespace transmission_test;
 
 namespace {
 
-// A rough interface (or sheet) with alpha an input, so that one
-// interpreter, and one pair of tables, serves every alpha.
-struct Compensated {
-    facet::CheckedProgram program;
-    std::unique_ptr<facet::Interpreter<double>> interp;
+// The text of a rough interface (or sheet) with alpha an input `a`.
+std::string compensatedText(const std::string& ndf, const std::string& masking, double eta, bool compensate,
+                            bool thin) {
+    return fmt::format(
+        "material t {{ input a = 0.3 in 0.0001 .. 1; ndf = {}(a); masking = {}; fresnel = dielectric({}); "
+        "energy = {}; scatter = both; thin = {}; }}\n",
+        ndf, masking, eta, compensate ? "kulla_conty" : "none", thin ? "true" : "false");
+}
+
+// Its reference: one interpreter, and one pair of tables, serves every alpha.
+struct Compensated : Reference {
     Compensated(const std::string& ndf, const std::string& masking, double eta, bool compensate, bool thin,
-                facet::Transport transport) {
-        std::string text = fmt::format(
-            "material t {{ input a = 0.3 in 0.0001 .. 1; ndf = {}(a); masking = {}; fresnel = dielectric({}); "
-            "energy = {}; scatter = both; thin = {}; }}\n",
-            ndf, masking, eta, compensate ? "kulla_conty" : "none", thin ? "true" : "false");
-        facet::DiagnosticEngine diags;
-        program = facet::loadProgramText(text, "compensated.mat", diags);
-        INFO(text, "\n", diags.str());
-        REQUIRE_FALSE(diags.hasErrors());
-        interp = std::make_unique<facet::Interpreter<double>>(*program.find("t"));
-        interp->setTransport(transport);
-    }
-    facet::ResolvedMaterial<double> lobe(double alpha) const { return interp->resolve(&alpha); }
+                facet::Transport transport)
+        : Reference(compensatedText(ndf, masking, eta, compensate, thin), transport) {}
+    facet::ResolvedMaterial<double> lobeAt(double alpha) const { return interp->resolve(&alpha); }
     double f(const V3& wi, const V3& wo, double alpha) const {
         double i[3] = {wi.x, wi.y, wi.z}, o[3] = {wo.x, wo.y, wo.z};
         facet::EvalResult<double> e = interp->eval(i, o, &alpha);
@@ -149,7 +145,7 @@ TEST_CASE("generalized reciprocity with the compensation, radiance and importanc
             for (auto transport : {facet::Transport::Radiance, facet::Transport::Importance}) {
                 Compensated ref("ggx", "smith_height_correlated", eta, true, thin, transport);
                 for (double alpha : {0.3, 0.9}) {
-                    facet::ResolvedMaterial<double> lobe = ref.lobe(alpha);
+                    facet::ResolvedMaterial<double> lobe = ref.lobeAt(alpha);
                     int compensated = 0;
                     for (int k = 0; k < 100; ++k) {
                         V3 wi = uniformSphere(rng), wo = uniformSphere(rng);
@@ -181,7 +177,7 @@ TEST_CASE("sampling the compensated lobe: chi-square over the whole sphere; a pd
             for (double side : {1.0, -1.0}) {
                 const double eta = 1.5;
                 Compensated ref("ggx", "smith_height_correlated", eta, true, thin, facet::Transport::Radiance);
-                facet::ResolvedMaterial<double> lobe = ref.lobe(alpha);
+                facet::ResolvedMaterial<double> lobe = ref.lobeAt(alpha);
                 V3 wo = direction(70, 0.8);
                 wo.z *= side;
                 facet::SphereGrid grid = transmissionGrid(wo, alpha, eta);
