@@ -34,13 +34,16 @@ LaneBatch regularSample(const CheckedMaterial& material, size_t n, uint64_t seed
     for (auto& d : s.dir) d.reserve(n);
     for (auto& c : s.slots) c.reserve(n);
     std::vector<double> inputs(material.slotCount);
+    // A lobe that scatters below the surface (SPEC 11) is defined over the
+    // whole sphere: both directions uniform on it.
+    const bool wholeSphere = !material.combinesLobes() && material.singleLobe().wholeSphere();
     for (size_t i = 0; i < n; ++i) {
         double w[2][3];
         for (auto& v : w) {
             // Uniform on the hemisphere: z uniform in [0, 1]. 5% are mirrored
             // below the horizon, which the kernels must return as 0.
             double z = u(rng), phi = 2 * kPi * u(rng);
-            if (u(rng) < 0.05) z = -z;
+            if (u(rng) < (wholeSphere ? 0.5 : 0.05)) z = -z;
             double r = std::sqrt(std::max(0.0, 1 - z * z));
             v[0] = r * std::cos(phi), v[1] = r * std::sin(phi), v[2] = z;
         }

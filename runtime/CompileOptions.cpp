@@ -28,6 +28,7 @@ LoweringOptions loweringOptionsFor(const CompileOptions& options, const EnergyTa
     lowering.variant = options.math == MathMode::Fast ? MathVariant::fast() : MathVariant::exact();
     lowering.variant.floatFirst = options.floatFirst;
     lowering.trustInputs = options.assumeUnit;
+    lowering.transport = options.transport;
     lowering.width = simd ? width : 4;
     lowering.emitScalar = !simd;
     lowering.emitBatch = simd;

@@ -17,6 +17,7 @@
 #include "ToleranceSearch.h"
 
 #include <chrono>
+#include <mutex>
 
 namespace facet {
 
@@ -28,6 +29,34 @@ double millisSince(std::chrono::steady_clock::time_point start) {
 
 // This thread's CPU time with LLVM's work on the compile stack counted.
 double threadCpuMillis() { return callerCpuNanos() * 1e-6; }
+
+// LLVM creates some of its state lazily, in function-local statics of its
+// passes and code generator, and destroys it at exit(). State created after
+// a static Compiler (the first kernel a renderer's plugin compiles) is
+// destroyed before that Compiler, whose destructor still runs the queued
+// tier-ups (Kernel.h): they then used freed memory (valgrind: an invalid
+// read in a MachineFunctionPass; a crash in InstCombine's library-call
+// lookup). So the first Compiler of the process compiles one kernel, eval
+// and sampler, scalar and SIMD, optimized, before its constructor returns:
+// that state then outlives every Compiler (tests/jit/StaticCompilerExit.cpp).
+void warmUpLlvm(Compiler& compiler) {
+    static std::once_flag once;
+    std::call_once(once, [&compiler] {
+        static const char* const kMaterial =
+            "material warm_up { input roughness = 0.5 in 0 .. 1; ndf = ggx(roughness * roughness); "
+            "masking = smith_height_correlated; fresnel = schlick(rgb(0.9, 0.6, 0.5)); }\n";
+        for (const char* spec : {"backend=simd;codegen=optimized;cache=off", "backend=scalar;codegen=optimized;cache=off"}) {
+            CompileOptions options;
+            std::string error = CompileOptions::parse(spec, options);
+            internal_assert(error.empty()) << error;
+            DiagnosticEngine diags;
+            std::unique_ptr<Kernel> k = compiler.compileText(kMaterial, "<warm-up>", "", options, diags);
+            internal_assert(k) << diags.str();
+            float wo[3] = {0, 0, 1}, u[3] = {0.5f, 0.5f, 0.5f}, wi[3], pdf, weight[3], roughness = 0.5f;
+            k->sample(wo, u, &roughness, wi, &pdf, weight);
+        }
+    });
+}
 
 }  // namespace
 
@@ -47,7 +76,11 @@ Compiler::Compiler()
       cache_(std::make_shared<CacheDirectory>(defaultCacheRoot())),
       tables_(std::make_unique<TableCache>(cache_, "tables")),
       memoryCache_(std::make_shared<MemoryCache>()),
-      tierUpWorker_(std::make_unique<TierUpWorker>()) {}
+      tierUpWorker_(std::make_unique<TierUpWorker>()) {
+    warmUpLlvm(*this);
+}
+
+
 Compiler::~Compiler() {
     tierUpWorker_.reset();  // first: its running job uses the JIT and the caches
 }

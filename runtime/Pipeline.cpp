@@ -149,7 +149,7 @@ void plan(PipelineRun& run, const PipelineControl& control, const PipelineTarget
         << "energy compensation planned without its table";
     // The sampler's tables only for a run that emits the sampler.
     run.plan = planLowering(run.specialized, run.lowering.variant, run.lowering.trustInputs, run.lobeEnergyTables,
-                            run.lowering.emitSampling);
+                            run.lowering.emitSampling, run.lowering.transport);
 }
 
 void lower(PipelineRun& run, const PipelineControl& control, const PipelineTarget& target) {

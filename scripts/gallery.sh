@@ -29,7 +29,7 @@ $facet render materials/brushed_metal.mat --plot pdf --wo 0.7071068,0,0.7071068 
 # whole circle.
 $facet render examples/materials/frosted_glass.mat --backend interp -o "$out/frosted_glass.png" --size 256 \
   --samples 64 | grep -E "^rendered"
-$facet render examples/materials/rough_glass.mat --backend interp --plot lobe -o "$out/lobe_rough_glass.png"
+$facet render examples/materials/rough_glass.mat --plot lobe -o "$out/lobe_rough_glass.png"
 mkdir -p build/gallery-materials
 printf 'material rough_gold { ndf = ggx(0.8); masking = smith_height_correlated; fresnel = conductor(eta = rgb(0.143, 0.374, 1.442), k = rgb(3.983, 2.385, 1.603)); energy = kulla_conty; }\n' \
   > build/gallery-materials/rough_gold.mat

@@ -6,8 +6,8 @@
 //                [--exposure EV] [--threads N] [--backend simd|scalar|interp]
 //                [--math exact|fast] [--set NAME=VALUE]...
 //       a lit sphere, shaded by the compiled kernel (SphereRender.h); a
-//       material that scatters below its surface (--backend interp) is lit
-//       through it, from behind unless --light says otherwise
+//       material that scatters below its surface is lit through it, from
+//       behind unless --light says otherwise
 //   facet render FILE --plot lobe -o lobe.png [--theta-i A,B,...] [--size W]
 //       the BRDF in the plane of incidence, one polar curve per theta_i
 //       (the whole circle, theta_i up to 180, for a lobe that scatters below)

@@ -95,13 +95,13 @@ WholeSphereReport wholeSphereChecks(const CheckedMaterial& m, const Interpreter<
                 std::string where = fmt::format("alpha {} eta {:.4g} {} theta_o {}", alpha, eta,
                                                 in ? "inside" : "outside", theta);
                 report.checks.push_back(
-                    PhysicsCheck{"energy <= 1 (R + T)", where, e, 1, std::max(0.0, e - 1), kEnergySlack});
+                    PhysicsCheck{"energy <= 1 (R + T)", where, e, 1, std::max(0.0, e - 1), kEnergySlack, true, {}});
                 if (!row.compensated) continue;
                 double ec = furnace(c, wo);
                 row.compensatedMin = std::min(row.compensatedMin, ec);
                 row.compensatedMax = std::max(row.compensatedMax, ec);
                 report.checks.push_back(
-                    PhysicsCheck{"compensated furnace", where, ec, 1, std::abs(1 - ec), kCompensatedBound});
+                    PhysicsCheck{"compensated furnace", where, ec, 1, std::abs(1 - ec), kCompensatedBound, true, {}});
             }
             report.furnace.push_back(row);
         }
@@ -132,7 +132,7 @@ WholeSphereReport wholeSphereChecks(const CheckedMaterial& m, const Interpreter<
         }
     }
     report.checks.push_back(
-        PhysicsCheck{"generalized reciprocity", worstWhere, worst, 0, worst, kReciprocityBound});
+        PhysicsCheck{"generalized reciprocity", worstWhere, worst, 0, worst, kReciprocityBound, true, {}});
     return report;
 }
 

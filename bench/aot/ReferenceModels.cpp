@@ -404,6 +404,8 @@ const std::vector<ReferenceModel>& referenceModels() {
         {"aniso_ggx_dielectric", "aniso_ggx_dielectric.mat",
          "anisotropic GGX + Smith height-correlated + dielectric (N-BK7)", {"roughness_x", "roughness_y"},
          &anisoGgxDielectric, nullptr, nullptr, &bareAnisoGgxDielectric},
+        {"rough_glass", "rough_glass.mat", "GGX + Smith separable + dielectric (1.5), reflection and refraction",
+         {"roughness"}, &roughGlass, nullptr, nullptr, &bareRoughGlass, true},
     };
     return models;
 }

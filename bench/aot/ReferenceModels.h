@@ -1,4 +1,4 @@
-// ReferenceModels: hand-written ahead-of-time C++ of three reference BRDFs.
+// ReferenceModels: hand-written ahead-of-time C++ of four reference BSDFs.
 //
 // These are the baseline `facet bench` times the JIT against (SPEC section 6):
 // what a good engineer writes by hand for speed in plain C++ — float, std::
@@ -45,6 +45,7 @@ struct ReferenceModel {
     SampleBatchFn sample = nullptr;  // a hand-written sampler, where there is one
     PdfBatchFn pdf = nullptr;
     BatchFn bare = nullptr;  // the bare loop of the same BRDF (below)
+    bool wholeSphere = false;  // f over the whole sphere (SPEC 11), not 0 below the horizon
 };
 
 // (a) isotropic GGX + Smith height-correlated + Schlick with an rgb f0.
@@ -89,7 +90,16 @@ int64_t bareBeckmannConductor(int64_t n, const float* const wi[3], const float* 
 int64_t bareAnisoGgxDielectric(int64_t n, const float* const wi[3], const float* const wo[3],
                                const float* const* inputs, float* const rgb[3]);
 
-// All three, in the order above.
+// (d) a rough glass over the whole sphere (RoughGlassModel.cpp): isotropic
+// GGX + Smith separable + exact dielectric (eta 1.5), scatter = both. Input:
+// roughness. f is defined for wi and wo on either side (no 0 below the
+// horizon); its bare twin follows.
+int64_t roughGlass(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                   float* const rgb[3]);
+int64_t bareRoughGlass(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                       float* const rgb[3]);
+
+// All four, in the order above.
 const std::vector<ReferenceModel>& referenceModels();
 // The model tagged `name`, or null.
 const ReferenceModel* findReferenceModel(std::string_view name);

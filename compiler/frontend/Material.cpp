@@ -70,13 +70,19 @@ std::string printBsdf(const CheckedMaterial& m, const BsdfNode& node) {
 }
 
 std::string compiledBackendsRefuse(const CheckedMaterial& m) {
-    // SPEC 11's lobes are evaluated and sampled by the reference
-    // (DielectricLobe.h); their lowering is not built yet.
-    for (const CheckedLobe& lobe : m.lobes)
-        if (lobe.wholeSphere())
-            return "material '" + m.name + "': lobe '" + lobe.name + "' scatters below the surface (" +
-                   (lobe.thin ? std::string("thin = true") : "scatter = " + std::string(scatterName(lobe.scatter))) +
-                   "), which only the reference evaluates so far; use --backend interp";
+    // SPEC 11's lobes: the compiled backends evaluate one alone
+    // (LaneDielectric.cpp) and sample it through the reference; its energy
+    // compensation and its place in a combination are the reference's only.
+    for (const CheckedLobe& lobe : m.lobes) {
+        if (!lobe.wholeSphere()) continue;
+        std::string what = "material '" + m.name + "': lobe '" + lobe.name + "' scatters below the surface (" +
+                           (lobe.thin ? std::string("thin = true") : "scatter = " + std::string(scatterName(lobe.scatter))) + ")";
+        if (m.combinesLobes())
+            return what + " in a combination of lobes, which only the reference evaluates so far; use --backend interp";
+        if (lobe.compensatesEnergy())
+            return what + " with energy = kulla_conty, whose compensation from both sides only the reference "
+                          "evaluates so far; use --backend interp";
+    }
     // A layer's tables are baked when the kernel is compiled, from constant
     // parameters: a per-lane table (3D over the top's parameters) is not
     // built yet. Binding the input (`--set`) makes it constant.

@@ -159,7 +159,9 @@ std::string samplerlessWhat(const CheckedMaterial& material);
 std::string layerTableInput(const CheckedMaterial& material, int layer);
 
 // The message with which the compiled backends refuse a material, "" when
-// they take it: a layer whose tables would depend on a per-lane input. Every command that compiles,
+// they take it: a layer whose tables would depend on a per-lane input, a
+// lobe below the surface with energy compensation or in a combination.
+// Every command that compiles,
 // verifies or benchmarks a material reports it at the material's name.
 std::string compiledBackendsRefuse(const CheckedMaterial& material);
 

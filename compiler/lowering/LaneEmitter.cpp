@@ -63,12 +63,15 @@ void LaneEmitter::distrust(Value* cond) {
 
 LaneEmitter::Result LaneEmitter::emit(std::array<Value*, 3> wi, std::array<Value*, 3> wo,
                                       const std::vector<Value*>& slots) {
-    LaneGeometry geo = geometry(readDirection(wi), readDirection(wo));
-    lowerInputsAndLets(slots);
-
     MathEmitter& fm = floatMath_;
     Result r;
-    r.rgb = brdf(geo);
+    if (plan.wholeSphere) {
+        r.rgb = wholeSphereBsdf(readDirection(wi), readDirection(wo), slots);  // LaneDielectric.cpp
+    } else {
+        LaneGeometry geo = geometry(readDirection(wi), readDirection(wo));
+        lowerInputsAndLets(slots);
+        r.rgb = brdf(geo);
+    }
     // A value that overflows float is an invalid lane, never Inf/NaN, and an
     // invalid lane's value is 0. A guarded body needs neither: its invalid
     // lanes are untrusted, so their value and status come from the other

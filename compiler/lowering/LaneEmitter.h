@@ -15,7 +15,8 @@
 //
 // Files: LaneEmitter.cpp (geometry, assembly), ExprLowering.cpp (the
 // material's expressions and parameters), LaneTerms.cpp (helpers several
-// model terms share, constant tables and their lookups).
+// model terms share, constant tables and their lookups), LaneDielectric.cpp
+// (a lobe over the whole sphere).
 #pragma once
 
 #include "Diagnostics.h"
@@ -265,6 +266,33 @@ private:
     LaneGeometry geometry(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
                           bool wiSampled = false);
     std::array<llvm::Value*, 3> brdf(const LaneGeometry& geo);
+    // LaneDielectric.cpp: a lobe over the whole sphere (plan.wholeSphere).
+    // f from the input directions, in float: its own geometry and the
+    // lane's inputs and lets.
+    std::array<llvm::Value*, 3> wholeSphereBsdf(const std::array<llvm::Value*, 3>& wi,
+                                                const std::array<llvm::Value*, 3>& wo,
+                                                const std::vector<llvm::Value*>& slots);
+    // The lane's NDF parameters and index of refraction (per channel; the
+    // interface's moved away from 1, SPEC 11), after lowerInputsAndLets.
+    struct WholeSphereTerms {
+        NdfParams n;
+        LVal eta;
+        llvm::Value* interfaceEta = nullptr;  // null for a thin sheet
+    };
+    WholeSphereTerms wholeSphereTerms();
+    // eta' = the far side's index relative to wo's side (eta where wo is
+    // above, woUp; else 1/eta), and eta' - 1 without cancellation near 1.
+    std::pair<llvm::Value*, llvm::Value*> relativeEta(const WholeSphereTerms& t, llvm::Value* woUp);
+    // f per channel in the precise type for unit wi, wo in the precise type
+    // (0 where the selected facet faces away; either direction in the
+    // surface is the caller's).
+    LVal wholeSphereValue(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
+                          const WholeSphereTerms& t);
+    // LaneDielectricSampling.cpp: its sample and pdf bodies.
+    SampleResult emitWholeSphereSample(const std::array<llvm::Value*, 3>& wo, const std::array<llvm::Value*, 3>& u,
+                                       const std::vector<llvm::Value*>& slots);
+    PdfResult emitWholeSpherePdf(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
+                                 const std::vector<llvm::Value*>& slots);
     // 0 for an invalid lane, in a one-lane body (LaneEmitter.cpp says why
     // not by a select).
     void zeroInvalidLaneByBranch(std::array<llvm::Value*, 3>& values);
@@ -309,6 +337,7 @@ private:
                                 const std::vector<llvm::Value*>& slots);
     llvm::Value* walkPdf(SamplingTerms& t, const std::array<llvm::Value*, 3>& wi);
     void finishSample(SampleResult& r, llvm::Value* noSample);
+    PdfResult finishPdf(llvm::Value* pdf);
     SamplingTerms samplingTerms(const std::array<llvm::Value*, 3>& wo);
     llvm::Value* specularProbability(SamplingTerms& t);
     llvm::Value* specularPdf(SamplingTerms& t, const std::array<llvm::Value*, 3>& m, llvm::Value* om);

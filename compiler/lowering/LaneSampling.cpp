@@ -184,6 +184,7 @@ LaneEmitter::SampleResult LaneEmitter::emitSample(const Vec& woArg, const Vec& u
     const SamplingPlan& sp = plan.sampling;
     internal_assert(sp.specular != SpecularSampling::None) << "a sampler without a specular technique";
     if (sp.walk) return emitWalkSample(woArg, u, slots);
+    if (plan.wholeSphere) return emitWholeSphereSample(woArg, u, slots);  // LaneDielectricSampling.cpp
     const Vec woIn = readDirection(woArg);
     Vec wo;
     if (body.correctedSums) {
@@ -322,9 +323,9 @@ void LaneEmitter::finishSample(SampleResult& r, Value* noSample) {
 }
 
 LaneEmitter::PdfResult LaneEmitter::emitPdf(const Vec& wiIn, const Vec& woIn, const std::vector<Value*>& slots) {
-    MathEmitter& fm = floatMath_;
     MathEmitter& pm = preciseMath_;
     internal_assert(plan.sampling.specular != SpecularSampling::None) << "a pdf without a specular technique";
+    if (plan.wholeSphere) return emitWholeSpherePdf(wiIn, woIn, slots);  // LaneDielectricSampling.cpp
     Vec wiF{}, woF{};
     Vec wi = unitDirection(readDirection(wiIn), wiF);
     Vec wo = unitDirection(readDirection(woIn), woF);
@@ -339,7 +340,13 @@ LaneEmitter::PdfResult LaneEmitter::emitPdf(const Vec& wiIn, const Vec& woIn, co
         Value* spec = pm.select(h.exists, specularPdf(t, h.m, h.om), pm.c(0.0));
         pdf = pm.select(t.above, mixturePdf(t, spec, wi), pm.c(0.0));
     }
+    return finishPdf(pdf);
+}
 
+// The density in float; as in eval, one float cannot hold is an invalid
+// lane, and an invalid lane's density is 0.
+LaneEmitter::PdfResult LaneEmitter::finishPdf(Value* pdf) {
+    MathEmitter& fm = floatMath_;
     PdfResult r;
     r.pdf = fm.convert(pdf, fm.type());
     markInvalid(fm.isNanInfOrNegative(r.pdf));

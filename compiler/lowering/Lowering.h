@@ -58,6 +58,8 @@ struct LoweringOptions {
     bool emitSampling = false;
     // The host's promise of valid inputs (assume=unit; LoweringPlan::trustInputs).
     bool trustInputs = false;
+    // The transport a refracting lobe's kernel is for (SPEC 11; LoweringPlan::transport).
+    Transport transport = Transport::Radiance;
     // Each batch entry gets its lane body at one lane too, which its one-lane
     // calls run (LoweringPlan::oneLaneBody): optimized code only, as it
     // costs about a third more compile time.

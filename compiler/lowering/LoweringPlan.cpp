@@ -309,8 +309,37 @@ static LoweringPlan planWalk(const CheckedMaterial& material, const MaterialEmit
     return plan;
 }
 
+// A lobe over the whole sphere (SPEC 11): one plain body, which computes
+// its own geometry (LaneDielectric.cpp) from directions it normalizes in
+// the precise type. The float-first and guarded bodies' guards are written
+// for the reflection geometry (h = wi + wo), so neither applies. Its sampler
+// (LaneDielectricSampling.cpp) draws the NDF's normals as a reflecting
+// lobe's does, in the same body.
+static LoweringPlan planWholeSphere(const CheckedMaterial& material, const MaterialEmitters& em, LoweringPlan plan,
+                                    Transport transport) {
+    const CheckedLobe& lobe = material.singleLobe();
+    internal_assert(lobe.hasNdf() && !em.ndf.traits.wholeLobe && plan.lambda != LambdaForm::None &&
+                    !lobe.compensatesEnergy())
+        << "a whole-sphere lobe without a microfacet NDF and a Smith masking, or with compensation";
+    plan.thinSheet = lobe.thin;
+    plan.keepsReflection = lobe.scatter != Scatter::Transmit;
+    plan.keepsTransmission = lobe.scatter != Scatter::Reflect;
+    plan.transport = transport;
+    plan.scalarBody = planBody(material, em, plan, BodyRole::Plain, plan.variant);
+    plan.scalarBody.halfVector = HalfVectorForm::Precise;
+    plan.scalarBody.correctedSums = false;
+    plan.batchBodies = BatchBodies::Plain;
+    plan.batchBody = plan.scalarBody;
+    planParams(material, plan);
+    plan.sampling.specular = plannedSpecularSampling(material);
+    plan.sampling.compiled = plan.sampling.specular != SpecularSampling::None;
+    plan.sampling.body = plan.sampling.batchBody = plan.scalarBody;
+    return plan;
+}
+
 LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs,
-                          const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables, bool samplerTables) {
+                          const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables, bool samplerTables,
+                          Transport transport) {
     if (material.combinesLobes())
         return planCombination(material, variant, trustInputs, lobeEnergyTables, samplerTables);
     const MaterialEmitters em = termEmitters(material);
@@ -335,8 +364,11 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     } else
         plan.lambda = LambdaForm::ClosedForm;
 
+    // The refracting lobe needs the exact term's transmittance: no Schlick substitution.
+    plan.wholeSphere = material.singleLobe().wholeSphere();
+    if (plan.wholeSphere) plan.variant.schlickDielectric = plan.variant.floatFirst = false;
     const FresnelEmitter& fresnel = em.fresnel;
-    plan.fresnel.substituteSchlick = variant.schlickDielectric && fresnel.substitutableBySchlick();
+    plan.fresnel.substituteSchlick = plan.variant.schlickDielectric && fresnel.substitutableBySchlick();
     plan.fresnel.exactInFloat = !plan.fresnel.substituteSchlick && fresnel.evaluableInFloat(material.singleLobe().fresnel);
     plan.fresnel.rangeGuard = !fresnel.atLeast(material.singleLobe().fresnel, 1e-6);
     plan.fresnel.atMostOne = fresnel.atMostOne();
@@ -345,6 +377,7 @@ LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& va
     // no F = 0 select. (A smaller bound would admit a Schlick eta within
     // 1e-14 of 1, which a float body rounds to 1: f0 = 0.)
     plan.fresnel.canVanish = fresnel.canVanish() && !fresnel.atLeast(material.singleLobe().fresnel, 1e-12);
+    if (plan.wholeSphere) return planWholeSphere(material, em, plan, transport);
 
     // The scalar kernel computes the plain body: per lane, float is no
     // faster than double except for division and square root, and the
@@ -426,6 +459,12 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
        << " at-most-one=" << yesNo(plan.fresnel.atMostOne) << " can-vanish=" << yesNo(plan.fresnel.canVanish) << "\n";
     os << "energy-compensation: " << yesNo(plan.compensatesEnergy) << "\n";
     if (plan.walksMicrosurface) os << "random-walk: yes (exact double body; sampler walks, pdf for MIS)\n";
+    if (plan.wholeSphere)
+        os << "whole-sphere: " << (plan.thinSheet ? "thin sheet" : "refracting interface")
+           << " keeps=" << (plan.keepsReflection ? "reflection" : "") << (plan.keepsReflection && plan.keepsTransmission ? "+" : "")
+           << (plan.keepsTransmission ? "transmission" : "")
+           << " transport=" << (plan.transport == Transport::Importance ? "importance" : "radiance")
+           << " (one plain body)\n";
     os << "trust-inputs: " << yesNo(plan.trustInputs) << "\n";
     auto count = [](const std::vector<bool>& v) { return std::count(v.begin(), v.end(), true); };
     os << "reads: inputs " << count(plan.reads.inputs) << " of " << plan.reads.inputs.size() << ", lets "

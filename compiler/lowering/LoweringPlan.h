@@ -225,6 +225,16 @@ struct LoweringPlan {
     // (LaneWalk.cpp); every body is the exact plain body (fast mode too: a
     // walk in float would branch away from the reference's path).
     bool walksMicrosurface = false;
+    // SPEC 11: the lobe scatters over the whole sphere (LaneDielectric.cpp;
+    // the reference is compiler/reference/DielectricLobe.h): a refracting
+    // interface or a thin sheet (thinSheet), the pairs it keeps (on one
+    // side, across), and the transport its refracted pairs are for. One
+    // plain body (double in exact mode, float in fast mode), and the
+    // reference's sampler.
+    bool wholeSphere = false;
+    bool thinSheet = false;
+    bool keepsReflection = true, keepsTransmission = false;
+    Transport transport = Transport::Radiance;
     // The host's promise (assume=unit): finite directions with |w| within
     // 1e-3 of 1, finite inputs, u in [0, 1). The kernel then drops the work
     // whose only purpose is to find lanes that break it: the direction,
@@ -281,7 +291,7 @@ struct LobeLowering {
 // an eval-only compile of a combination does not integrate them.
 LoweringPlan planLowering(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs = false,
                           const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables = {},
-                          bool samplerTables = true);
+                          bool samplerTables = true, Transport transport = Transport::Radiance);
 // CombinationPlan.cpp: planLowering() and printPlan() of a combination.
 LoweringPlan planCombination(const CheckedMaterial& material, const MathVariant& variant, bool trustInputs,
                              const std::vector<std::shared_ptr<const EnergyTable>>& lobeEnergyTables,

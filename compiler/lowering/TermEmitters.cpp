@@ -133,6 +133,23 @@ llvm::Value* NdfEmitter::visibleSmithSum(LaneEmitter& lane, const NdfParams& n,
 
 FresnelAverageArgs FresnelEmitter::averageArgs(LaneEmitter&) const { return {}; }
 
+LVal FresnelEmitter::refractiveIndex(LaneEmitter&) const {
+    internal_error << "refractive index of a Fresnel term without one (the checker allows only dielectric)";
+}
+llvm::Value* FresnelEmitter::reflectanceAcross(LaneEmitter&, llvm::Value*, llvm::Value*) const {
+    internal_error << "reflectance across an interface of a non-dielectric Fresnel term";
+}
+llvm::Value* FresnelEmitter::transmittanceAcross(LaneEmitter&, llvm::Value*, llvm::Value*) const {
+    internal_error << "transmittance across an interface of a non-dielectric Fresnel term";
+}
+llvm::Value* FresnelEmitter::pairTransmittance(LaneEmitter&, llvm::Value*, llvm::Value*, llvm::Value*) const {
+    internal_error << "transmittance of a refracted pair of a non-dielectric Fresnel term";
+}
+llvm::Value* MaskingEmitter::transmittedOverCosines(LaneEmitter&, const NdfEmitter&, const NdfParams&,
+                                                    const LaneGeometry&, llvm::Value*) const {
+    internal_error << "transmission form of a non-Smith masking (the checker refuses the pair)";
+}
+
 LVal DiffuseEmitter::diffuse(LaneEmitter&) const { internal_error << "diffuse term of `none`"; }
 
 std::array<llvm::Value*, 3> EnergyEmitter::compensation(LaneEmitter&, const NdfEmitter&, const NdfParams&,

@@ -141,6 +141,12 @@ public:
     // without G and without dividing two underflowed values.
     virtual llvm::Value* overCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
                                      const LaneGeometry& geo, llvm::Value* D) const = 0;
+    // The same for a transmitted pair (SPEC 11), with wi mirrored above the
+    // surface in `geo` (both cosines positive) and h the refracting facet:
+    // scale G_T / ((n.wi)(n.wo)), G_T the masking's transmission form
+    // (MaskingFormulas::transmittedGOverCosines). Only Smith forms have one.
+    virtual llvm::Value* transmittedOverCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
+                                                const LaneGeometry& geo, llvm::Value* scale) const;
 };
 
 // A Fresnel model's per-lane F_avg inputs (Kulla-Conty): what average()
@@ -174,6 +180,19 @@ public:
     virtual FresnelAverageArgs averageArgs(LaneEmitter& lane) const;
     // F_avg of channel ch, precise type.
     virtual llvm::Value* average(LaneEmitter& lane, const FresnelAverageArgs& args, int ch) const = 0;
+
+    // ---- the interface of a lobe that refracts or is a thin sheet (SPEC
+    // 11; the checker allows only the dielectric term there) ----
+    // The refractive index per channel, clamped to the catalog domain, precise type.
+    virtual LVal refractiveIndex(LaneEmitter& lane) const;
+    // F and the transmittance 1 - F at cos c on the near side of an
+    // interface whose far side has the relative index eta (eta < 1: total
+    // internal reflection past the critical angle); and the transmittance
+    // of a refracted pair from its cosines with the facet on the near side
+    // (c) and on the far side (ct > 0). Precise type; c in [0, 1].
+    virtual llvm::Value* reflectanceAcross(LaneEmitter& lane, llvm::Value* eta, llvm::Value* c) const;
+    virtual llvm::Value* transmittanceAcross(LaneEmitter& lane, llvm::Value* eta, llvm::Value* c) const;
+    virtual llvm::Value* pairTransmittance(LaneEmitter& lane, llvm::Value* eta, llvm::Value* c, llvm::Value* ct) const;
 };
 
 class DiffuseEmitter {

@@ -62,6 +62,32 @@ double maxRelError(const CheckedMaterial& m, const LaneBatch& s, const Outputs& 
     return cmp.maxRel;
 }
 
+// The error relative to max(|want|, 1e-2) for a model over the whole
+// sphere: a float loop's refracting facet m = (eta' wi + wo)/|...| loses
+// wi.m to cancellation where the facet is nearly tangent to wi, and there
+// f is 1e-6 or less of its usual values (0.1 .. 10); elsewhere as above.
+// Its bound is looser too (kWholeSphereBound): refraction near grazing is
+// ill-conditioned in float (1.5e-3 measured at n.wi = 0.05 from inside),
+// which Facet's exact kernels avoid by computing the geometry in double.
+constexpr double kWholeSphereBound = 4e-3;
+
+double maxModelError(const aot::ReferenceModel& model, const CheckedMaterial& m, const LaneBatch& s,
+                     const Outputs& out, std::string& worst) {
+    if (!model.wholeSphere) return maxRelError(m, s, out, worst);
+    ReferenceValues want = evaluateReference(m, s);
+    double most = 0;
+    for (size_t i = 0; i < s.size(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            double e = std::abs(out.c[c][i] - want.rgb[c][i]) / std::max(std::abs(want.rgb[c][i]), 1e-2);
+            if (!(e <= most)) {
+                most = e;
+                worst = fmt::format("lane {} ch {}: {} got {:.9g} want {:.17g}", i, c,
+                                    describeLane(m, s.wi(), s.wo(), s.inputs(), i), out.c[c][i], want.rgb[c][i]);
+            }
+        }
+    return most;
+}
+
 }  // namespace
 
 TEST_SUITE("aot") {
@@ -107,8 +133,8 @@ TEST_CASE("AOT reference models and their bare twins match the interpreter withi
                 int64_t invalid = fn(int64_t(s.size()), s.wi(), s.wo(), s.inputs(), out.p);
                 CHECK(invalid == 0);
                 std::string worst;
-                double err = maxRelError(m, s, out, worst);
-                CHECK_MESSAGE(err <= 1e-4, fmt::format("{}: max rel {:.3g} at {}", fn == model.bare ? "bare" : "aot",
+                double err = maxModelError(model, m, s, out, worst);
+                CHECK_MESSAGE(err <= (model.wholeSphere ? kWholeSphereBound : 1e-4), fmt::format("{}: max rel {:.3g} at {}", fn == model.bare ? "bare" : "aot",
                                                        err, worst));
             }
         }
@@ -218,7 +244,7 @@ TEST_CASE("AOT defaults: a null inputs array or a null slot means the material's
             CHECK(given.c[c] == partial.c[c]);
         }
         std::string worst;
-        CHECK_MESSAGE(maxRelError(m, s, none, worst) <= 1e-4, worst);
+        CHECK_MESSAGE(maxModelError(model, m, s, none, worst) <= (model.wholeSphere ? kWholeSphereBound : 1e-4), worst);
     }
 }
 
@@ -244,7 +270,11 @@ TEST_CASE("AOT conventions: invalid lanes are 0 and counted, below the horizon i
         CHECK(invalid == 4);  // NaN wi, Inf wo, non-unit wi, NaN input
         for (int c = 0; c < 3; ++c) {
             CHECK(out.c[c][0] > 0);
-            for (size_t i = 1; i < n; ++i) CHECK(out.c[c][i] == 0.0f);
+            // wi below the horizon (lane 4) and wi = -wo (lane 6) are refracted
+            // pairs of a whole-sphere model.
+            for (size_t i = 1; i < n; ++i)
+                CHECK((out.c[c][i] == 0.0f || (model.wholeSphere && (i == 4 || i == 6))));
+            if (model.wholeSphere) CHECK((out.c[c][4] > 0 && out.c[c][6] > 0));
         }
     }
 }

@@ -182,32 +182,33 @@ public:
         const bool totalReflectionPossible = !etaAboveOne(use);
         c2 = m.mul(c, c);
         return lane.map({eta}, true, [&](auto& x) {
-            // g^2 = eta^2 - sin^2 = (eta^2 - 1) + c^2 and, with gp = g + c,
-            // g - c = (eta^2 - 1)/gp (pbrt's form, no cancellation):
-            //   A = (g - c)/(g + c) = e/gp^2,   e = eta^2 - 1,
-            //   B = (c gp - 1)/(c (g - c) + 1) = gp (c gp - 1)/den,
-            //   den = c e + gp = g + c eta^2 > 0,
-            //   F = A^2 (1 + B^2) / 2 = r^2 (den^2 + b^2) / 2,
-            //   r = e/(gp^2 den),   b = gp (c gp - 1),
-            // with one division and each factor within the type's range for
-            // every eta up to maxFresnelIndex (r^2 and the sum are bounded
-            // where e^2 (den^2 + b^2) would not be).
-            Value* n = x[0];
-            Value* e = m.mul(m.sub(n, one), m.add(n, one));
-            Value* g2 = m.add(e, c2);
-            Value* g = m.sqrt(totalReflectionPossible ? m.maxnum(g2, m.c(0.0)) : g2);
-            Value* gp = m.add(g, c);
-            Value* den = m.fma(c, e, gp);
-            Value* r = m.div(e, m.mul(m.mul(gp, gp), den));
-            Value* b = m.mul(gp, m.fma(c, gp, m.c(-1.0)));
-            Value* halfSum = m.mul(m.c(0.5), m.fma(den, den, m.mul(b, b)));
-            Value* F = m.mul(m.mul(r, r), halfSum);
-            if (totalReflectionPossible) {
-                Value* totalReflection = lane.builder.CreateOr(m.le(g2, m.c(0.0)), m.eq(gp, m.c(0.0)));
-                F = m.select(totalReflection, one, F);
-            }
-            return pm.convert(F, pm.type());
+            return pm.convert(reflectance(lane, m, x[0], c, c2, totalReflectionPossible), pm.type());
         });
+    }
+
+    LVal refractiveIndex(LaneEmitter& lane) const override {
+        return lane.rgbParam(lane.material.singleLobe().fresnel, kEta, false, lane.maxFresnelIndex());
+    }
+    Value* reflectanceAcross(LaneEmitter& lane, Value* eta, Value* c) const override {
+        MathEmitter& m = lane.preciseMath();
+        return reflectance(lane, m, eta, c, m.mul(c, c), true);
+    }
+    // T = 1 - F = 2 c g (1 / (c + g)^2 + eta^2 / (eta^2 c + g)^2) (1 - rs^2
+    // and 1 - rp^2 with the reference's rs, rp): every term positive, so T
+    // keeps its relative precision where F -> 1 (grazing); 0 past the
+    // critical angle.
+    Value* transmittanceAcross(LaneEmitter& lane, Value* eta, Value* c) const override {
+        MathEmitter& m = lane.preciseMath();
+        Value* g2 = m.fma(c, c, m.mul(m.sub(eta, m.c(1.0)), m.add(eta, m.c(1.0))));
+        Value* T = transmittanceFromG(m, eta, c, m.sqrt(m.maxnum(g2, m.c(0.0))));
+        return m.select(lane.builder.CreateAnd(m.gt(g2, m.c(0.0)), m.gt(c, m.c(0.0))), T, m.c(0.0));
+    }
+    // g = eta cos(theta_t) from the refracted direction's own cosine.
+    Value* pairTransmittance(LaneEmitter& lane, Value* eta, Value* c, Value* ct) const override {
+        MathEmitter& m = lane.preciseMath();
+        Value* g = m.mul(eta, ct);
+        Value* T = transmittanceFromG(m, eta, c, g);
+        return m.select(lane.builder.CreateAnd(m.gt(g, m.c(0.0)), m.gt(c, m.c(0.0))), T, m.c(0.0));
     }
 
     FresnelAverageArgs averageArgs(LaneEmitter& lane) const override {
@@ -222,6 +223,44 @@ public:
             return lane.preciseMath().c(fresnelAverageDielectric(eta));
         }
         return dielectricAverageLookup(lane, args.a[ch]);
+    }
+
+private:
+    static Value* transmittanceFromG(MathEmitter& m, Value* eta, Value* c, Value* g) {
+        Value* n2 = m.mul(eta, eta);
+        Value *a = m.add(c, g), *b = m.fma(n2, c, g);
+        Value* sum = m.add(m.div(m.c(1.0), m.mul(a, a)), m.div(n2, m.mul(b, b)));
+        return m.mul(m.mul(m.c(2.0), m.mul(c, g)), sum);
+    }
+
+    // F at cos c (c2 = c^2) for the index n, in `m`.
+    static Value* reflectance(LaneEmitter& lane, MathEmitter& m, Value* n, Value* c, Value* c2,
+                              bool totalReflectionPossible) {
+        Value* one = m.c(1.0);
+        // g^2 = eta^2 - sin^2 = (eta^2 - 1) + c^2 and, with gp = g + c,
+        // g - c = (eta^2 - 1)/gp (pbrt's form, no cancellation):
+        //   A = (g - c)/(g + c) = e/gp^2,   e = eta^2 - 1,
+        //   B = (c gp - 1)/(c (g - c) + 1) = gp (c gp - 1)/den,
+        //   den = c e + gp = g + c eta^2 > 0,
+        //   F = A^2 (1 + B^2) / 2 = r^2 (den^2 + b^2) / 2,
+        //   r = e/(gp^2 den),   b = gp (c gp - 1),
+        // with one division and each factor within the type's range for
+        // every eta up to maxFresnelIndex (r^2 and the sum are bounded
+        // where e^2 (den^2 + b^2) would not be).
+        Value* e = m.mul(m.sub(n, one), m.add(n, one));
+        Value* g2 = m.add(e, c2);
+        Value* g = m.sqrt(totalReflectionPossible ? m.maxnum(g2, m.c(0.0)) : g2);
+        Value* gp = m.add(g, c);
+        Value* den = m.fma(c, e, gp);
+        Value* r = m.div(e, m.mul(m.mul(gp, gp), den));
+        Value* b = m.mul(gp, m.fma(c, gp, m.c(-1.0)));
+        Value* halfSum = m.mul(m.c(0.5), m.fma(den, den, m.mul(b, b)));
+        Value* F = m.mul(m.mul(r, r), halfSum);
+        if (totalReflectionPossible) {
+            Value* totalReflection = lane.builder.CreateOr(m.le(g2, m.c(0.0)), m.eq(gp, m.c(0.0)));
+            F = m.select(totalReflection, one, F);
+        }
+        return F;
     }
 };
 

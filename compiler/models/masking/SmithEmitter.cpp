@@ -49,11 +49,50 @@ SmithSums smithSums(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n
     return s;
 }
 
+// ln Gamma(x) for x >= 1, double: Stirling's series at z = x + 6 >= 7 to
+// the z^-7 term (the next is below 1 / (1188 z^9) = 2.1e-11), less the
+// logarithm of x (x + 1) ... (x + 5), taken as two products of three so
+// that neither overflows for any x a Lambda can reach (the cosines are
+// floats: Lambda < 1e46).
+Value* logGamma(MathEmitter& dm, Value* x) {
+    Value* z = dm.add(x, dm.c(6.0));
+    Value* w = dm.div(dm.c(1.0), z);
+    Value* series = dm.mul(w, dm.poly(dm.mul(w, w), {1.0 / 12, -1.0 / 360, 1.0 / 1260, -1.0 / 1680}));
+    Value* stirling = dm.add(dm.fma(dm.sub(z, dm.c(0.5)), dm.log(z), dm.sub(dm.c(0.91893853320467274178), z)), series);
+    Value* low = dm.mul(x, dm.mul(dm.add(x, dm.c(1.0)), dm.add(x, dm.c(2.0))));
+    Value* high = dm.mul(dm.add(x, dm.c(3.0)), dm.mul(dm.add(x, dm.c(4.0)), dm.add(x, dm.c(5.0))));
+    return dm.sub(stirling, dm.add(dm.log(low), dm.log(high)));
+}
+
+// Heitz 2014's transmission form of the height-correlated masking (the
+// reference is Smith.cpp's heightCorrelatedTransmission): scale B(1 + Li, 1
+// + Lo) / (ci co), formed in logarithms and in double in every body: the
+// log-gammas grow like L ln L at grazing and cancel to the small log B,
+// which float would lose. Lambda from the sums: ai = ci (1 + Li).
+Value* betaOverCosines(LaneEmitter& lane, const SmithSums& s, Value* ci, Value* co, Value* scale) {
+    MathEmitter& dm = lane.doubleMath();
+    MathEmitter& pm = lane.preciseMath();
+    auto wide = [&](Value* v) { return dm.convert(v, dm.type()); };
+    Value *cid = wide(ci), *cod = wide(co);
+    Value* li = dm.div(dm.sub(wide(s.ai), cid), cid);
+    Value* lo = dm.div(dm.sub(wide(s.ao), cod), cod);
+    li = dm.maxnum(li, dm.c(0.0)), lo = dm.maxnum(lo, dm.c(0.0));
+    Value* logB = dm.sub(dm.add(logGamma(dm, dm.add(li, dm.c(1.0))), logGamma(dm, dm.add(lo, dm.c(1.0)))),
+                         logGamma(dm, dm.add(dm.add(li, lo), dm.c(2.0))));
+    Value* g = dm.exp(dm.sub(logB, dm.add(dm.log(cid), dm.log(cod))));
+    return pm.convert(dm.mul(wide(scale), g), pm.type());
+}
+
 class SeparableSmith final : public MaskingEmitter {  // G1(v) / (n.v) = 1 / ((n.v) (1 + Lambda(v)))
     Value* overCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n, const LaneGeometry& geo,
                        Value* D) const override {
         SmithSums s = smithSums(lane, ndf, n, geo);
         return lane.overProduct(D, s.ai, s.ao);
+    }
+    // Uncorrelated heights: the same either way.
+    Value* transmittedOverCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n, const LaneGeometry& geo,
+                                  Value* scale) const override {
+        return overCosines(lane, ndf, n, geo, scale);
     }
 };
 
@@ -70,6 +109,12 @@ class DirectionCorrelatedSmith final : public MaskingEmitter {
                            ? pm.div(D, pm.maxnum(pm.mul(s.ai, co), pm.mul(s.ao, ci)))
                            : pm.minnum(pm.div(pm.div(D, s.ai), co), pm.div(pm.div(D, s.ao), ci));
         return pm.fma(w, lane.overProduct(D, s.ai, s.ao), pm.mul(pm.sub(pm.c(1.0), w), least));
+    }
+    // Across the surface no directional correlation is left: the separable form.
+    Value* transmittedOverCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n, const LaneGeometry& geo,
+                                  Value* scale) const override {
+        SmithSums s = smithSums(lane, ndf, n, geo);
+        return lane.overProduct(scale, s.ai, s.ao);
     }
 };
 
@@ -102,6 +147,11 @@ public:
             den = pm.fma(ci, ro, rest);
         }
         return !lane.body.scaleMaskingSums ? lane.quarterDOver(D, den) : pm.div(pm.div(D, den), a);
+    }
+    // Across the surface only the heights correlate (both forms): the Beta form.
+    Value* transmittedOverCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n, const LaneGeometry& geo,
+                                  Value* scale) const override {
+        return betaOverCosines(lane, smithSums(lane, ndf, n, geo), geo.wiD[2], geo.woD[2], scale);
     }
 
 private:

@@ -1,0 +1,180 @@
+// LaneDielectric: the lane body of a lobe that scatters over the whole
+// sphere (SPEC 11; LoweringPlan::wholeSphere): a rough dielectric interface
+// (Walter et al. 2007) or a thin-walled sheet.
+//
+// Written from the formulas of compiler/reference/DielectricLobe.h, not
+// from its code (the differential tests compare the two). Everything is in
+// wo's frame: z is multiplied by the sign of n.wo, so that wo is above and
+// the far side has the relative index eta' = eta (wo outside) or 1/eta.
+// Three facets come out of that frame:
+//   - the mirrored pair's: i = (wi.x, wi.y, |wi.z|), o = (wo.x, wo.y,
+//     |wo.z|), h = (i + o)/|i + o|. It is the reflected pair's half vector
+//     (both directions on wo's side, so i + o is wi + wo there) and the thin
+//     sheet's for either pair (nothing bends in a sheet: the transmitted
+//     lobe is the reflected one mirrored);
+//   - the refracted pair's (interface only): v = eta' wi + wo = (wi + wo) +
+//     (eta' - 1) wi, m = v/|v| turned up, kept where the facet faces both
+//     directions (wi.m < 0 < wo.m).
+// The model terms come from the catalog's emitters: D at either facet, the
+// masking's reflection form on the mirrored pair and its transmission form
+// (transmittedOverCosines) on the refracted one with wi mirrored above, the
+// Fresnel term's reflectance and transmittance across the interface.
+#include "LaneEmitter.h"
+
+#include "reference/DielectricLobe.h"
+
+namespace facet {
+
+
+
+namespace {
+
+// A facet normal with the pair (both above) it is the geometry of, as the
+// NDF and masking emitters read a LaneGeometry: unit h in the precise type
+// (slopeH without a length: the unit h), cos = wo.h.
+LaneGeometry facetGeometry(MathEmitter& fm, MathEmitter& pm, const std::array<llvm::Value*, 3>& i,
+                           const std::array<llvm::Value*, 3>& o, const std::array<llvm::Value*, 3>& h, llvm::Value* cos, llvm::Value* nonZero) {
+    LaneGeometry g{};
+    for (int k = 0; k < 3; ++k) {
+        g.wiD[k] = i[k], g.woD[k] = o[k], g.hD[k] = h[k];
+        g.wi[k] = fm.convert(i[k], fm.type());
+        g.wo[k] = fm.convert(o[k], fm.type());
+        g.h[k] = fm.convert(h[k], fm.type());
+    }
+    g.slopeH = g.hD;
+    g.slopeHLen2 = nullptr;
+    g.cosD = cos;
+    g.oneMinusCosD = pm.sub(pm.c(1.0), cos);
+    g.sin2D = pm.mul(g.oneMinusCosD, pm.add(pm.c(1.0), cos));
+    g.hNonZero = nonZero;
+    return g;
+}
+
+llvm::Value* dot3(MathEmitter& m, const std::array<llvm::Value*, 3>& a, const std::array<llvm::Value*, 3>& b) {
+    return m.fma(a[0], b[0], m.fma(a[1], b[1], m.mul(a[2], b[2])));
+}
+
+}  // namespace
+
+LaneEmitter::WholeSphereTerms LaneEmitter::wholeSphereTerms() {
+    MathEmitter& pm = preciseMath_;
+    llvm::IRBuilder<>& b = builder;
+    WholeSphereTerms t;
+    t.n = emitters_.ndf.params(*this);
+    t.eta = emitters_.fresnel.refractiveIndex(*this);
+    if (!plan.thinSheet) {
+        // The interface's index moved away from 1 (SPEC 11: the refracted
+        // lobe of an index-matched interface is a delta).
+        llvm::Value* n0 = t.eta.c[0];
+        const double clamp = kEtaClampFromOne;
+        n0 = pm.select(b.CreateAnd(pm.ge(n0, pm.c(1.0)), pm.lt(n0, pm.c(1.0 + clamp))), pm.c(1.0 + clamp), n0);
+        n0 = pm.select(b.CreateAnd(pm.lt(n0, pm.c(1.0)), pm.gt(n0, pm.c(1.0 - clamp))), pm.c(1.0 - clamp), n0);
+        t.interfaceEta = n0;
+    }
+    return t;
+}
+
+// eta' = eta (wo outside) or 1/eta, and eta' - 1 without cancellation near 1.
+std::pair<llvm::Value*, llvm::Value*> LaneEmitter::relativeEta(const WholeSphereTerms& t, llvm::Value* woUp) {
+    MathEmitter& pm = preciseMath_;
+    llvm::Value* n0 = t.interfaceEta;
+    return {pm.select(woUp, n0, pm.div(pm.c(1.0), n0)),
+            pm.select(woUp, pm.sub(n0, pm.c(1.0)), pm.div(pm.sub(pm.c(1.0), n0), n0))};
+}
+
+std::array<llvm::Value*, 3> LaneEmitter::wholeSphereBsdf(const std::array<llvm::Value*, 3>& wiIn,
+                                                         const std::array<llvm::Value*, 3>& woIn,
+                                                         const std::vector<llvm::Value*>& slots) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& pm = preciseMath_;
+    std::array<llvm::Value*, 3> unusedF;
+    const std::array<llvm::Value*, 3> wi = unitDirection(wiIn, unusedF), wo = unitDirection(woIn, unusedF);
+    lowerInputsAndLets(slots);
+    LVal value = wholeSphereValue(wi, wo, wholeSphereTerms());
+    // f = 0 where either direction lies in the surface (a valid lane).
+    llvm::Value* inSurface = builder.CreateOr(pm.eq(wi[2], pm.c(0.0)), pm.eq(wo[2], pm.c(0.0)));
+    return map({value}, true, [&](auto& x) {
+        return fm.select(inSurface, fm.c(0.0), fm.convert(x[0], fm.type()));
+    }).c;
+}
+
+LVal LaneEmitter::wholeSphereValue(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
+                                   const WholeSphereTerms& t) {
+    MathEmitter& fm = floatMath_;
+    MathEmitter& pm = preciseMath_;
+    llvm::IRBuilder<>& b = builder;
+    const NdfEmitter& ndf = emitters_.ndf;
+    const MaskingEmitter& masking = emitters_.masking;
+    const FresnelEmitter& fresnel = emitters_.fresnel;
+    const NdfParams& n = t.n;
+    llvm::Value* zero = pm.c(0.0);
+    llvm::Value* woUp = pm.gt(wo[2], zero);
+    llvm::Value* sameSide = b.CreateICmpEQ(pm.gt(wi[2], zero), woUp);
+
+    // The mirrored pair and its half vector.
+    const std::array<llvm::Value*, 3> i{wi[0], wi[1], pm.abs(wi[2])}, o{wo[0], wo[1], pm.abs(wo[2])};
+    const std::array<llvm::Value*, 3> s{pm.add(wi[0], wo[0]), pm.add(wi[1], wo[1]), pm.add(i[2], o[2])};
+    llvm::Value* len = pm.sqrt(dot3(pm, s, s));
+    llvm::Value* inv = pm.div(pm.c(1.0), len);
+    const std::array<llvm::Value*, 3> h{pm.mul(s[0], inv), pm.mul(s[1], inv), pm.mul(s[2], inv)};
+    llvm::Value* c = pm.minnum(pm.mul(len, pm.c(0.5)), pm.c(1.0));
+    LaneGeometry mirrored = facetGeometry(fm, pm, i, o, h, c, pm.gt(len, zero));
+    // D G / (4 |n.wi| |n.wo|) of the mirrored pair.
+    llvm::Value* lobe = masking.overCosines(*this, ndf, n, mirrored, pm.mul(ndf.D(*this, n, mirrored), pm.c(0.25)));
+    lobe = pm.select(mirrored.hNonZero, lobe, zero);
+
+    LVal value;
+    if (plan.thinSheet) {
+        // The sheet's reflectance R' = 2F / (1 + F) and transmittance T' =
+        // T / (2 - T) = (1 - F) / (1 + F) per channel at wo.h.
+        value = map({t.eta}, true, [&](auto& x) {
+            llvm::Value* w = zero;
+            if (plan.keepsReflection) {
+                llvm::Value* F = fresnel.reflectanceAcross(*this, x[0], c);
+                w = pm.select(sameSide, pm.div(pm.mul(F, pm.c(2.0)), pm.add(pm.c(1.0), F)), zero);
+            }
+            if (plan.keepsTransmission) {
+                llvm::Value* T = fresnel.transmittanceAcross(*this, x[0], c);
+                w = pm.select(sameSide, w, pm.div(T, pm.sub(pm.c(2.0), T)));
+            }
+            // w = 0 is 0 even where the lobe overflowed.
+            return pm.select(pm.eq(w, zero), zero, pm.mul(w, lobe));
+        });
+    } else {
+        auto [etaRel, etaMinusOne] = relativeEta(t, woUp);
+        llvm::Value* reflected = zero;
+        if (plan.keepsReflection) {
+            llvm::Value* F = fresnel.reflectanceAcross(*this, etaRel, c);
+            reflected = pm.select(pm.eq(F, zero), zero, pm.mul(F, lobe));
+        }
+        llvm::Value* transmitted = zero;
+        if (plan.keepsTransmission) {
+            // In wo's frame wi is below: wi' = (wi.x, wi.y, -|wi.z|), and
+            // v = (wi' + wo') + (eta' - 1) wi'.
+            const std::array<llvm::Value*, 3> wiF{wi[0], wi[1], pm.neg(i[2])};
+            std::array<llvm::Value*, 3> v;
+            for (int k = 0; k < 3; ++k)
+                v[k] = pm.fma(etaMinusOne, wiF[k], k < 2 ? s[k] : pm.sub(o[2], i[2]));
+            llvm::Value* lenSq = dot3(pm, v, v);
+            llvm::Value* vLen = pm.sqrt(lenSq);
+            llvm::Value* up = pm.div(pm.select(pm.lt(v[2], zero), pm.c(-1.0), pm.c(1.0)), vLen);
+            const std::array<llvm::Value*, 3> m{pm.mul(v[0], up), pm.mul(v[1], up), pm.mul(v[2], up)};
+            llvm::Value* im = dot3(pm, wiF, m);  // < 0 where the facet faces wi
+            llvm::Value* om = dot3(pm, o, m);
+            llvm::Value* faces = b.CreateAnd(b.CreateAnd(pm.lt(im, zero), pm.gt(om, zero)),
+                                       b.CreateAnd(pm.gt(m[2], zero), pm.gt(lenSq, zero)));
+            llvm::Value* T = fresnel.pairTransmittance(*this, etaRel, pm.minnum(om, pm.c(1.0)), pm.neg(im));
+            LaneGeometry refracted = facetGeometry(fm, pm, i, o, m, om, faces);
+            // D T |wi.m| |wo.m| / |v|^2 (radiance transport), times eta'^2
+            // for importance transport (Veach 1997, 5.14).
+            llvm::Value* scale = pm.div(pm.mul(pm.mul(ndf.D(*this, n, refracted), T), pm.mul(pm.neg(im), om)), lenSq);
+            if (plan.transport == Transport::Importance) scale = pm.mul(scale, pm.mul(etaRel, etaRel));
+            llvm::Value* lobeT = masking.transmittedOverCosines(*this, ndf, n, refracted, scale);
+            transmitted = pm.select(b.CreateAnd(faces, pm.gt(scale, zero)), lobeT, zero);
+        }
+        value = LVal::scalar(pm.select(sameSide, reflected, transmitted));
+    }
+    return value;
+}
+
+}  // namespace facet
