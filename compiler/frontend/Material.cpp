@@ -70,8 +70,8 @@ std::string printBsdf(const CheckedMaterial& m, const BsdfNode& node) {
 }
 
 std::string compiledBackendsRefuse(const CheckedMaterial& m) {
-    // SPEC 11's lobes: the compiled backends evaluate one alone
-    // (LaneDielectric.cpp) and sample it through the reference; its energy
+    // SPEC 11's lobes: the compiled backends evaluate and sample one alone
+    // (LaneDielectric.cpp, LaneDielectricSampling.cpp); its energy
     // compensation and its place in a combination are the reference's only.
     for (const CheckedLobe& lobe : m.lobes) {
         if (!lobe.wholeSphere()) continue;

@@ -25,8 +25,6 @@
 
 namespace facet {
 
-
-
 namespace {
 
 // A facet normal with the pair (both above) it is the geometry of, as the
@@ -48,10 +46,6 @@ LaneGeometry facetGeometry(MathEmitter& fm, MathEmitter& pm, const std::array<ll
     g.sin2D = pm.mul(g.oneMinusCosD, pm.add(pm.c(1.0), cos));
     g.hNonZero = nonZero;
     return g;
-}
-
-llvm::Value* dot3(MathEmitter& m, const std::array<llvm::Value*, 3>& a, const std::array<llvm::Value*, 3>& b) {
-    return m.fma(a[0], b[0], m.fma(a[1], b[1], m.mul(a[2], b[2])));
 }
 
 }  // namespace
@@ -80,6 +74,50 @@ std::pair<llvm::Value*, llvm::Value*> LaneEmitter::relativeEta(const WholeSphere
     llvm::Value* n0 = t.interfaceEta;
     return {pm.select(woUp, n0, pm.div(pm.c(1.0), n0)),
             pm.select(woUp, pm.sub(n0, pm.c(1.0)), pm.div(pm.sub(pm.c(1.0), n0), n0))};
+}
+
+LaneEmitter::MirroredPair LaneEmitter::mirroredPair(const std::array<llvm::Value*, 3>& wi,
+                                                   const std::array<llvm::Value*, 3>& wo) {
+    MathEmitter& pm = preciseMath_;
+    MirroredPair p;
+    p.i = {wi[0], wi[1], pm.abs(wi[2])};
+    p.o = {wo[0], wo[1], pm.abs(wo[2])};
+    p.s = {pm.add(wi[0], wo[0]), pm.add(wi[1], wo[1]), pm.add(p.i[2], p.o[2])};
+    p.len = pm.sqrt(dot(pm, p.s, p.s));
+    llvm::Value* inv = pm.div(pm.c(1.0), p.len);
+    p.h = {pm.mul(p.s[0], inv), pm.mul(p.s[1], inv), pm.mul(p.s[2], inv)};
+    p.cos = pm.minnum(pm.mul(p.len, pm.c(0.5)), pm.c(1.0));
+    return p;
+}
+
+LaneEmitter::RefractedFacet LaneEmitter::refractedFacet(const MirroredPair& p, llvm::Value* etaMinusOne) {
+    MathEmitter& pm = preciseMath_;
+    llvm::IRBuilder<>& b = builder;
+    llvm::Value* zero = pm.c(0.0);
+    RefractedFacet f;
+    // In wo's frame wi is below: wi' = (wi.x, wi.y, -|wi.z|), and v =
+    // (wi' + wo') + (eta' - 1) wi', whose z sum is |wo.z| - |wi.z|.
+    f.wiFrame = {p.i[0], p.i[1], pm.neg(p.i[2])};
+    std::array<llvm::Value*, 3> v;
+    for (int k = 0; k < 3; ++k) v[k] = pm.fma(etaMinusOne, f.wiFrame[k], k < 2 ? p.s[k] : pm.sub(p.o[2], p.i[2]));
+    f.lenSq = dot(pm, v, v);
+    llvm::Value* up = pm.div(pm.select(pm.lt(v[2], zero), pm.c(-1.0), pm.c(1.0)), pm.sqrt(f.lenSq));
+    f.m = {pm.mul(v[0], up), pm.mul(v[1], up), pm.mul(v[2], up)};
+    f.im = dot(pm, f.wiFrame, f.m);  // < 0 where the facet faces wi
+    f.om = dot(pm, p.o, f.m);
+    f.faces = b.CreateAnd(b.CreateAnd(pm.lt(f.im, zero), pm.gt(f.om, zero)),
+                          b.CreateAnd(pm.gt(f.m[2], zero), pm.gt(f.lenSq, zero)));
+    return f;
+}
+
+llvm::Value* LaneEmitter::sheetReflectance(llvm::Value* F) {
+    MathEmitter& pm = preciseMath_;
+    return pm.div(pm.mul(F, pm.c(2.0)), pm.add(pm.c(1.0), F));
+}
+
+llvm::Value* LaneEmitter::sheetTransmittance(llvm::Value* T) {
+    MathEmitter& pm = preciseMath_;
+    return pm.div(T, pm.sub(pm.c(2.0), T));
 }
 
 std::array<llvm::Value*, 3> LaneEmitter::wholeSphereBsdf(const std::array<llvm::Value*, 3>& wiIn,
@@ -112,30 +150,25 @@ LVal LaneEmitter::wholeSphereValue(const std::array<llvm::Value*, 3>& wi, const 
     llvm::Value* sameSide = b.CreateICmpEQ(pm.gt(wi[2], zero), woUp);
 
     // The mirrored pair and its half vector.
-    const std::array<llvm::Value*, 3> i{wi[0], wi[1], pm.abs(wi[2])}, o{wo[0], wo[1], pm.abs(wo[2])};
-    const std::array<llvm::Value*, 3> s{pm.add(wi[0], wo[0]), pm.add(wi[1], wo[1]), pm.add(i[2], o[2])};
-    llvm::Value* len = pm.sqrt(dot3(pm, s, s));
-    llvm::Value* inv = pm.div(pm.c(1.0), len);
-    const std::array<llvm::Value*, 3> h{pm.mul(s[0], inv), pm.mul(s[1], inv), pm.mul(s[2], inv)};
-    llvm::Value* c = pm.minnum(pm.mul(len, pm.c(0.5)), pm.c(1.0));
-    LaneGeometry mirrored = facetGeometry(fm, pm, i, o, h, c, pm.gt(len, zero));
+    const MirroredPair p = mirroredPair(wi, wo);
+    llvm::Value* c = p.cos;
+    LaneGeometry mirrored = facetGeometry(fm, pm, p.i, p.o, p.h, c, pm.gt(p.len, zero));
     // D G / (4 |n.wi| |n.wo|) of the mirrored pair.
     llvm::Value* lobe = masking.overCosines(*this, ndf, n, mirrored, pm.mul(ndf.D(*this, n, mirrored), pm.c(0.25)));
     lobe = pm.select(mirrored.hNonZero, lobe, zero);
 
     LVal value;
     if (plan.thinSheet) {
-        // The sheet's reflectance R' = 2F / (1 + F) and transmittance T' =
-        // T / (2 - T) = (1 - F) / (1 + F) per channel at wo.h.
+        // The sheet's reflectance R' and transmittance T' per channel at wo.h.
         value = map({t.eta}, true, [&](auto& x) {
             llvm::Value* w = zero;
             if (plan.keepsReflection) {
                 llvm::Value* F = fresnel.reflectanceAcross(*this, x[0], c);
-                w = pm.select(sameSide, pm.div(pm.mul(F, pm.c(2.0)), pm.add(pm.c(1.0), F)), zero);
+                w = pm.select(sameSide, sheetReflectance(F), zero);
             }
             if (plan.keepsTransmission) {
                 llvm::Value* T = fresnel.transmittanceAcross(*this, x[0], c);
-                w = pm.select(sameSide, w, pm.div(T, pm.sub(pm.c(2.0), T)));
+                w = pm.select(sameSide, w, sheetTransmittance(T));
             }
             // w = 0 is 0 even where the lobe overflowed.
             return pm.select(pm.eq(w, zero), zero, pm.mul(w, lobe));
@@ -149,28 +182,16 @@ LVal LaneEmitter::wholeSphereValue(const std::array<llvm::Value*, 3>& wi, const 
         }
         llvm::Value* transmitted = zero;
         if (plan.keepsTransmission) {
-            // In wo's frame wi is below: wi' = (wi.x, wi.y, -|wi.z|), and
-            // v = (wi' + wo') + (eta' - 1) wi'.
-            const std::array<llvm::Value*, 3> wiF{wi[0], wi[1], pm.neg(i[2])};
-            std::array<llvm::Value*, 3> v;
-            for (int k = 0; k < 3; ++k)
-                v[k] = pm.fma(etaMinusOne, wiF[k], k < 2 ? s[k] : pm.sub(o[2], i[2]));
-            llvm::Value* lenSq = dot3(pm, v, v);
-            llvm::Value* vLen = pm.sqrt(lenSq);
-            llvm::Value* up = pm.div(pm.select(pm.lt(v[2], zero), pm.c(-1.0), pm.c(1.0)), vLen);
-            const std::array<llvm::Value*, 3> m{pm.mul(v[0], up), pm.mul(v[1], up), pm.mul(v[2], up)};
-            llvm::Value* im = dot3(pm, wiF, m);  // < 0 where the facet faces wi
-            llvm::Value* om = dot3(pm, o, m);
-            llvm::Value* faces = b.CreateAnd(b.CreateAnd(pm.lt(im, zero), pm.gt(om, zero)),
-                                       b.CreateAnd(pm.gt(m[2], zero), pm.gt(lenSq, zero)));
-            llvm::Value* T = fresnel.pairTransmittance(*this, etaRel, pm.minnum(om, pm.c(1.0)), pm.neg(im));
-            LaneGeometry refracted = facetGeometry(fm, pm, i, o, m, om, faces);
+            const RefractedFacet f = refractedFacet(p, etaMinusOne);
+            llvm::Value* T = fresnel.pairTransmittance(*this, etaRel, pm.minnum(f.om, pm.c(1.0)), pm.neg(f.im));
+            LaneGeometry refracted = facetGeometry(fm, pm, p.i, p.o, f.m, f.om, f.faces);
             // D T |wi.m| |wo.m| / |v|^2 (radiance transport), times eta'^2
             // for importance transport (Veach 1997, 5.14).
-            llvm::Value* scale = pm.div(pm.mul(pm.mul(ndf.D(*this, n, refracted), T), pm.mul(pm.neg(im), om)), lenSq);
+            llvm::Value* scale =
+                pm.div(pm.mul(pm.mul(ndf.D(*this, n, refracted), T), pm.mul(pm.neg(f.im), f.om)), f.lenSq);
             if (plan.transport == Transport::Importance) scale = pm.mul(scale, pm.mul(etaRel, etaRel));
             llvm::Value* lobeT = masking.transmittedOverCosines(*this, ndf, n, refracted, scale);
-            transmitted = pm.select(b.CreateAnd(faces, pm.gt(scale, zero)), lobeT, zero);
+            transmitted = pm.select(b.CreateAnd(f.faces, pm.gt(scale, zero)), lobeT, zero);
         }
         value = LVal::scalar(pm.select(sameSide, reflected, transmitted));
     }

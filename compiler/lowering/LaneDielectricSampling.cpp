@@ -24,12 +24,6 @@ namespace facet {
 using llvm::Value;
 using Vec = std::array<Value*, 3>;
 
-namespace {
-
-Vec scaled(MathEmitter& m, Value* k, const Vec& v) { return {m.mul(k, v[0]), m.mul(k, v[1]), m.mul(k, v[2])}; }
-
-}  // namespace
-
 // The branch probabilities at cos c (the facet's wo.m) of the interface or
 // the sheet: what the reference's sampler weighs its choice with.
 struct BranchWeights {
@@ -44,20 +38,24 @@ static BranchWeights branchWeights(LaneEmitter& lane, const FresnelEmitter& fres
         Value* pr = keepsReflection ? fresnel.reflectanceAcross(lane, etaRel, c) : pm.c(0.0);
         return {pr, fresnel.transmittanceAcross(lane, etaRel, c)};
     }
-    // The sheet: R' = 2F / (1 + F), T' = T / (2 - T), summed over the channels.
+    // The sheet: R' and T' summed over the channels.
     Value *pr = pm.c(0.0), *pt = pm.c(0.0);
     for (int ch = 0; ch < 3; ++ch) {
         Value* n = eta.c[ch];
         if (keepsReflection) {
-            Value* F = fresnel.reflectanceAcross(lane, n, c);
-            pr = pm.add(pr, pm.div(pm.mul(F, pm.c(2.0)), pm.add(pm.c(1.0), F)));
+            pr = pm.add(pr, lane.sheetReflectance(fresnel.reflectanceAcross(lane, n, c)));
         }
         if (keepsTransmission) {
-            Value* T = fresnel.transmittanceAcross(lane, n, c);
-            pt = pm.add(pt, pm.div(T, pm.sub(pm.c(2.0), T)));
+            pt = pm.add(pt, lane.sheetTransmittance(fresnel.transmittanceAcross(lane, n, c)));
         }
     }
     return {pr, pt};
+}
+
+// A branch's share of the draws, part / total: 0 where no branch has
+// weight (past the critical angle of scatter = transmit).
+static Value* branchShare(MathEmitter& pm, Value* part, Value* total) {
+    return pm.select(pm.gt(total, pm.c(0.0)), pm.div(part, total), pm.c(0.0));
 }
 
 // The density of the drawn normal m for the view o (above, unit): visible
@@ -138,8 +136,7 @@ LaneEmitter::SampleResult LaneEmitter::emitWholeSphereSample(const Vec& woArg, c
     }
     const Vec i = selectVec(pm, reflect, iR, iT);
     Value* branchValid = b.CreateOr(b.CreateAnd(reflect, pm.gt(iR[2], zero)), b.CreateAnd(b.CreateNot(reflect), validT));
-    // (No branch has weight past the critical angle of scatter = transmit: no sample.)
-    Value* share = pm.select(pm.gt(total, zero), pm.div(pm.select(reflect, w.reflect, w.transmit), total), zero);
+    Value* share = branchShare(pm, pm.select(reflect, w.reflect, w.transmit), total);
     Value* pdf = pm.mul(pm.mul(share, facetDensity(*this, ndf, t.n, o, m, om)), pm.select(reflect, jacR, jacT));
     // Back from wo's frame.
     const Vec wi = {i[0], i[1], pm.mul(i[2], sign)};
@@ -175,50 +172,33 @@ LaneEmitter::PdfResult LaneEmitter::emitWholeSpherePdf(const Vec& wiIn, const Ve
     Value* inSurface = b.CreateOr(pm.eq(wi[2], zero), pm.eq(wo[2], zero));
     // The mirrored pair (both above) and its half vector: the reflected
     // pair's facet, and the sheet's for either pair.
-    const Vec i = {wi[0], wi[1], pm.abs(wi[2])}, o = {wo[0], wo[1], pm.abs(wo[2])};
-    const Vec s = {pm.add(wi[0], wo[0]), pm.add(wi[1], wo[1]), pm.add(i[2], o[2])};
-    Value* len = pm.sqrt(dot(pm, s, s));
-    const Vec h = scaled(pm, pm.div(pm.c(1.0), len), s);
-    Value* c = pm.minnum(pm.mul(len, pm.c(0.5)), pm.c(1.0));
-    Value* pdfMirrored = pm.mul(facetDensity(*this, ndf, t.n, o, h, c), pm.div(pm.c(0.25), c));
-    pdfMirrored = pm.select(pm.gt(len, zero), pdfMirrored, zero);
-
-    // A branch's share of the draws: 0 where neither branch has weight.
-    auto share = [&](Value* part, Value* total) {
-        return pm.select(pm.gt(total, zero), pm.div(part, total), zero);
-    };
+    const MirroredPair p = mirroredPair(wi, wo);
+    Value* c = p.cos;
+    Value* pdfMirrored = pm.mul(facetDensity(*this, ndf, t.n, p.o, p.h, c), pm.div(pm.c(0.25), c));
+    pdfMirrored = pm.select(pm.gt(p.len, zero), pdfMirrored, zero);
+    // (branchWeights leaves out what `scatter` drops: its share is 0.)
     Value* pdf;
     if (plan.thinSheet) {
         BranchWeights w = branchWeights(*this, fresnel, t.eta, nullptr, c);
-        pdf = pm.mul(share(pm.select(sameSide, w.reflect, w.transmit), pm.add(w.reflect, w.transmit)), pdfMirrored);
+        pdf = pm.mul(branchShare(pm, pm.select(sameSide, w.reflect, w.transmit), pm.add(w.reflect, w.transmit)), pdfMirrored);
     } else {
         auto [etaRel, etaMinusOne] = relativeEta(t, woUp);
         BranchWeights w = branchWeights(*this, fresnel, t.eta, etaRel, c);
-        Value* reflected = pm.mul(share(w.reflect, pm.add(w.reflect, w.transmit)), pdfMirrored);
+        Value* reflected = pm.mul(branchShare(pm, w.reflect, pm.add(w.reflect, w.transmit)), pdfMirrored);
         Value* transmitted = zero;
         if (plan.keepsTransmission) {
             // The refracted pair's facet (as eval forms it), P_T from the
             // pair's own transmittance, J = eta'^2 |wi.m| / |v|^2.
-            const Vec wiF = {wi[0], wi[1], pm.neg(i[2])};
-            Vec v;
-            for (int k = 0; k < 3; ++k) v[k] = pm.fma(etaMinusOne, wiF[k], k < 2 ? s[k] : pm.sub(o[2], i[2]));
-            Value* lenSq = dot(pm, v, v);
-            Value* up = pm.div(pm.select(pm.lt(v[2], zero), pm.c(-1.0), pm.c(1.0)), pm.sqrt(lenSq));
-            const Vec m = scaled(pm, up, v);
-            Value *im = dot(pm, wiF, m), *om = dot(pm, o, m);
-            Value* faces = b.CreateAnd(b.CreateAnd(pm.lt(im, zero), pm.gt(om, zero)), pm.gt(lenSq, zero));
-            Value* cm = pm.minnum(om, pm.c(1.0));
+            const RefractedFacet f = refractedFacet(p, etaMinusOne);
+            Value* cm = pm.minnum(f.om, pm.c(1.0));
             Value* pr = plan.keepsReflection ? fresnel.reflectanceAcross(*this, etaRel, cm) : zero;
-            Value* pt = fresnel.pairTransmittance(*this, etaRel, cm, pm.neg(im));
-            Value* jac = pm.div(pm.mul(pm.mul(etaRel, etaRel), pm.neg(im)), lenSq);
-            Value* p = pm.mul(pm.mul(share(pt, pm.add(pr, pt)), facetDensity(*this, ndf, t.n, o, m, om)), jac);
-            transmitted = pm.select(faces, p, zero);
+            Value* pt = fresnel.pairTransmittance(*this, etaRel, cm, pm.neg(f.im));
+            Value* jac = pm.div(pm.mul(pm.mul(etaRel, etaRel), pm.neg(f.im)), f.lenSq);
+            Value* density = pm.mul(branchShare(pm, pt, pm.add(pr, pt)), facetDensity(*this, ndf, t.n, p.o, f.m, f.om));
+            transmitted = pm.select(f.faces, pm.mul(density, jac), zero);
         }
-        if (!plan.keepsReflection) reflected = zero;
         pdf = pm.select(sameSide, reflected, transmitted);
     }
-    if (plan.thinSheet && !(plan.keepsReflection && plan.keepsTransmission))
-        pdf = pm.select(plan.keepsReflection ? sameSide : b.CreateNot(sameSide), pdf, zero);
     return finishPdf(pm.select(inSurface, zero, pdf));
 }
 

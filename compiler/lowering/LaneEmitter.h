@@ -16,7 +16,7 @@
 // Files: LaneEmitter.cpp (geometry, assembly), ExprLowering.cpp (the
 // material's expressions and parameters), LaneTerms.cpp (helpers several
 // model terms share, constant tables and their lookups), LaneDielectric.cpp
-// (a lobe over the whole sphere).
+// and LaneDielectricSampling.cpp (a lobe over the whole sphere).
 #pragma once
 
 #include "Diagnostics.h"
@@ -226,6 +226,11 @@ public:
     llvm::Value* bracketedNewton(MathEmitter& math, const std::function<NewtonTerms(llvm::Value*)>& eval,
                                  llvm::Value* v0, llvm::Value* lo, llvm::Value* hi, int steps,
                                  double settledStep = 0, double settledFloor = 0);
+    // A thin sheet's reflectance R' = 2F / (1 + F) and transmittance T' =
+    // T / (2 - T) = (1 - F) / (1 + F), summed over the bounces inside it
+    // (LaneDielectric.cpp; precise type).
+    llvm::Value* sheetReflectance(llvm::Value* F);
+    llvm::Value* sheetTransmittance(llvm::Value* T);
     // Upper clamp of eta and k for the exact Fresnel terms (float: |N|^4 must stay finite).
     double maxFresnelIndex() const { return body.precise == Precision::Double ? INFINITY : 1e9; }
 
@@ -288,6 +293,22 @@ private:
     // surface is the caller's).
     LVal wholeSphereValue(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
                           const WholeSphereTerms& t);
+    // The facets eval and pdf select from unit wi, wo (LaneDielectric.cpp
+    // says why these): the mirrored pair i = (wi.x, wi.y, |wi.z|), o =
+    // (wo.x, wo.y, |wo.z|), their sum s, |s|, the unit h and wo.h = |s|/2
+    // (at most 1); and, from it, the refracted facet of eta' - 1, with wi
+    // in wo's frame (below), v = s' + (eta' - 1) wi', m = v/|v| turned up,
+    // wi.m, wo.m, and whether m faces both directions.
+    struct MirroredPair {
+        std::array<llvm::Value*, 3> i, o, s, h;
+        llvm::Value *len, *cos;
+    };
+    MirroredPair mirroredPair(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo);
+    struct RefractedFacet {
+        std::array<llvm::Value*, 3> wiFrame, m;
+        llvm::Value *lenSq, *im, *om, *faces;
+    };
+    RefractedFacet refractedFacet(const MirroredPair& p, llvm::Value* etaMinusOne);
     // LaneDielectricSampling.cpp: its sample and pdf bodies.
     SampleResult emitWholeSphereSample(const std::array<llvm::Value*, 3>& wo, const std::array<llvm::Value*, 3>& u,
                                        const std::vector<llvm::Value*>& slots);

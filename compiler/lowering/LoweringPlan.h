@@ -229,8 +229,8 @@ struct LoweringPlan {
     // the reference is compiler/reference/DielectricLobe.h): a refracting
     // interface or a thin sheet (thinSheet), the pairs it keeps (on one
     // side, across), and the transport its refracted pairs are for. One
-    // plain body (double in exact mode, float in fast mode), and the
-    // reference's sampler.
+    // plain body (double in exact mode, float in fast mode), its sampler
+    // in LaneDielectricSampling.cpp.
     bool wholeSphere = false;
     bool thinSheet = false;
     bool keepsReflection = true, keepsTransmission = false;

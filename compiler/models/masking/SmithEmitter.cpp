@@ -83,16 +83,22 @@ Value* betaOverCosines(LaneEmitter& lane, const SmithSums& s, Value* ci, Value* 
     return pm.convert(dm.mul(wide(scale), g), pm.type());
 }
 
+// The separable form, x G1(wi) G1(wo) / (ci co) = x / (ai ao).
+Value* separableOverCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n, const LaneGeometry& geo,
+                            Value* x) {
+    SmithSums s = smithSums(lane, ndf, n, geo);
+    return lane.overProduct(x, s.ai, s.ao);
+}
+
 class SeparableSmith final : public MaskingEmitter {  // G1(v) / (n.v) = 1 / ((n.v) (1 + Lambda(v)))
     Value* overCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n, const LaneGeometry& geo,
                        Value* D) const override {
-        SmithSums s = smithSums(lane, ndf, n, geo);
-        return lane.overProduct(D, s.ai, s.ao);
+        return separableOverCosines(lane, ndf, n, geo, D);
     }
     // Uncorrelated heights: the same either way.
     Value* transmittedOverCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n, const LaneGeometry& geo,
                                   Value* scale) const override {
-        return overCosines(lane, ndf, n, geo, scale);
+        return separableOverCosines(lane, ndf, n, geo, scale);
     }
 };
 
@@ -113,8 +119,7 @@ class DirectionCorrelatedSmith final : public MaskingEmitter {
     // Across the surface no directional correlation is left: the separable form.
     Value* transmittedOverCosines(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n, const LaneGeometry& geo,
                                   Value* scale) const override {
-        SmithSums s = smithSums(lane, ndf, n, geo);
-        return lane.overProduct(scale, s.ai, s.ao);
+        return separableOverCosines(lane, ndf, n, geo, scale);
     }
 };
 
