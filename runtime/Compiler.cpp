@@ -65,6 +65,7 @@ struct Compiler::TierUpJob {
     std::weak_ptr<KernelCode> code;
     CheckedMaterial material;
     std::shared_ptr<const EnergyTable> energyTable;  // keeps lowering.energyTable alive
+    std::shared_ptr<const EnergyTable> energyTableInside;  // and lowering.energyTableInside
     LoweringOptions lowering;
     std::string prefix, key, cachePath;
     CompileOptions::Cache cache;
@@ -137,6 +138,7 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
     kernel->backend_ = options.backend;
     kernel->transport_ = options.transport;
     kernel->energyTable_ = run.energyTable;
+    kernel->energyTableInside_ = run.energyTableInside;
     kernel->lobeEnergyTables_ = run.specialized.combinesLobes()
                                     ? run.lobeEnergyTables
                                     : std::vector<std::shared_ptr<const EnergyTable>>{run.energyTable};
@@ -203,7 +205,7 @@ std::unique_ptr<Kernel> Compiler::compile(PipelineRun& run, DiagnosticEngine& di
         kernel->code_->tierUpPending = true;
         // The record without the quick object: the tier-up stores its own.
         auto job = std::make_shared<TierUpJob>(TierUpJob{kernel->code_, kernel->material_, kernel->energyTable_,
-                                                         lowering, prefix, key, cachePath, options.cache,
+                                                         kernel->energyTableInside_, lowering, prefix, key, cachePath, options.cache,
                                                          CachedKernel{"", cached->variant, cached->measuredError}});
         tierUpWorker_->post([this, job](TierUpWorker::Run run) { tierUp(*job, run); });
     }

@@ -38,6 +38,7 @@ std::optional<AotKernel> Compiler::compileAot(const CheckedMaterial& material, c
         // The variant compileMaterial chooses for the host: the same search,
         // measuring JIT kernels of the host's width against the interpreter.
         LoweringOptions host = loweringOptionsFor(options, run.energyTable.get(), run.simd, resolveWidth(options));
+        host.energyTableInside = run.energyTableInside.get();
         MathVariant chosen = host.variant;
         CachedKernel probe = searchVariants(run.specialized, host, *options.tolerance, "facet_aot_probe",
                                             FacetJit::Level::Quick, chosen);

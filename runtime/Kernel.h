@@ -230,6 +230,9 @@ private:
     // Per lobe (CheckedMaterial::lobes order; {energyTable_} for one lobe):
     // the tables the reference fallbacks evaluate the lobes with.
     std::vector<std::shared_ptr<const EnergyTable>> lobeEnergyTables_;
+    // A compensated lobe over the whole sphere: its table from inside (the
+    // sampler's lowering and the tier-up point to it).
+    std::shared_ptr<const EnergyTable> energyTableInside_;
     double measuredError_ = -1;
     double compileMillis_ = 0;
     Transport transport_ = Transport::Radiance;  // of the reference fallbacks (SPEC 11)

@@ -47,6 +47,7 @@ void Kernel::ensureSampler() const {
                 lookUpCaches(*memoryCache_, *diskCache_, samplerKey_, samplerCachePath_, samplerCache_, origin);
             if (!cached) {
                 PipelineRun run = PipelineRun::fromSpecialized(material_, energyTable_);
+                run.energyTableInside = energyTableInside_;
                 // A combination's lobes' tables too: the eval compile's own
                 // objects, not tables built again (~0.3 s each) in the empty
                 // cache below.

@@ -7,6 +7,7 @@
 #include "Diagnostics.h"
 #include "Specialize.h"
 #include "TableCache.h"
+#include "reference/DielectricEnergy.h"
 
 #include <llvm/IR/LLVMContext.h>
 #include <llvm/Support/raw_ostream.h>
@@ -82,7 +83,8 @@ void PipelineRun::rewindTo(PipelineStage stage) {
     }
     if (stage < PipelineStage::Planned) lowering = LoweringOptions{}, plan = LoweringPlan{};
     if (stage < PipelineStage::Specialized)
-        specialized = CheckedMaterial{}, energyTable.reset(), lambdaTable.reset(), lobeEnergyTables.clear(),
+        specialized = CheckedMaterial{}, energyTable.reset(), energyTableInside.reset(), lambdaTable.reset(),
+        lobeEnergyTables.clear(),
         lobeLambdaTables.clear();
     internal_assert(stage >= PipelineStage::Checked || readFile || !text.empty())
         << "a pipeline run given a checked material cannot rewind to its source";
@@ -134,14 +136,27 @@ bool specialize(PipelineRun& run, TableCache& tables, DiagnosticEngine& diags) {
     return true;
 }
 
+// A lobe over the whole sphere compensates from both sides: the table from
+// inside too (DielectricEnergy.h; a thin sheet's sides share one).
+void insideTable(PipelineRun& run, TableCache& tables) {
+    if (run.energyTableInside || !run.energyTable || run.specialized.combinesLobes()) return;
+    const CheckedLobe& lobe = run.specialized.singleLobe();
+    if (!lobe.wholeSphere()) return;
+    run.energyTableInside = lobe.thin ? run.energyTable : tables.get(insideTableKey(run.energyTable->key));
+}
+
 void plan(PipelineRun& run, const PipelineControl& control, const PipelineTarget& target, TableCache& tables) {
     lobeTables(run, tables);
+    insideTable(run, tables);
     if (control.lowering) {
         run.lowering = *control.lowering;
     } else {
         int width = run.options.width ? run.options.width : target.naturalWidth;
         run.lowering = loweringOptionsFor(run.options, run.energyTable.get(), run.simd, width);
     }
+    // A run that starts specialized from a caller's lowering (the kernel's
+    // object, its tier-up) keeps the caller's inside table.
+    if (run.energyTableInside) run.lowering.energyTableInside = run.energyTableInside.get();
     run.lowering.lobeEnergyTables.clear();
     for (const auto& t : run.lobeEnergyTables) run.lowering.lobeEnergyTables.push_back(t.get());
     internal_assert(run.specialized.combinesLobes() || !run.specialized.singleLobe().compensatesEnergy() ||

@@ -64,6 +64,9 @@ struct PipelineRun {
     // through the TableCache, which puts it where the plan finds it)
     CheckedMaterial checked, specialized;
     std::shared_ptr<const EnergyTable> energyTable;
+    // and, a lobe over the whole sphere, its table from inside (loaded at
+    // the planned stage; the same table for a thin sheet)
+    std::shared_ptr<const EnergyTable> energyTableInside;
     std::shared_ptr<const LambdaTable> lambdaTable;
     // A combination of lobes: the same per lobe (Kulla-Conty tables in
     // CheckedMaterial::lobes order, null for a lobe without; the Lambda

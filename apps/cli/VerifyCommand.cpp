@@ -204,9 +204,9 @@ bool verifyMaterial(const CheckedMaterial& m, const std::string& path, Compiler&
     printSample(refStats, m, cases, opt.verbose);
     ok &= refStats.ok();
 
-    // A whole-sphere lobe (SPEC 11) the compiled backends do not lower yet
-    // (compiledBackendsRefuse: its energy compensation) has no kernels to
-    // compare; any other material that reaches here compiles.
+    // A whole-sphere lobe (SPEC 11) the compiled backends do not lower
+    // (compiledBackendsRefuse: a compensated sheet whose index is an input)
+    // has no kernels to compare; any other material that reaches here compiles.
     const bool wholeSphere = scattersBelowSurface(m);
     const std::string notLowered = compiledBackendsRefuse(m);
     if (opt.jit && !notLowered.empty()) std::printf("    %-14s not compiled: %s\n", "kernels", notLowered.c_str());

@@ -4,6 +4,7 @@
 #include "Material.h"
 
 #include "Diagnostics.h"
+#include "KullaConty.h"
 
 #include <utility>
 #include <vector>
@@ -71,17 +72,22 @@ std::string printBsdf(const CheckedMaterial& m, const BsdfNode& node) {
 
 std::string compiledBackendsRefuse(const CheckedMaterial& m) {
     // SPEC 11's lobes: the compiled backends evaluate and sample one alone
-    // (LaneDielectric.cpp, LaneDielectricSampling.cpp); its energy
-    // compensation and its place in a combination are the reference's only.
+    // (LaneDielectric.cpp, LaneDielectricSampling.cpp) and its compensation
+    // (WholeSphereEnergy.cpp), whose crossing shares they take from the
+    // lobe's index when the kernel is built.
     for (const CheckedLobe& lobe : m.lobes) {
         if (!lobe.wholeSphere()) continue;
         std::string what = "material '" + m.name + "': lobe '" + lobe.name + "' scatters below the surface (" +
                            (lobe.thin ? std::string("thin = true") : "scatter = " + std::string(scatterName(lobe.scatter))) + ")";
         if (m.combinesLobes())
             return what + " in a combination of lobes, which only the reference evaluates so far; use --backend interp";
-        if (lobe.compensatesEnergy())
-            return what + " with energy = kulla_conty, whose compensation from both sides only the reference "
-                          "evaluates so far; use --backend interp";
+        const int eta = fresnelEntry(*lobe.fresnel.model).refractiveIndexParam;
+        const CheckedInput* input =
+            eta >= 0 && lobe.fresnel.has(eta) ? inputUsed(*lobe.fresnel.args[size_t(eta)], m) : nullptr;
+        if (lobe.compensatesEnergy() && input)
+            return what + " with energy = kulla_conty and an index that reads input '" + input->name +
+                   "': the compiled kernels take the sheet's crossing share, an integral over its index, when they "
+                   "are built; bind it (--set " + input->name + "=VALUE) or use --backend interp";
     }
     // A layer's tables are baked when the kernel is compiled, from constant
     // parameters: a per-lane table (3D over the top's parameters) is not

@@ -173,7 +173,8 @@ LaneOutputs emitBodies(const KernelContext& k, llvm::IRBuilder<>& b, llvm::Type*
         return BodyFn([&k, &module, &body, &emitBody, laneTy](llvm::IRBuilder<>& builder,
                                                               const std::vector<llvm::Value*>& lanesIn,
                                                               const std::vector<llvm::Value*>& lanesSlots) {
-            LaneEmitter lanes(k.material, k.plan, body, k.options.energyTable, builder, laneTy, module);
+            LaneEmitter lanes(k.material, k.plan, body, k.options.energyTable, builder, laneTy, module,
+                              k.options.energyTableInside);
             return emitBody(lanes, lanesIn, lanesSlots);
         });
     };

@@ -20,6 +20,7 @@
 // (transmittedOverCosines) on the refracted one with wi mirrored above, the
 // Fresnel term's reflectance and transmittance across the interface.
 #include "LaneEmitter.h"
+#include "WholeSphereEnergy.h"
 
 #include "reference/DielectricLobe.h"
 
@@ -194,6 +195,12 @@ LVal LaneEmitter::wholeSphereValue(const std::array<llvm::Value*, 3>& wi, const 
             transmitted = pm.select(b.CreateAnd(f.faces, pm.gt(scale, zero)), lobeT, zero);
         }
         value = LVal::scalar(pm.select(sameSide, reflected, transmitted));
+    }
+    if (plan.compensatesEnergy) {
+        // energy = kulla_conty: the lobe the single scattering loses, from
+        // both sides (WholeSphereEnergy.h).
+        LVal ms = WholeSphereEnergy(*this, ndf, n).value(wi, wo);
+        value = map({value, ms}, value.rgb || ms.rgb, [&](auto& x) { return pm.add(x[0], x[1]); });
     }
     return value;
 }

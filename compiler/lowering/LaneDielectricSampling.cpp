@@ -16,7 +16,9 @@
 // as in the reference and pbrt-v4. weight = f |n.wi| / pdf, f from eval's
 // own wholeSphereValue.
 #include "LaneEmitter.h"
+#include "WholeSphereEnergy.h"
 
+#include <optional>
 #include <tuple>
 
 namespace facet {
@@ -93,6 +95,16 @@ LaneEmitter::SampleResult LaneEmitter::emitWholeSphereSample(const Vec& woArg, c
     WholeSphereTerms t = wholeSphereTerms();
     Value* zero = pm.c(0.0);
     Value *u0 = pm.convert(u[0], pm.type()), *u1 = pm.convert(u[1], pm.type()), *u2 = pm.convert(u[2], pm.type());
+    // With compensation, u0 below its probability p draws from it (u0 / p
+    // reused for its side); above, the single scattering's draw takes
+    // (u0 - p) / (1 - p).
+    std::optional<WholeSphereEnergy> energy;
+    Value *p = zero, *uSingle = u0;
+    if (plan.compensatesEnergy) {
+        energy.emplace(*this, ndf, t.n);
+        p = energy->probability(wo);
+        uSingle = pm.select(pm.gt(p, zero), pm.div(pm.sub(u0, p), pm.sub(pm.c(1.0), p)), u0);
+    }
 
     // wo's frame; a view in the surface has no sample (it computes with n).
     Value* woUp = pm.gt(wo[2], zero);
@@ -108,7 +120,7 @@ LaneEmitter::SampleResult LaneEmitter::emitWholeSphereSample(const Vec& woArg, c
     if (!plan.thinSheet) std::tie(etaRel, etaMinusOne) = relativeEta(t, woUp);
     BranchWeights w = branchWeights(*this, emitters_.fresnel, t.eta, etaRel, c);
     Value* total = pm.add(w.reflect, w.transmit);
-    Value* reflect = pm.lt(pm.mul(u0, total), w.reflect);
+    Value* reflect = pm.lt(pm.mul(uSingle, total), w.reflect);
 
     // The reflection of o about m (wi + wo = 2 (wo.m) m), and its Jacobian.
     Value* twoOm = pm.add(om, om);
@@ -139,9 +151,19 @@ LaneEmitter::SampleResult LaneEmitter::emitWholeSphereSample(const Vec& woArg, c
     Value* share = branchShare(pm, pm.select(reflect, w.reflect, w.transmit), total);
     Value* pdf = pm.mul(pm.mul(share, facetDensity(*this, ndf, t.n, o, m, om)), pm.select(reflect, jacR, jacT));
     // Back from wo's frame.
-    const Vec wi = {i[0], i[1], pm.mul(i[2], sign)};
+    Vec wi = {i[0], i[1], pm.mul(i[2], sign)};
     Value* sampled = b.CreateAnd(b.CreateAnd(view, branchValid),
                                  b.CreateAnd(pm.gt(total, zero), pm.gt(pdf, zero)));
+    if (energy) {
+        // The compensation's draw where u0 < p; the density is the
+        // mixture's at whichever wi came out (as the pdf entry's).
+        Value* fromCompensation = pm.lt(u0, p);
+        const Vec wiC = energy->sample(wo, pm.div(u0, p), u1, u2);
+        Value* drawnC = b.CreateAnd(view, b.CreateNot(pm.eq(wiC[2], zero)));
+        wi = selectVec(pm, fromCompensation, wiC, wi);
+        sampled = b.CreateSelect(fromCompensation, drawnC, sampled);
+        pdf = pm.add(pm.mul(pm.sub(pm.c(1.0), p), singleScatteringPdf(wi, wo, t)), pm.mul(p, energy->pdf(wi, wo)));
+    }
 
     LVal f = wholeSphereValue(wi, wo, t);
     SampleResult r;
@@ -158,18 +180,30 @@ LaneEmitter::SampleResult LaneEmitter::emitWholeSphereSample(const Vec& woArg, c
 LaneEmitter::PdfResult LaneEmitter::emitWholeSpherePdf(const Vec& wiIn, const Vec& woIn,
                                                        const std::vector<Value*>& slots) {
     MathEmitter& pm = preciseMath_;
-    llvm::IRBuilder<>& b = builder;
-    const NdfEmitter& ndf = emitters_.ndf;
-    const FresnelEmitter& fresnel = emitters_.fresnel;
     Vec unusedF;
     const Vec wi = unitDirection(readDirection(wiIn), unusedF), wo = unitDirection(readDirection(woIn), unusedF);
     lowerInputsAndLets(slots);
     WholeSphereTerms t = wholeSphereTerms();
     Value* zero = pm.c(0.0);
+    Value* pdf = singleScatteringPdf(wi, wo, t);
+    if (plan.compensatesEnergy) {
+        // The mixture's: (1 - p) single + p compensation.
+        WholeSphereEnergy energy(*this, emitters_.ndf, t.n);
+        Value* p = energy.probability(wo);
+        pdf = pm.add(pm.mul(pm.sub(pm.c(1.0), p), pdf), pm.mul(p, energy.pdf(wi, wo)));
+    }
+    Value* inSurface = builder.CreateOr(pm.eq(wi[2], zero), pm.eq(wo[2], zero));
+    return finishPdf(pm.select(inSurface, zero, pdf));
+}
 
+Value* LaneEmitter::singleScatteringPdf(const Vec& wi, const Vec& wo, const WholeSphereTerms& t) {
+    MathEmitter& pm = preciseMath_;
+    llvm::IRBuilder<>& b = builder;
+    const NdfEmitter& ndf = emitters_.ndf;
+    const FresnelEmitter& fresnel = emitters_.fresnel;
+    Value* zero = pm.c(0.0);
     Value* woUp = pm.gt(wo[2], zero);
     Value* sameSide = b.CreateICmpEQ(pm.gt(wi[2], zero), woUp);
-    Value* inSurface = b.CreateOr(pm.eq(wi[2], zero), pm.eq(wo[2], zero));
     // The mirrored pair (both above) and its half vector: the reflected
     // pair's facet, and the sheet's for either pair.
     const MirroredPair p = mirroredPair(wi, wo);
@@ -199,7 +233,7 @@ LaneEmitter::PdfResult LaneEmitter::emitWholeSpherePdf(const Vec& wiIn, const Ve
         }
         pdf = pm.select(sameSide, reflected, transmitted);
     }
-    return finishPdf(pm.select(inSurface, zero, pdf));
+    return pdf;
 }
 
 }  // namespace facet

@@ -24,8 +24,9 @@ llvm::Type* doubleOf(llvm::IRBuilder<>& b, llvm::Type* laneType) {
 
 LaneEmitter::LaneEmitter(const CheckedMaterial& material, const LoweringPlan& plan, const BodyPlan& body,
                          const EnergyTable* energyTable, llvm::IRBuilder<>& builder, llvm::Type* laneType,
-                         llvm::Module& module)
-    : material(material), plan(plan), body(body), builder(builder), energyTable_(energyTable), module_(module),
+                         llvm::Module& module, const EnergyTable* energyTableInside)
+    : material(material), plan(plan), body(body), builder(builder), energyTable_(energyTable),
+      energyTableInside_(energyTableInside), module_(module),
       emitters_(termEmitters(material)), floatMath_(builder, laneType, body.shortPolynomials),
       preciseMath_(builder, body.precise == Precision::Double ? doubleOf(builder, laneType) : laneType,
                    body.shortPolynomials),

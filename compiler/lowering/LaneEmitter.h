@@ -73,7 +73,7 @@ class LaneEmitter {
 public:
     LaneEmitter(const CheckedMaterial& material, const LoweringPlan& plan, const BodyPlan& body,
                 const EnergyTable* energyTable, llvm::IRBuilder<>& builder, llvm::Type* laneType,
-                llvm::Module& module);
+                llvm::Module& module, const EnergyTable* energyTableInside = nullptr);
 
     struct Result {
         std::array<llvm::Value*, 3> rgb;
@@ -125,6 +125,9 @@ public:
     }
     llvm::Module& module() { return module_; }
     const EnergyTable* energyTable() const { return energyTable_; }
+    // A whole-sphere lobe's compensation table from inside (its outside's
+    // is energyTable(); a thin sheet's are the same table).
+    const EnergyTable* energyTableInside() const { return energyTableInside_; }
 
     // Lane validity: `cond` lanes are invalid (value 0, counted).
     void markInvalid(llvm::Value* cond);
@@ -314,6 +317,10 @@ private:
                                        const std::vector<llvm::Value*>& slots);
     PdfResult emitWholeSpherePdf(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
                                  const std::vector<llvm::Value*>& slots);
+    // The single-scattering sampler's density at unit wi for unit wo, both
+    // off the surface (the mixture's part besides the compensation's).
+    llvm::Value* singleScatteringPdf(const std::array<llvm::Value*, 3>& wi, const std::array<llvm::Value*, 3>& wo,
+                                     const WholeSphereTerms& t);
     // 0 for an invalid lane, in a one-lane body (LaneEmitter.cpp says why
     // not by a select).
     void zeroInvalidLaneByBranch(std::array<llvm::Value*, 3>& values);
@@ -372,6 +379,7 @@ private:
     llvm::Value* clampParam(llvm::Value* x, const ParamPlan& param, double lo, double hi, bool floatResult);
 
     const EnergyTable* energyTable_;
+    const EnergyTable* energyTableInside_;
     llvm::Module& module_;
     MaterialEmitters emitters_;
     MathEmitter floatMath_;

@@ -41,6 +41,9 @@ struct LoweringOptions {
     // energy = kulla_conty: the E table of the material's NDF x masking,
     // embedded in the module as constant arrays (required for such materials).
     const EnergyTable* energyTable = nullptr;
+    // and, for a lobe over the whole sphere, the table from inside
+    // (insideTableKey of energyTable's key; the same table for a thin sheet).
+    const EnergyTable* energyTableInside = nullptr;
     // A combination of lobes: the table of each compensating lobe (per lobe,
     // in CheckedMaterial::lobes order; null for the others).
     std::vector<const EnergyTable*> lobeEnergyTables;

@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include "Specialize.h"
+#include "reference/DielectricEnergy.h"
+
+#include <fmt/format.h>
 #include "TermEmitters.h"
 
 #include <cmath>
@@ -318,13 +321,18 @@ static LoweringPlan planWalk(const CheckedMaterial& material, const MaterialEmit
 static LoweringPlan planWholeSphere(const CheckedMaterial& material, const MaterialEmitters& em, LoweringPlan plan,
                                     Transport transport) {
     const CheckedLobe& lobe = material.singleLobe();
-    internal_assert(lobe.hasNdf() && !em.ndf.traits.wholeLobe && plan.lambda != LambdaForm::None &&
-                    !lobe.compensatesEnergy())
-        << "a whole-sphere lobe without a microfacet NDF and a Smith masking, or with compensation";
+    internal_assert(lobe.hasNdf() && !em.ndf.traits.wholeLobe && plan.lambda != LambdaForm::None)
+        << "a whole-sphere lobe without a microfacet NDF and a Smith masking";
     plan.thinSheet = lobe.thin;
     plan.keepsReflection = lobe.scatter != Scatter::Transmit;
     plan.keepsTransmission = lobe.scatter != Scatter::Reflect;
     plan.transport = transport;
+    if (plan.compensatesEnergy) {
+        CrossingConstants constants = crossingConstants(material);
+        plan.smoothCrossing = constants.smoothCrossing;
+        plan.interfaceEta2 = constants.eta2;
+        plan.sheetCrossing = constants.sheetCrossing;
+    }
     plan.scalarBody = planBody(material, em, plan, BodyRole::Plain, plan.variant);
     plan.scalarBody.halfVector = HalfVectorForm::Precise;
     plan.scalarBody.correctedSums = false;
@@ -465,6 +473,15 @@ std::string printPlan(const CheckedMaterial& material, const LoweringPlan& plan)
            << (plan.keepsTransmission ? "transmission" : "")
            << " transport=" << (plan.transport == Transport::Importance ? "importance" : "radiance")
            << " (one plain body)\n";
+    if (plan.wholeSphere && plan.compensatesEnergy) {
+        if (plan.thinSheet)
+            os << fmt::format("whole-sphere-compensation: tables of both sides, crossing share {:.6g} {:.6g} {:.6g}\n",
+                              plan.sheetCrossing[0], plan.sheetCrossing[1], plan.sheetCrossing[2]);
+        else
+            os << fmt::format("whole-sphere-compensation: tables outside and inside, smooth crossing share {:.6g}, "
+                              "eta^2 {:.6g} (each lane limits the share by its tables' averages)\n",
+                              plan.smoothCrossing, plan.interfaceEta2);
+    }
     os << "trust-inputs: " << yesNo(plan.trustInputs) << "\n";
     auto count = [](const std::vector<bool>& v) { return std::count(v.begin(), v.end(), true); };
     os << "reads: inputs " << count(plan.reads.inputs) << " of " << plan.reads.inputs.size() << ", lets "

@@ -235,6 +235,13 @@ struct LoweringPlan {
     bool thinSheet = false;
     bool keepsReflection = true, keepsTransmission = false;
     Transport transport = Transport::Radiance;
+    // Its energy = kulla_conty (compensatesEnergy; WholeSphereEnergy.cpp):
+    // the crossing shares' constants, from the lobe's constant index
+    // (compiler/reference/DielectricEnergy.h, crossingConstants): the smooth
+    // interface's share 1 - F_avg and eta^2, which each lane limits by its
+    // tables' averages, or the thin sheet's share per channel.
+    double smoothCrossing = 0, interfaceEta2 = 1;
+    std::array<double, 3> sheetCrossing{};
     // The host's promise (assume=unit): finite directions with |w| within
     // 1e-3 of 1, finite inputs, u in [0, 1). The kernel then drops the work
     // whose only purpose is to find lanes that break it: the direction,

@@ -21,8 +21,28 @@ constexpr Real kPi = Real(3.141592653589793238462643383279502884L);
 // single-scattering lobe always keeps a share of the samples.
 constexpr double kMaxCompensationProbability = 0.9;
 
-// The sheet's average transmittance 2 Int T'(mu) mu dmu of channel ch,
-// T' = (1 - F) / (1 + F), on the Fresnel average's panels.
+// Side of a direction: true outside (z > 0).
+template <typename Real>
+bool outside(const Vec3<Real>& w) { return w.z > 0; }
+
+template <typename Real>
+Real ecOn(const ResolvedMaterial<Real>& r, bool out, Real mu) {
+    const EnergyTable& t = out ? *r.energyTable : *r.energyTableInside;
+    return Real(t.ecAt(double(mu), double(r.energyAlpha)));
+}
+
+// The crossing share from wo's side and the kept shares (reflect, cross)
+// averaged over the channels, for the sampler.
+template <typename Real>
+std::array<Real, 2> keptShares(const ResolvedMaterial<Real>& r, bool out) {
+    const std::array<Real, 3>& x = out ? r.crossingOutside : r.crossingInside;
+    Real cross = (x[0] + x[1] + x[2]) / 3;
+    return {keepsPair(r, true) ? 1 - cross : Real(0), keepsPair(r, false) ? cross : Real(0)};
+}
+
+}  // namespace
+
+// On the Fresnel average's panels.
 template <typename Real>
 Real sheetTransmittanceAverage(const ResolvedMaterial<Real>& r, int ch) {
     Real eta = r.fresnelArgs.channel(r.fresnel->refractiveIndexParam, ch);
@@ -47,26 +67,24 @@ Real sheetTransmittanceAverage(const ResolvedMaterial<Real>& r, int ch) {
     return mm.value;
 }
 
-// Side of a direction: true outside (z > 0).
-template <typename Real>
-bool outside(const Vec3<Real>& w) { return w.z > 0; }
-
-template <typename Real>
-Real ecOn(const ResolvedMaterial<Real>& r, bool out, Real mu) {
-    const EnergyTable& t = out ? *r.energyTable : *r.energyTableInside;
-    return Real(t.ecAt(double(mu), double(r.energyAlpha)));
+CrossingConstants crossingConstants(const CheckedMaterial& material) {
+    // The lobe without its compensation resolves without tables; the
+    // index is the same.
+    CheckedMaterial plain = material;
+    for (const ModelInfo* m : catalogSlot(ModelSlot::Energy))
+        if (!energyEntry(*m).compensates) plain.singleLobe().energy.model = m;
+    internal_assert(!plain.singleLobe().compensatesEnergy()) << "no energy model without compensation";
+    ResolvedMaterial<double> r = Interpreter<double>(plain).resolve(nullptr);
+    CrossingConstants out;
+    if (r.thin) {
+        for (int ch = 0; ch < 3; ++ch) out.sheetCrossing[size_t(ch)] = sheetTransmittanceAverage(r, ch);
+    } else {
+        double eta = clampedEta(r, 0);
+        out.eta2 = eta * eta;
+        out.smoothCrossing = 1 - fresnelAverage(r, 0);
+    }
+    return out;
 }
-
-// The crossing share from wo's side and the kept shares (reflect, cross)
-// averaged over the channels, for the sampler.
-template <typename Real>
-std::array<Real, 2> keptShares(const ResolvedMaterial<Real>& r, bool out) {
-    const std::array<Real, 3>& x = out ? r.crossingOutside : r.crossingInside;
-    Real cross = (x[0] + x[1] + x[2]) / 3;
-    return {keepsPair(r, true) ? 1 - cross : Real(0), keepsPair(r, false) ? cross : Real(0)};
-}
-
-}  // namespace
 
 EnergyTableKey insideTableKey(const EnergyTableKey& outside) {
     EnergyTableKey inside = outside;
@@ -150,6 +168,7 @@ Vec3<Real> sampleCompensation(const ResolvedMaterial<Real>& r, const Vec3<Real>&
 }
 
 #define FACET_WHOLE_SPHERE_COMPENSATION(Real)                                                                    \
+    template Real sheetTransmittanceAverage(const ResolvedMaterial<Real>&, int);                                  \
     template void resolveWholeSphereCompensation(ResolvedMaterial<Real>&, std::shared_ptr<const EnergyTable>,    \
                                                  std::shared_ptr<const EnergyTable>);                            \
     template std::array<Real, 3> wholeSphereCompensation(const ResolvedMaterial<Real>&, const Vec3<Real>&,       \

@@ -57,6 +57,23 @@ template <typename Real>
 void resolveWholeSphereCompensation(ResolvedMaterial<Real>& r, std::shared_ptr<const EnergyTable> outside,
                                     std::shared_ptr<const EnergyTable> inside);
 
+// The sheet's average transmittance 2 Int T'(mu) mu dmu of channel ch,
+// T' = (1 - F) / (1 + F): its crossing share from either side.
+template <typename Real>
+Real sheetTransmittanceAverage(const ResolvedMaterial<Real>& r, int ch);
+
+// What the crossing shares take from the lobe's index alone, for the
+// compiled kernels (compiler/lowering/WholeSphereEnergy.cpp), which have
+// the tables' averages per lane: the smooth interface's share 1 - F_avg and
+// the clamped eta^2, or the sheet's crossing share per channel. `material`
+// is a single whole-sphere lobe with a constant index; resolved at its
+// inputs' defaults without building its tables.
+struct CrossingConstants {
+    double smoothCrossing = 0, eta2 = 1;
+    std::array<double, 3> sheetCrossing{};
+};
+CrossingConstants crossingConstants(const CheckedMaterial& material);
+
 // The compensation lobe f_ms(wi, wo), rgb; 0 where r has none.
 template <typename Real>
 std::array<Real, 3> wholeSphereCompensation(const ResolvedMaterial<Real>& r, const Vec3<Real>& wi,

@@ -306,8 +306,8 @@ CorpusFile readCorpusFile(const std::string& path) {
 struct Tally {
     int passed = 0, failed = 0;
     // Expect lines a compiled backend does not run: materials it refuses
-    // (compiledBackendsRefuse: a lobe below the surface with energy
-    // compensation or in a combination); printed in the summary.
+    // (compiledBackendsRefuse: a compensated thin sheet whose index is an
+    // input; a layer whose tables read one); printed in the summary.
     int referenceOnly = 0;
     void pass() { ++passed; }
     template <typename... Args>

@@ -4,8 +4,8 @@
 // (eta and 1/eta) and the thin sheet, on directions drawn over the whole
 // sphere, scalar and SIMD, exact and fast; importance transport; SPEC 11's
 // hard cases on every backend and math mode (no NaN, Inf or negative value;
-// exact within docs/numerics.md's bound); and what the compiled backends
-// still refuse.
+// exact within docs/numerics.md's bound). Their compensation:
+// CompiledCompensationTests.cpp.
 #include "TransmissionSupport.h"
 
 #include "HardCases.h"
@@ -289,26 +289,6 @@ TEST_CASE("the compiled sampler and pdf draw what the reference draws, on both s
     CHECK(worstWeight <= 1e-4);
     CHECK(worstPdfCall <= 1e-4);
     CHECK(branchFlips * 1000 <= compared);
-}
-
-TEST_CASE("the compiled backends refuse what they do not lower yet, naming the lobe and the reason") {
-    Compiled c;
-    facet::CompileOptions simd;
-    REQUIRE(facet::CompileOptions::parse("backend=simd;cache=memory", simd) == "");
-    struct Refusal {
-        const char* text;
-        const char* says;
-    } refusals[] = {
-        {"material t { ndf = ggx(0.3); masking = smith_height_correlated; fresnel = dielectric(1.5); scatter = both; "
-         "energy = kulla_conty; }\n",
-         "lobe 't' scatters below the surface (scatter = both) with energy = kulla_conty"},
-    };
-    for (const Refusal& r : refusals) {
-        facet::DiagnosticEngine diags;
-        CHECK(c.compiler.compileText(r.text, "glass.mat", "", simd, diags) == nullptr);
-        INFO(diags.str());
-        CHECK(diags.str().find(r.says) != std::string::npos);
-    }
 }
 
 }  // TEST_SUITE

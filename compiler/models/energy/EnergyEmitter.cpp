@@ -3,6 +3,7 @@
 // (pi EcAvg) times F_avg^2 (1 - EcAvg) / (1 - F_avg EcAvg) per channel,
 // with Ec bilinear and EcAvg linear in the material's table, which the
 // kernel embeds as a constant (sqrt-spaced in alpha and mu).
+#include "lowering/EnergyTableLookup.h"
 #include "lowering/LaneEmitter.h"
 #include "Immortal.h"
 
@@ -15,42 +16,10 @@ using llvm::Value;
 
 class NoCompensationEmitter final : public EnergyEmitter {};
 
-// The lane's lookups in the embedded table: the alpha row (once) and Ec at
-// any cosine.
-class EnergyTableLookup {
-public:
-    EnergyTableLookup(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n) : lane_(lane), pm_(lane.preciseMath()) {
-        const EnergyTable* table = lane.energyTable();
-        internal_assert(table) << "energy = kulla_conty lowered without its E table";
-        table_ = table;
-        ecTable_ = lane.floatTable(table->ec, "facet_energy_ec");
-        auto* avgTable = lane.floatTable(table->ecAvg, "facet_energy_ecavg");
-        MathEmitter& pm = pm_;
-        Value* alpha = pm.minnum(pm.maxnum(ndf.energyAlpha(lane, n), pm.c(table->alphaMin)), pm.c(table->alphaMax));
-        Value* v = pm.fma(pm.sqrt(alpha), pm.c(table->alphaScale()), pm.c(table->alphaOffset()));
-        v = pm.minnum(pm.maxnum(v, pm.c(0.0)), pm.c(table->alphaCount - 1.0));
-        row_ = pm.minnum(lane.intrinsic(llvm::Intrinsic::floor, v), pm.c(table->alphaCount - 2.0));
-        tRow_ = pm.sub(v, row_);
-        ecAvg = lane.lerpFetch(avgTable, row_, tRow_);
-    }
-    // 1 - E(c), bilinear in (sqrt alpha, sqrt c).
-    Value* ec(Value* c) {
-        MathEmitter& pm = pm_;
-        const int M = table_->muCount;
-        Value* cc = pm.minnum(pm.maxnum(pm.convert(c, pm.type()), pm.c(0.0)), pm.c(1.0));
-        Value* u = pm.mul(pm.sqrt(cc), pm.c(M - 1.0));
-        Value* col = pm.minnum(lane_.intrinsic(llvm::Intrinsic::floor, u), pm.c(M - 2.0));
-        return lane_.bilerpFetch(ecTable_, M, row_, col, tRow_, pm.sub(u, col));
-    }
-    Value* ecAvg;
-
-private:
-    LaneEmitter& lane_;
-    MathEmitter& pm_;
-    const EnergyTable* table_;
-    llvm::GlobalVariable* ecTable_;
-    Value *row_, *tRow_;
-};
+// The lane's lookups in the embedded table, at the NDF's energy alpha.
+EnergyTableLookup tableLookup(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n) {
+    return EnergyTableLookup(lane, ndf.energyAlpha(lane, n), {lane.energyTable()});
+}
 
 // F_avg^2 (1 - EcAvg) / (1 - F_avg EcAvg) per channel, 0 where the
 // denominator vanishes.
@@ -74,10 +43,11 @@ public:
     std::array<Value*, 3> compensation(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
                                        const FresnelEmitter& fresnel, Value* ci, Value* co) const override {
         MathEmitter& pm = lane.preciseMath();
-        EnergyTableLookup table(lane, ndf, n);
-        Value* lobe = pm.div(pm.mul(table.ec(ci), table.ec(co)), pm.mul(pm.c(kPi), table.ecAvg));
-        lobe = pm.select(pm.gt(table.ecAvg, pm.c(0.0)), lobe, pm.c(0.0));
-        std::array<Value*, 3> out = fresnelTerms(lane, fresnel, table.ecAvg);
+        EnergyTableLookup table = tableLookup(lane, ndf, n);
+        Value* ecAvg = table.ecAvg();
+        Value* lobe = pm.div(pm.mul(table.ec(ci), table.ec(co)), pm.mul(pm.c(kPi), ecAvg));
+        lobe = pm.select(pm.gt(ecAvg, pm.c(0.0)), lobe, pm.c(0.0));
+        std::array<Value*, 3> out = fresnelTerms(lane, fresnel, ecAvg);
         for (Value*& x : out) x = pm.mul(lobe, x);
         return out;
     }
@@ -88,9 +58,9 @@ public:
     CompensationAlbedo samplingAlbedo(LaneEmitter& lane, const NdfEmitter& ndf, const NdfParams& n,
                                       const FresnelEmitter& fresnel, Value* co) const override {
         MathEmitter& pm = lane.preciseMath();
-        EnergyTableLookup table(lane, ndf, n);
+        EnergyTableLookup table = tableLookup(lane, ndf, n);
         Value* ec = table.ec(co);
-        std::array<Value*, 3> terms = fresnelTerms(lane, fresnel, table.ecAvg);
+        std::array<Value*, 3> terms = fresnelTerms(lane, fresnel, table.ecAvg());
         Value* mean = pm.mul(pm.add(pm.add(terms[0], terms[1]), terms[2]), pm.c(1.0 / 3.0));
         return {ec, pm.mul(ec, mean)};
     }
