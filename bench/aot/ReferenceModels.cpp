@@ -405,7 +405,7 @@ const std::vector<ReferenceModel>& referenceModels() {
          "anisotropic GGX + Smith height-correlated + dielectric (N-BK7)", {"roughness_x", "roughness_y"},
          &anisoGgxDielectric, nullptr, nullptr, &bareAnisoGgxDielectric},
         {"rough_glass", "rough_glass.mat", "GGX + Smith separable + dielectric (1.5), reflection and refraction",
-         {"roughness"}, &roughGlass, nullptr, nullptr, &bareRoughGlass, true},
+         {"roughness"}, &roughGlass, &roughGlassSample, &roughGlassPdf, &bareRoughGlass, true},
     };
     return models;
 }

@@ -98,6 +98,27 @@ int64_t roughGlass(int64_t n, const float* const wi[3], const float* const wo[3]
                    float* const rgb[3]);
 int64_t bareRoughGlass(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
                        float* const rgb[3]);
+// The importance sampler of (d), the baseline of Facet's whole-sphere
+// samplers: in wo's frame (z flipped where n.wo < 0, the far side's
+// relative index eta' = 1.5 or 1/1.5), a visible normal m of GGX by
+// spherical caps (Dupuy & Benyoub 2023; u[1] the azimuth, u[2] the height
+// on the cap, as in Facet's GGX sampler), reflection about m where u[0] < F
+// (wo.m, eta') (exactly: u[0] (F + T) < F), else refraction by Snell's law
+// (Walter et al. 2007); pdf = D_wo(m) times F / (4 |wo.m|) or (1 - F)
+// eta'^2 |wi.m| / (eta' wi.m + wo.m)^2; weight = f |n.wi| / pdf = G1(wi),
+// over eta'^2 for a refraction (radiance transport). Written like
+// ggxSchlickSample, with the conventions of facet_sample_batch for a lobe
+// over the whole sphere: wo on either side is valid; a non-finite or
+// non-unit wo (within 1e-3), u outside [0, 1) or a non-finite input gives
+// wi = 0, pdf = 0, weight = 0 and is counted; n.wo = 0, a reflection below
+// the horizon, a refraction above it and the refraction past the critical
+// angle (which u[0] never chooses: T = 0 there) are no sample (zeros,
+// valid). It draws what Facet's reference sampler draws for the same u.
+int64_t roughGlassSample(int64_t n, const float* const wo[3], const float* const u[3], const float* const* inputs,
+                         float* const wi[3], float* pdf, float* const weight[3]);
+// The density of wi given wo for (d), as facet_pdf_batch (0 where n.wi or n.wo is 0).
+int64_t roughGlassPdf(int64_t n, const float* const wi[3], const float* const wo[3], const float* const* inputs,
+                      float* pdf);
 
 // All four, in the order above.
 const std::vector<ReferenceModel>& referenceModels();
